@@ -1,0 +1,142 @@
+//! Pure codecs: bytes to typed values and back, with no state and no I/O.
+//!
+//! One module per protocol concept. Constructors validate physical units once, so a value
+//! that exists is valid and encoding it cannot fail; decoding returns typed values, with
+//! `Unknown(n)` for enum bytes that newer firmware may send.
+
+use core::fmt;
+
+pub mod crc;
+pub mod ids;
+
+/// A CAN frame as the protocol uses it: a 29-bit extended identifier and 8 data bytes.
+///
+/// The link works on these so that it needs no CAN crate types; the driver converts them
+/// to and from its CAN driver's frame type.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Frame {
+    /// The raw extended identifier (at most [`ids::EXTENDED_MAX`]).
+    pub id: u32,
+    /// The 8 data bytes (every frame of the protocol has DLC 8).
+    pub data: [u8; 8],
+}
+
+impl Frame {
+    /// A frame with the given identifier and data.
+    pub const fn new(id: u32, data: [u8; 8]) -> Self {
+        Frame { id, data }
+    }
+}
+
+/// A physical value that a constructor rejected: not finite, or outside its valid range.
+///
+/// `field` names the argument as the protocol document does; `min` and `max` give the
+/// valid range in the same physical unit as `value` (degrees, deg/s, zoom ratio,
+/// seconds, counts or image coordinates).
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct RangeError {
+    /// The rejected argument, e.g. `"pitch"`.
+    pub field: &'static str,
+    /// The value given (NaN or infinite when it was not finite).
+    pub value: f64,
+    /// The smallest valid value.
+    pub min: f64,
+    /// The largest valid value.
+    pub max: f64,
+}
+
+impl RangeError {
+    /// Checks that `value` is finite and within `[min, max]` (single precision, the
+    /// cheap path on a Cortex-M4F).
+    pub(crate) fn check_f32(
+        field: &'static str,
+        value: f32,
+        min: f32,
+        max: f32,
+    ) -> Result<f32, Self> {
+        // NaN fails both comparisons, infinities fail one of them.
+        if value >= min && value <= max {
+            Ok(value)
+        } else {
+            Err(RangeError {
+                field,
+                value: value.into(),
+                min: min.into(),
+                max: max.into(),
+            })
+        }
+    }
+
+    /// Checks that `value` is finite and within `[min, max]` (double precision, for
+    /// values such as GPS coordinates that need it).
+    pub(crate) fn check_f64(
+        field: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    ) -> Result<f64, Self> {
+        if value >= min && value <= max {
+            Ok(value)
+        } else {
+            Err(RangeError {
+                field,
+                value,
+                min,
+                max,
+            })
+        }
+    }
+
+    /// Whether the value was NaN or infinite rather than merely out of range.
+    pub fn is_not_finite(&self) -> bool {
+        !self.value.is_finite()
+    }
+}
+
+impl fmt::Display for RangeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.is_not_finite() {
+            write!(
+                f,
+                "{} must be a finite number in [{}, {}], got {}",
+                self.field, self.min, self.max, self.value
+            )
+        } else {
+            write!(
+                f,
+                "{} = {} is out of range [{}, {}]",
+                self.field, self.value, self.min, self.max
+            )
+        }
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for RangeError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "{=str} = {=f64} is not in [{=f64}, {=f64}]",
+            self.field,
+            self.value,
+            self.min,
+            self.max
+        )
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for RangeError {}
+
+/// Rounds a scaled physical value to the nearest wire unit (half away from zero).
+///
+/// Callers range-check the value first, so the result fits the wire type.
+pub(crate) fn round_f32(x: f32) -> f32 {
+    libm::roundf(x)
+}
+
+/// Double-precision [`round_f32`].
+pub(crate) fn round_f64(x: f64) -> f64 {
+    libm::round(x)
+}
