@@ -8,6 +8,10 @@ use core::fmt;
 
 pub mod crc;
 pub mod ids;
+pub mod postback;
+pub mod serial;
+pub mod text;
+pub mod vehicle;
 
 /// A CAN frame as the protocol uses it: a 29-bit extended identifier and 8 data bytes.
 ///

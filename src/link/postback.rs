@@ -1,0 +1,520 @@
+//! Reassembling postbacks from their four CAN frames.
+//!
+//! The frames carry no sequence number, and on a real bus frames are lost, repeated and
+//! corrupted. The assembler keeps the last four frames received on the postback ID as a
+//! sliding window. Whenever the window is full and its oldest frame begins with `EB 90`,
+//! the window is a candidate message: its CRC decides. A data frame that happens to begin
+//! with `EB 90` therefore cannot abort a good message around it (a restart-on-header
+//! state machine would lose that message), and a real header that follows a lost frame
+//! still starts its own candidate. Frames more than `max_gap_ms` apart never belong to one
+//! message: a longer gap discards the window.
+//!
+//! Every frame fed on the postback ID ends in exactly one place, which the counters show:
+//! `frames == 4 * messages + discarded_frames + pending()`.
+//!
+//! ```
+//! use idu_gimbal::link::postback::PostbackAssembler;
+//! use idu_gimbal::wire::{ids, postback::Postback};
+//! use idu_gimbal::Instant;
+//!
+//! let sent = Postback { pitch: -3000, ..Postback::default() };
+//! let mut asm = PostbackAssembler::new();
+//! let mut got = None;
+//! for (i, frame) in sent.to_can_frames().iter().enumerate() {
+//!     got = asm.feed(ids::POSTBACK, frame, Instant::from_millis(1000 + i as u32));
+//! }
+//! assert_eq!(got, Some(sent));
+//! assert_eq!(asm.stats().messages, 1);
+//! ```
+
+use crate::time::Instant;
+use crate::wire::postback::{self, Packet, Postback};
+
+/// Default bound on the gap between two frames of one message, in milliseconds.
+pub const DEFAULT_MAX_GAP_MS: u32 = 100;
+
+/// What the assembler has seen.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AssemblerStats {
+    /// Frames fed on the postback ID (including malformed ones).
+    pub frames: u32,
+    /// Good messages emitted.
+    pub messages: u32,
+    /// Candidate messages (four frames, the first beginning `EB 90`) whose CRC failed.
+    pub crc_errors: u32,
+    /// Candidates that failed because a newer header arrived before they completed (a
+    /// message restarted after lost frames); counted instead of `crc_errors`.
+    pub restarts: u32,
+    /// Incomplete messages discarded because the gap to the next frame, or to
+    /// [`PostbackAssembler::expire`], exceeded the bound, or a malformed frame broke them.
+    pub dropped_partials: u32,
+    /// Frames fed on the postback ID whose length was not 8.
+    pub malformed: u32,
+    /// Frames that ended in no message.
+    pub discarded_frames: u32,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Slot {
+    data: [u8; 8],
+    /// This frame began a candidate whose CRC has already been checked (and failed).
+    evaluated: bool,
+}
+
+impl Slot {
+    fn is_header(&self) -> bool {
+        matches!(self.data, [0xEB, 0x90, ..])
+    }
+}
+
+/// Reassembles postbacks from CAN frames; see the [module docs](self).
+#[derive(Clone, Debug)]
+pub struct PostbackAssembler {
+    window: [Slot; postback::FRAMES],
+    /// Index of the oldest frame in `window`.
+    head: usize,
+    /// Frames in the window.
+    count: usize,
+    last: Instant,
+    max_gap_ms: u32,
+    stats: AssemblerStats,
+}
+
+impl Default for PostbackAssembler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl PostbackAssembler {
+    /// An assembler with the default gap bound ([`DEFAULT_MAX_GAP_MS`]).
+    pub const fn new() -> Self {
+        Self::with_max_gap(DEFAULT_MAX_GAP_MS)
+    }
+
+    /// An assembler that discards a partial message when two of its frames are more than
+    /// `max_gap_ms` apart.
+    pub const fn with_max_gap(max_gap_ms: u32) -> Self {
+        PostbackAssembler {
+            window: [Slot {
+                data: [0; 8],
+                evaluated: false,
+            }; postback::FRAMES],
+            head: 0,
+            count: 0,
+            last: Instant::from_millis(0),
+            max_gap_ms,
+            stats: AssemblerStats {
+                frames: 0,
+                messages: 0,
+                crc_errors: 0,
+                restarts: 0,
+                dropped_partials: 0,
+                malformed: 0,
+                discarded_frames: 0,
+            },
+        }
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> AssemblerStats {
+        self.stats
+    }
+
+    /// Frames held that may still become part of a message.
+    pub fn pending(&self) -> usize {
+        self.count
+    }
+
+    /// The gap bound in milliseconds.
+    pub fn max_gap_ms(&self) -> u32 {
+        self.max_gap_ms
+    }
+
+    fn slot(&self, i: usize) -> Slot {
+        self.window
+            .get((self.head + i) % postback::FRAMES)
+            .copied()
+            .unwrap_or_default()
+    }
+
+    /// Takes one received frame. Frames on other IDs are not the assembler's business and
+    /// are ignored (not counted). Returns a postback when this frame completes a good one.
+    pub fn feed(&mut self, id: u32, data: &[u8], now: Instant) -> Option<Postback> {
+        if id != postback::ID {
+            return None;
+        }
+        let stats = &mut self.stats;
+        stats.frames = stats.frames.wrapping_add(1);
+        let Ok(data) = <[u8; 8]>::try_from(data) else {
+            stats.malformed = stats.malformed.wrapping_add(1);
+            stats.discarded_frames = stats.discarded_frames.wrapping_add(1);
+            self.discard();
+            return None;
+        };
+        if self.count > 0 && now.millis_since(self.last) > self.max_gap_ms {
+            self.discard();
+        }
+        self.last = now;
+        if self.count == postback::FRAMES {
+            // The oldest frame leaves the window without having become part of a message.
+            self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(1);
+            self.head = (self.head + 1) % postback::FRAMES;
+            self.count -= 1;
+        }
+        let at = (self.head + self.count) % postback::FRAMES;
+        if let Some(slot) = self.window.get_mut(at) {
+            *slot = Slot {
+                data,
+                evaluated: false,
+            };
+        }
+        self.count += 1;
+        if self.count == postback::FRAMES && self.slot(0).is_header() {
+            return self.evaluate();
+        }
+        None
+    }
+
+    fn evaluate(&mut self) -> Option<Postback> {
+        let mut bytes = [0u8; postback::CAN_LEN];
+        for (i, chunk) in bytes.chunks_exact_mut(8).enumerate() {
+            chunk.copy_from_slice(&self.slot(i).data);
+        }
+        let packet = Packet::new(&bytes[..]).ok()?;
+        if packet.check().is_ok() {
+            self.stats.messages = self.stats.messages.wrapping_add(1);
+            self.count = 0;
+            return Some(Postback::from_packet(&packet));
+        }
+        let newer_header = (1..postback::FRAMES).any(|i| self.slot(i).is_header());
+        if newer_header {
+            self.stats.restarts = self.stats.restarts.wrapping_add(1);
+        } else {
+            self.stats.crc_errors = self.stats.crc_errors.wrapping_add(1);
+        }
+        if let Some(oldest) = self.window.get_mut(self.head) {
+            oldest.evaluated = true;
+        }
+        None
+    }
+
+    /// Drops the window, counting its frames as discarded and the message in progress, if
+    /// any, as a dropped partial.
+    fn discard(&mut self) {
+        let in_progress = (0..self.count).any(|i| {
+            let s = self.slot(i);
+            s.is_header() && !s.evaluated
+        });
+        if in_progress {
+            self.stats.dropped_partials = self.stats.dropped_partials.wrapping_add(1);
+        }
+        self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(self.count as u32);
+        self.count = 0;
+    }
+
+    /// Discards a partial message whose last frame is more than the gap bound before `now`.
+    /// Call it periodically so that a message cut short is counted when it is, not when the
+    /// next frame happens to arrive.
+    pub fn expire(&mut self, now: Instant) {
+        if self.count > 0 && now.millis_since(self.last) > self.max_gap_ms {
+            self.discard();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::ids;
+    use crate::wire::postback::tests::arb_postback;
+    use proptest::prelude::*;
+
+    fn msg(pitch: i16) -> Postback {
+        Postback {
+            pitch,
+            heading: 12345,
+            motor_heading: -77,
+            ..Postback::default()
+        }
+    }
+
+    struct Run {
+        asm: PostbackAssembler,
+        t: u32,
+        out: Vec<Postback>,
+    }
+
+    impl Run {
+        fn new() -> Self {
+            Run {
+                asm: PostbackAssembler::new(),
+                t: 5,
+                out: Vec::new(),
+            }
+        }
+        fn frame(&mut self, data: &[u8], dt: u32) {
+            self.t = self.t.wrapping_add(dt);
+            if let Some(p) = self
+                .asm
+                .feed(ids::POSTBACK, data, Instant::from_millis(self.t))
+            {
+                self.out.push(p);
+            }
+        }
+        fn message(&mut self, p: &Postback) {
+            for f in p.to_can_frames() {
+                self.frame(&f, 1);
+            }
+            self.t = self.t.wrapping_add(500);
+        }
+        fn invariant(&self) {
+            let s = self.asm.stats();
+            assert_eq!(
+                s.frames,
+                4 * s.messages + s.discarded_frames + self.asm.pending() as u32,
+                "{s:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn four_frames_make_a_message() {
+        let mut r = Run::new();
+        r.message(&msg(100));
+        r.message(&msg(200));
+        assert_eq!(r.out, [msg(100), msg(200)]);
+        r.invariant();
+    }
+
+    #[test]
+    fn loss_of_any_one_frame_loses_only_that_message() {
+        for lost in 0..4 {
+            let mut r = Run::new();
+            let a = msg(1).to_can_frames();
+            for (i, f) in a.iter().enumerate() {
+                if i != lost {
+                    r.frame(f, 1);
+                }
+            }
+            // The next message arrives right away (worst case: no gap to help).
+            r.message(&msg(2));
+            assert_eq!(r.out, [msg(2)], "lost frame {lost}");
+            r.invariant();
+            let s = r.asm.stats();
+            assert_eq!(s.messages, 1);
+            if lost != 0 {
+                // A's header was superseded by B's.
+                assert_eq!(s.restarts, 1, "lost {lost}: {s:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn duplicated_frames() {
+        for dup in 0..4 {
+            let mut r = Run::new();
+            let a = msg(1).to_can_frames();
+            for (i, f) in a.iter().enumerate() {
+                r.frame(f, 1);
+                if i == dup {
+                    r.frame(f, 1);
+                }
+            }
+            r.t += 500;
+            r.message(&msg(2));
+            // A duplicated header is harmless: the window slides past the first copy (a
+            // restart) and the second copy starts the real message. A duplicate of the last
+            // frame comes after the message completed. A duplicated middle frame breaks A.
+            // B always survives; no wrong message ever.
+            if dup == 0 || dup == 3 {
+                assert_eq!(r.out, [msg(1), msg(2)]);
+            } else {
+                assert_eq!(r.out, [msg(2)], "dup {dup}");
+            }
+            r.invariant();
+        }
+    }
+
+    #[test]
+    fn reordered_frames_are_not_delivered() {
+        let mut r = Run::new();
+        let a = msg(1).to_can_frames();
+        for i in [0, 2, 1, 3] {
+            r.frame(&a[i], 1);
+        }
+        assert!(r.out.is_empty());
+        assert_eq!(r.asm.stats().crc_errors, 1);
+        r.t += 500;
+        r.message(&msg(2));
+        assert_eq!(r.out, [msg(2)]);
+        r.invariant();
+    }
+
+    #[test]
+    fn data_frames_that_begin_with_eb90() {
+        // gimbal type 0xEB, tracking 0x90: frame 2 begins with EB 90.
+        let p = Postback {
+            gimbal_type: crate::wire::postback::GimbalType::Unknown(0xEB),
+            tracking: true,
+            ..msg(5)
+        };
+        let mut frames = p.to_can_frames();
+        frames[2][1] = 0x90; // tracking flag byte 0x90 (non-zero: tracking)
+        let bytes: Vec<u8> = frames.concat();
+        let mut fixed = [0u8; 32];
+        fixed.copy_from_slice(&bytes);
+        let crc = crate::wire::crc::checksum(&fixed[..25]).to_le_bytes();
+        fixed[25..27].copy_from_slice(&crc);
+        assert_eq!(&fixed[16..18], &[0xEB, 0x90]);
+        let expected = Postback::parse(&fixed).unwrap();
+        let mut r = Run::new();
+        for f in fixed.chunks(8) {
+            r.frame(f, 1);
+        }
+        assert_eq!(r.out, [expected]);
+        assert_eq!(r.asm.stats().restarts + r.asm.stats().crc_errors, 0);
+        r.invariant();
+    }
+
+    #[test]
+    fn garbage_frames_between_messages() {
+        let mut r = Run::new();
+        r.frame(&[1, 2, 3, 4, 5, 6, 7, 8], 1);
+        r.frame(&[0xEB, 0x90, 0, 0, 0, 0, 0, 0], 1); // a lone false header
+        r.frame(&[0; 8], 1);
+        r.message(&msg(3));
+        r.frame(&[0xFF; 8], 1);
+        r.frame(&[0xFF; 5], 1); // malformed length
+        r.message(&msg(4));
+        assert_eq!(r.out, [msg(3), msg(4)]);
+        assert_eq!(r.asm.stats().malformed, 1);
+        r.invariant();
+    }
+
+    #[test]
+    fn stale_partial_is_dropped() {
+        let mut r = Run::new();
+        let a = msg(1).to_can_frames();
+        r.frame(&a[0], 1);
+        r.frame(&a[1], 1);
+        r.frame(&a[2], 101); // gap > 100 ms: A is dropped, this frame alone remains
+        r.frame(&a[3], 1);
+        assert!(r.out.is_empty());
+        assert_eq!(r.asm.stats().dropped_partials, 1);
+        // Exactly at the bound still counts as one message.
+        let b = msg(2).to_can_frames();
+        r.t += 500;
+        for f in &b {
+            r.frame(f, 100);
+        }
+        assert_eq!(r.out, [msg(2)]);
+        // expire() drops a message cut short without waiting for the next frame.
+        r.frame(&a[0], 500);
+        r.asm.expire(Instant::from_millis(r.t + 100));
+        assert_eq!(r.asm.pending(), 1);
+        r.asm.expire(Instant::from_millis(r.t + 101));
+        assert_eq!((r.asm.pending(), r.asm.stats().dropped_partials), (0, 2));
+        r.invariant();
+    }
+
+    #[test]
+    fn tick_wraps_mid_message() {
+        let mut r = Run::new();
+        r.t = u32::MAX - 1;
+        let a = msg(9).to_can_frames();
+        for f in &a {
+            r.frame(f, 1); // u32::MAX, 0, 1, 2
+        }
+        assert_eq!(r.out, [msg(9)]);
+        assert_eq!(r.asm.stats().dropped_partials, 0);
+        r.invariant();
+    }
+
+    #[test]
+    fn other_ids_are_ignored() {
+        let mut asm = PostbackAssembler::new();
+        for f in msg(1).to_can_frames() {
+            assert_eq!(asm.feed(ids::CONTROL, &f, Instant::from_millis(0)), None);
+        }
+        assert_eq!(asm.stats(), AssemblerStats::default());
+    }
+
+    #[derive(Debug, Clone)]
+    enum Fault {
+        None,
+        Drop,
+        Dup,
+        Corrupt(usize),
+        Garbage([u8; 8]),
+        Gap,
+    }
+
+    fn arb_fault() -> impl Strategy<Value = Fault> {
+        prop_oneof![
+            6 => Just(Fault::None),
+            1 => Just(Fault::Drop),
+            1 => Just(Fault::Dup),
+            1 => (0usize..64).prop_map(Fault::Corrupt),
+            1 => any::<[u8; 8]>().prop_map(Fault::Garbage),
+            1 => Just(Fault::Gap),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        /// Whatever the faults, every message delivered is one that was sent, in order, and
+        /// the frame accounting holds; with no faults, every message is delivered.
+        #[test]
+        fn faults_never_yield_a_wrong_message(
+            msgs in proptest::collection::vec(arb_postback(), 1..12),
+            faults in proptest::collection::vec(arb_fault(), 48),
+            start: u32,
+        ) {
+            let mut r = Run::new();
+            r.t = start;
+            let mut clean = true;
+            for (m, p) in msgs.iter().enumerate() {
+                for (i, f) in p.to_can_frames().iter().enumerate() {
+                    match faults.get(m * 4 + i).cloned().unwrap_or(Fault::None) {
+                        Fault::None => r.frame(f, 1),
+                        Fault::Drop => clean = false,
+                        Fault::Dup => { clean = false; r.frame(f, 1); r.frame(f, 1) }
+                        Fault::Corrupt(bit) => { clean = false; let mut c = *f; c[bit / 8] ^= 1 << (bit % 8); r.frame(&c, 1) }
+                        Fault::Garbage(g) => { clean = false; r.frame(&g, 1); r.frame(f, 1) }
+                        Fault::Gap => { clean = false; r.frame(f, 150) }
+                    }
+                }
+                r.t = r.t.wrapping_add(500);
+            }
+            let mut sent = msgs.iter();
+            for got in &r.out {
+                prop_assert!(sent.any(|s| s == got), "delivered {:?} was not sent (in order)", got);
+            }
+            if clean {
+                prop_assert_eq!(&r.out, &msgs);
+            }
+            r.invariant();
+        }
+
+        #[test]
+        fn arbitrary_input_never_panics(
+            frames in proptest::collection::vec((any::<bool>(), proptest::collection::vec(any::<u8>(), 0..10), 0u32..300), 0..60)
+        ) {
+            let mut asm = PostbackAssembler::new();
+            let mut t = 0u32;
+            for (on_id, data, dt) in frames {
+                t = t.wrapping_add(dt);
+                let id = if on_id { ids::POSTBACK } else { ids::CONTROL };
+                if let Some(p) = asm.feed(id, &data, Instant::from_millis(t)) {
+                    // Anything emitted has a valid CRC: re-encode and compare the CRC check.
+                    prop_assert!(Postback::parse(&p.to_can_bytes()).is_ok());
+                }
+            }
+            let s = asm.stats();
+            prop_assert_eq!(s.frames, 4 * s.messages + s.discarded_frames + asm.pending() as u32);
+        }
+    }
+}

@@ -1,0 +1,422 @@
+//! Serial/TCP framing (chapter III): the same frames over the gimbal's UART (115200 8N1),
+//! which the serial server bridges to TCP port 2000.
+//!
+//! A control command travels in a 24-byte frame:
+//!
+//! | offset | size | field |
+//! |---|---|---|
+//! | 0 | 3 | `EB 90 0A` (header and length byte; `0x0A` counts bytes 12..=21) |
+//! | 3 | 9 | zero |
+//! | 12 | 2 | `40 88` |
+//! | 14 | 8 | the CAN data bytes of the control frame |
+//! | 22 | 2 | CRC-16/MODBUS over bytes 0..=21, low byte first |
+//!
+//! The postback is taken to travel as its 27 bytes without CAN padding (length byte `0x0C`;
+//! the document does not show it, see [`super::postback`]).
+//!
+//! [`StreamParser`] reads a byte stream with fixed memory: it resyncs on garbage, accepts
+//! input split at any byte boundary, and yields a frame only when its CRC holds.
+//!
+//! ```
+//! use idu_gimbal::wire::serial::{self, StreamItem, StreamParser};
+//! // Look down 90°, NOTES.md's reference vector.
+//! let frame = serial::control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
+//! assert_eq!(&frame[20..], &[0x00, 0x00, 0x68, 0x5E]);
+//! let mut parser = StreamParser::new();
+//! let mut got = None;
+//! for &b in b"noise".iter().chain(frame.iter()) {
+//!     got = parser.push(b).or(got);
+//! }
+//! assert_eq!(got, Some(StreamItem::Control([0x0F, 0x07, 0, 0, 0, 0, 0, 0])));
+//! ```
+
+use super::crc;
+use super::postback::{self, Postback};
+
+mod field {
+    use core::ops::Range;
+    pub const HEADER: Range<usize> = 0..2;
+    pub const LENGTH: usize = 2;
+    pub const MARKER: Range<usize> = 12..14;
+    pub const DATA: Range<usize> = 14..22;
+    pub const CHECKED: Range<usize> = 0..22;
+    pub const CRC: Range<usize> = 22..24;
+}
+
+/// Length of a control frame on the stream.
+pub const FRAME_LEN: usize = 24;
+/// Length byte of a control frame.
+pub const CONTROL_LENGTH_BYTE: u8 = 0x0A;
+/// Bytes 12..=13 of a control frame.
+pub const MARKER: [u8; 2] = [0x40, 0x88];
+/// The longest frame the stream carries (a postback).
+pub const MAX_FRAME_LEN: usize = postback::MESSAGE_LEN;
+
+/// The 24-byte serial/TCP frame that carries a control frame's 8 CAN data bytes.
+pub fn control_frame(can_data: &[u8; 8]) -> [u8; FRAME_LEN] {
+    let mut f = [0u8; FRAME_LEN];
+    let mut put = |range: core::ops::Range<usize>, bytes: &[u8]| {
+        if let Some(dst) = f.get_mut(range) {
+            dst.copy_from_slice(bytes);
+        }
+    };
+    put(field::HEADER, &postback::HEADER);
+    put(field::LENGTH..field::LENGTH + 1, &[CONTROL_LENGTH_BYTE]);
+    put(field::MARKER, &MARKER);
+    put(field::DATA, can_data);
+    let crc = f.get(field::CHECKED).map_or(0, crc::checksum);
+    if let Some(dst) = f.get_mut(field::CRC) {
+        dst.copy_from_slice(&crc.to_le_bytes());
+    }
+    f
+}
+
+/// A frame recovered from the stream.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StreamItem {
+    /// A control frame's 8 CAN data bytes (decode them with `control::Command::decode`).
+    Control([u8; 8]),
+    /// A postback.
+    Postback(Postback),
+}
+
+/// Counters kept by a [`StreamParser`].
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StreamStats {
+    /// Control frames yielded.
+    pub control_frames: u32,
+    /// Postbacks yielded.
+    pub postbacks: u32,
+    /// Frames whose header and length were right but whose CRC failed.
+    pub crc_errors: u32,
+    /// Bytes discarded while looking for a header.
+    pub skipped_bytes: u32,
+    /// Partial frames discarded by [`StreamParser::finish`].
+    pub truncated: u32,
+}
+
+enum Step {
+    More,
+    Item(StreamItem),
+    /// The buffered bytes are not a frame: drop the first and look again in the rest.
+    Resync,
+}
+
+/// A fixed-memory parser for the serial/TCP byte stream.
+///
+/// Feed it bytes in any split; it yields each control frame and postback whose header,
+/// length byte and CRC hold. After a bad frame it looks for the next header inside the
+/// bytes it already has, so a garbage `EB 90` cannot hide a real frame that follows it.
+#[derive(Clone, Debug)]
+pub struct StreamParser {
+    buf: [u8; MAX_FRAME_LEN],
+    len: usize,
+    stats: StreamStats,
+}
+
+impl Default for StreamParser {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl StreamParser {
+    /// A parser waiting for a header.
+    pub const fn new() -> Self {
+        StreamParser {
+            buf: [0; MAX_FRAME_LEN],
+            len: 0,
+            stats: StreamStats {
+                control_frames: 0,
+                postbacks: 0,
+                crc_errors: 0,
+                skipped_bytes: 0,
+                truncated: 0,
+            },
+        }
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> StreamStats {
+        self.stats
+    }
+
+    /// Bytes of an incomplete frame held now.
+    pub fn pending(&self) -> usize {
+        self.len
+    }
+
+    /// Ends the stream: an incomplete frame is discarded and counted as truncated.
+    pub fn finish(&mut self) {
+        if self.len > 0 {
+            self.stats.truncated = self.stats.truncated.saturating_add(1);
+            self.len = 0;
+        }
+    }
+
+    /// Takes one byte; returns a frame when this byte completes one.
+    pub fn push(&mut self, byte: u8) -> Option<StreamItem> {
+        // Bytes still to examine: the new one, plus any handed back by a resync. Everything
+        // in play fits the buffer plus one byte.
+        let mut todo = [0u8; MAX_FRAME_LEN + 1];
+        let mut start = MAX_FRAME_LEN;
+        if let Some(slot) = todo.get_mut(start) {
+            *slot = byte;
+        }
+        let mut out = None;
+        while let Some(&b) = todo.get(start) {
+            start += 1;
+            match self.step(b) {
+                Step::More => {}
+                Step::Item(item) => out = Some(item),
+                Step::Resync => {
+                    // Hand back all buffered bytes but the first, ahead of those not yet seen.
+                    let keep = self.len.saturating_sub(1);
+                    self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(1);
+                    let new_start = start.saturating_sub(keep);
+                    if let (Some(dst), Some(src)) =
+                        (todo.get_mut(new_start..start), self.buf.get(1..self.len))
+                    {
+                        dst.copy_from_slice(src);
+                        start = new_start;
+                    }
+                    self.len = 0;
+                }
+            }
+        }
+        out
+    }
+
+    /// Takes a slice of bytes, yielding the frames it completes, in order.
+    pub fn feed<'p, 'b>(&'p mut self, bytes: &'b [u8]) -> Feed<'p, 'b> {
+        Feed {
+            parser: self,
+            bytes: bytes.iter(),
+        }
+    }
+
+    fn step(&mut self, byte: u8) -> Step {
+        let [h0, h1] = postback::HEADER;
+        let at = self.len;
+        let accept = match at {
+            0 => byte == h0,
+            1 => byte == h1,
+            2 => byte == CONTROL_LENGTH_BYTE || byte == postback::LENGTH_BYTE,
+            _ => true,
+        };
+        if !accept {
+            if at == 0 {
+                self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(1);
+                return Step::More;
+            }
+            // Keep the new byte in the buffer so the resync re-examines it.
+            if let Some(slot) = self.buf.get_mut(at) {
+                *slot = byte;
+                self.len += 1;
+            }
+            return Step::Resync;
+        }
+        match self.buf.get_mut(at) {
+            Some(slot) => *slot = byte,
+            None => return Step::Resync,
+        }
+        self.len += 1;
+        let expected = match self.buf.get(field::LENGTH) {
+            Some(&CONTROL_LENGTH_BYTE) => FRAME_LEN,
+            _ => postback::MESSAGE_LEN,
+        };
+        if self.len < expected || at < field::LENGTH {
+            return Step::More;
+        }
+        let frame = self.buf.get(..expected).unwrap_or(&[]);
+        let item = if expected == FRAME_LEN {
+            let computed = frame.get(field::CHECKED).map_or(0, crc::checksum);
+            let received = frame
+                .get(field::CRC)
+                .and_then(|c| c.try_into().ok())
+                .map_or(0, u16::from_le_bytes);
+            let data = frame.get(field::DATA).and_then(|d| d.try_into().ok());
+            match data {
+                Some(data) if computed == received => Some(StreamItem::Control(data)),
+                _ => None,
+            }
+        } else {
+            Postback::parse(frame).ok().map(StreamItem::Postback)
+        };
+        match item {
+            Some(item) => {
+                self.len = 0;
+                match item {
+                    StreamItem::Control(_) => {
+                        self.stats.control_frames = self.stats.control_frames.saturating_add(1)
+                    }
+                    StreamItem::Postback(_) => {
+                        self.stats.postbacks = self.stats.postbacks.saturating_add(1)
+                    }
+                }
+                Step::Item(item)
+            }
+            None => {
+                self.stats.crc_errors = self.stats.crc_errors.saturating_add(1);
+                Step::Resync
+            }
+        }
+    }
+}
+
+/// The frames completed by a slice of bytes: see [`StreamParser::feed`].
+#[derive(Debug)]
+pub struct Feed<'p, 'b> {
+    parser: &'p mut StreamParser,
+    bytes: core::slice::Iter<'b, u8>,
+}
+
+impl Iterator for Feed<'_, '_> {
+    type Item = StreamItem;
+
+    fn next(&mut self) -> Option<StreamItem> {
+        for &b in self.bytes.by_ref() {
+            if let Some(item) = self.parser.push(b) {
+                return Some(item);
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::postback::tests::{arb_postback, sample};
+    use proptest::prelude::*;
+
+    /// NOTES.md: look down 90° over TCP, 24 bytes.
+    const LOOK_DOWN: [u8; 24] = [
+        0xEB, 0x90, 0x0A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0x88, 0x0F, 0x07, 0, 0, 0, 0, 0, 0,
+        0x68, 0x5E,
+    ];
+
+    fn parse_all(bytes: &[u8]) -> (Vec<StreamItem>, StreamStats) {
+        let mut p = StreamParser::new();
+        let items: Vec<_> = p.feed(bytes).collect();
+        (items, p.stats())
+    }
+
+    #[test]
+    fn notes_vector() {
+        assert_eq!(control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]), LOOK_DOWN);
+        let (items, stats) = parse_all(&LOOK_DOWN);
+        assert_eq!(items, [StreamItem::Control([0x0F, 0x07, 0, 0, 0, 0, 0, 0])]);
+        assert_eq!(stats.control_frames, 1);
+    }
+
+    #[test]
+    fn the_documents_25_byte_typo_is_not_a_frame() {
+        // The document prints ten zeros after 0A; with ten, the CRC cannot hold.
+        let mut typo = vec![0xEB, 0x90, 0x0A];
+        typo.extend([0u8; 10]);
+        typo.extend([0x40, 0x88, 0x0F, 0x07, 0, 0, 0, 0, 0, 0, 0x68, 0x5E]);
+        let (items, stats) = parse_all(&typo);
+        assert!(items.is_empty());
+        assert_eq!(stats.crc_errors, 1);
+    }
+
+    #[test]
+    fn postback_on_the_stream() {
+        let pb = Postback::parse(&sample()).unwrap();
+        let (items, _) = parse_all(&sample()[..27]);
+        assert_eq!(items, [StreamItem::Postback(pb)]);
+    }
+
+    #[test]
+    fn false_header_before_a_real_frame() {
+        // A garbage `EB 90 0C` claims a postback; the real control frame inside it is found.
+        let mut bytes = vec![0xEB, 0x90, 0x0C];
+        bytes.extend(LOOK_DOWN);
+        let (items, stats) = parse_all(&bytes);
+        assert_eq!(items, [StreamItem::Control([0x0F, 0x07, 0, 0, 0, 0, 0, 0])]);
+        assert_eq!(stats.crc_errors, 1);
+        // EB EB 90 ...: the second EB starts the frame.
+        let mut bytes = vec![0xEB];
+        bytes.extend(LOOK_DOWN);
+        assert_eq!(parse_all(&bytes).0.len(), 1);
+    }
+
+    #[test]
+    fn truncated_tail() {
+        let mut p = StreamParser::new();
+        assert_eq!(p.feed(&LOOK_DOWN[..20]).count(), 0);
+        assert_eq!(p.pending(), 20);
+        p.finish();
+        assert_eq!((p.pending(), p.stats().truncated), (0, 1));
+        // A new frame after it parses.
+        assert_eq!(p.feed(&LOOK_DOWN).count(), 1);
+    }
+
+    fn stream_of(frames: &[Vec<u8>], garbage: &[Vec<u8>]) -> Vec<u8> {
+        let mut out = Vec::new();
+        for (i, f) in frames.iter().enumerate() {
+            if let Some(g) = garbage.get(i) {
+                out.extend(g);
+            }
+            out.extend(f);
+        }
+        out
+    }
+
+    proptest! {
+        #[test]
+        fn every_split_point(cut in 0usize..=24, cut2 in 0usize..=27) {
+            let mut p = StreamParser::new();
+            let mut items: Vec<_> = p.feed(&LOOK_DOWN[..cut]).collect();
+            items.extend(p.feed(&LOOK_DOWN[cut..]));
+            let s = sample();
+            items.extend(p.feed(&s[..cut2]));
+            items.extend(p.feed(&s[cut2..27]));
+            prop_assert_eq!(items.len(), 2);
+        }
+
+        #[test]
+        fn garbage_between_frames(
+            datas in proptest::collection::vec(any::<[u8; 8]>(), 1..6),
+            pbs in proptest::collection::vec(arb_postback(), 0..4),
+            garbage in proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..40), 10),
+        ) {
+            let mut frames: Vec<Vec<u8>> = datas.iter().map(|d| control_frame(d).to_vec()).collect();
+            frames.extend(pbs.iter().map(|p| p.to_stream_bytes().to_vec()));
+            let bytes = stream_of(&frames, &garbage);
+            let (items, _) = parse_all(&bytes);
+            // Every frame is recovered, in order; garbage may add frames only if it happens
+            // to contain a valid one, so look for ours as a subsequence.
+            let expected: Vec<StreamItem> = datas.iter().map(|d| StreamItem::Control(*d))
+                .chain(pbs.iter().map(|p| StreamItem::Postback(*p))).collect();
+            let mut it = items.iter();
+            for e in &expected {
+                prop_assert!(it.any(|i| i == e), "missing {:?}", e);
+            }
+        }
+
+        #[test]
+        fn never_yields_a_bad_crc(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+            let (items, _) = parse_all(&bytes);
+            for item in items {
+                if let StreamItem::Control(d) = item {
+                    // It must be a frame present in the input with a good CRC.
+                    let f = control_frame(&d);
+                    prop_assert!(bytes.windows(24).any(|w| w == f));
+                }
+            }
+        }
+
+        #[test]
+        fn bounded_and_panic_free(chunks in proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..50), 0..20)) {
+            let mut p = StreamParser::new();
+            for c in &chunks {
+                for _ in p.feed(c) {}
+                prop_assert!(p.pending() < MAX_FRAME_LEN);
+            }
+        }
+    }
+}
