@@ -15,6 +15,7 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod geo;
 pub mod link;
 pub mod time;
 pub mod wire;
