@@ -15,7 +15,9 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod interface;
 pub mod time;
+pub mod video;
 pub mod wire;
 
 pub use time::Instant;

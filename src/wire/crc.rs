@@ -20,6 +20,8 @@
 /// The 256-entry table for the reflected polynomial 0xA001.
 static TABLE: [u16; 256] = make_table();
 
+// `i < 256` by the loop condition; `get_mut` is not available in a const fn.
+#[allow(clippy::indexing_slicing)]
 const fn make_table() -> [u16; 256] {
     let mut table = [0u16; 256];
     let mut i = 0;
