@@ -16,8 +16,10 @@
 extern crate std;
 
 pub mod geo;
+pub mod interface;
 pub mod link;
 pub mod time;
+pub mod video;
 pub mod wire;
 
 pub use time::Instant;

@@ -50,6 +50,7 @@ pub struct RangeError {
     pub max: f64,
 }
 
+// Helpers for the codecs that are still to come; not yet used on this branch.
 impl RangeError {
     /// Checks that `value` is finite and within `[min, max]` (single precision, the
     /// cheap path on a Cortex-M4F).
