@@ -6,6 +6,7 @@
 
 use core::fmt;
 
+pub mod control;
 pub mod crc;
 pub mod ids;
 pub mod postback;
