@@ -15,6 +15,8 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+#[cfg(feature = "mock")]
+pub mod mock;
 pub mod time;
 pub mod wire;
 
