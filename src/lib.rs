@@ -18,6 +18,8 @@ extern crate std;
 pub mod geo;
 pub mod interface;
 pub mod link;
+#[cfg(feature = "mock")]
+pub mod mock;
 pub mod time;
 pub mod video;
 pub mod wire;

@@ -1,0 +1,1449 @@
+//! An in-memory CAN bus with fault injection, for host tests and emulated firmware.
+//!
+//! A [`Bus`] has `ENDPOINTS` nodes. Each node, taken once with [`Bus::endpoint`], is an
+//! [`Endpoint`] that implements [`embedded_can::nb::Can`] and [`embedded_can::blocking::Can`]
+//! with [`MockFrame`] and [`MockError`], so any driver written against `embedded-can` 0.4
+//! runs on it unchanged. Nothing allocates, nothing is `unsafe`, nothing panics, and
+//! the module works without `std`, so it also runs inside emulated firmware.
+//!
+//! # Model
+//!
+//! * Each endpoint has a set of TX mailboxes (3 by default, like bxcan; see
+//!   [`Bus::set_mailboxes`]) and an RX FIFO of `QUEUE` frames.
+//! * [`nb::Can::transmit`](embedded_can::nb::Can::transmit) puts the frame in a free
+//!   mailbox. When all are full it replaces the lowest-priority pending frame if that one
+//!   loses arbitration to the new frame, and returns it as `Ok(Some(displaced))`;
+//!   otherwise it returns `Err(nb::Error::WouldBlock)`.
+//! * With auto-delivery on (the default, [`Bus::set_auto_deliver`]) every successful
+//!   transmit puts all pending frames on the wire at once, so mailboxes are never full.
+//!   With it off, frames wait in their mailboxes until [`Bus::deliver`] or
+//!   [`Bus::deliver_one`], which send them in CAN arbitration order
+//!   ([`MockFrame::arbitration_key`], then transmission order).
+//! * A frame on the wire is offered to every *other* endpoint that has been taken (an
+//!   endpoint joins the bus when it is taken and never leaves; frames sent before are not
+//!   queued for it). A frame never comes back to its sender.
+//! * When a receiver's RX FIFO is full the frame is dropped for that receiver only, and
+//!   its next `receive` returns `Err(MockError { kind: ErrorKind::Overrun })` once, like
+//!   a hardware FIFO overrun; the frames already queued stay and are received after it.
+//! * [`Faults`] inject loss, undetected corruption, duplication and bus errors with a
+//!   deterministic PRNG seeded by [`Bus::new`]: the same seed, faults and sequence of
+//!   calls give the same results.
+//!
+//! # Example
+//!
+//! ```
+//! use embedded_can::{nb::Can, ExtendedId, Frame};
+//! use idu_gimbal::mock::{Bus, MockFrame};
+//!
+//! let bus: Bus<2, 8> = Bus::new(42);
+//! let mut flight_controller = bus.endpoint(0).unwrap();
+//! let mut gimbal = bus.endpoint(1).unwrap();
+//!
+//! let id = ExtendedId::new(0x0000_0F01).unwrap();
+//! let frame = MockFrame::new(id, &[1, 2, 3, 4, 5, 6, 7, 8]).unwrap();
+//! assert_eq!(flight_controller.transmit(&frame), Ok(None));
+//!
+//! let received = gimbal.receive().unwrap();
+//! assert!(received.is_extended());
+//! assert_eq!(received.raw_id(), 0x0F01);
+//! assert_eq!(received.data(), &[1, 2, 3, 4, 5, 6, 7, 8]);
+//! // Not echoed back to the sender, and nothing more to receive.
+//! assert_eq!(flight_controller.receive(), Err(nb::Error::WouldBlock));
+//! assert_eq!(gimbal.receive(), Err(nb::Error::WouldBlock));
+//! assert_eq!(bus.stats().delivered, 1);
+//! ```
+
+use core::cell::RefCell;
+use core::fmt;
+
+use embedded_can::{ErrorKind, ExtendedId, Id, StandardId};
+use heapless::Deque;
+
+/// The largest number of TX mailboxes an endpoint can have ([`Bus::set_mailboxes`]).
+pub const MAX_MAILBOXES: usize = 8;
+
+/// The number of TX mailboxes each endpoint starts with (as on bxcan).
+pub const DEFAULT_MAILBOXES: usize = 3;
+
+/// The largest standard (11-bit) identifier.
+const STANDARD_MAX: u32 = 0x7FF;
+/// The largest extended (29-bit) identifier.
+const EXTENDED_MAX: u32 = 0x1FFF_FFFF;
+
+/// Error kinds a random `tx_error` fault picks from: errors a transmitter detects.
+const TX_ERROR_KINDS: [ErrorKind; 4] = [
+    ErrorKind::Bit,
+    ErrorKind::Stuff,
+    ErrorKind::Form,
+    ErrorKind::Acknowledge,
+];
+/// Error kinds a random `rx_error` fault picks from: errors a receiver detects.
+const RX_ERROR_KINDS: [ErrorKind; 3] = [ErrorKind::Stuff, ErrorKind::Crc, ErrorKind::Form];
+
+/// A classic CAN frame: standard or extended identifier, data or remote, DLC 0 to 8.
+///
+/// Implements [`embedded_can::Frame`]. The identifier is stored raw with an `extended`
+/// flag (rather than as an [`embedded_can::Id`]) so that the frame can derive
+/// `defmt::Format`. Data bytes past the DLC, and all data bytes of a remote frame, are
+/// zero, so the derived equality compares exactly what is on the wire.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MockFrame {
+    id: u32,
+    extended: bool,
+    remote: bool,
+    dlc: u8,
+    data: [u8; 8],
+}
+
+impl MockFrame {
+    /// A data frame with a 29-bit extended identifier; `None` if `id` exceeds
+    /// `0x1FFF_FFFF` or `data` is longer than 8 bytes.
+    pub fn extended(id: u32, data: &[u8]) -> Option<Self> {
+        if id > EXTENDED_MAX {
+            return None;
+        }
+        Self::build(id, true, data)
+    }
+
+    /// A data frame with an 11-bit standard identifier; `None` if `id` exceeds `0x7FF`
+    /// or `data` is longer than 8 bytes.
+    pub fn standard(id: u16, data: &[u8]) -> Option<Self> {
+        let id = u32::from(id);
+        if id > STANDARD_MAX {
+            return None;
+        }
+        Self::build(id, false, data)
+    }
+
+    /// The raw identifier: 11 bits for a standard frame, 29 bits for an extended one.
+    pub const fn raw_id(&self) -> u32 {
+        self.id
+    }
+
+    /// The frame's CAN arbitration priority: **the lower key wins** the bus.
+    ///
+    /// This is the bit sequence a controller sends during arbitration, so it orders
+    /// frames exactly as a real bus does, mixed formats included: first the 11-bit base
+    /// identifier (a standard identifier, or the top 11 bits of an extended one), then
+    /// RTR of a standard frame (data beats remote) against SRR of an extended frame
+    /// (always recessive), then IDE (standard beats extended), then the low 18 bits of an
+    /// extended identifier, then its RTR. Within one format this is simply "lower raw id
+    /// first, data before remote". Across formats, a standard frame beats an extended
+    /// frame whose top 11 bits equal its identifier, but raw identifiers are not compared
+    /// directly: standard `0x002` loses to extended `0x0004_0000` (base `0x001`), and
+    /// extended `0x100` (base `0x000`) beats standard `0x100`.
+    pub const fn arbitration_key(&self) -> u32 {
+        let rtr = self.remote as u32;
+        if self.extended {
+            let base = self.id >> 18;
+            let low = self.id & 0x3_FFFF;
+            // base(11) | SRR=1 | IDE=1 | low(18) | RTR
+            (base << 21) | (1 << 20) | (1 << 19) | (low << 1) | rtr
+        } else {
+            // base(11) | RTR | IDE=0 | nothing further is compared
+            (self.id << 21) | (rtr << 20)
+        }
+    }
+
+    fn build(id: u32, extended: bool, bytes: &[u8]) -> Option<Self> {
+        let mut data = [0u8; 8];
+        data.get_mut(..bytes.len())?.copy_from_slice(bytes);
+        Some(MockFrame {
+            id,
+            extended,
+            remote: false,
+            dlc: u8::try_from(bytes.len()).ok()?,
+            data,
+        })
+    }
+
+    fn split_id(id: Id) -> (u32, bool) {
+        match id {
+            Id::Standard(id) => (u32::from(id.as_raw()), false),
+            Id::Extended(id) => (id.as_raw(), true),
+        }
+    }
+
+    /// Flips data bit `bit` (0 is the least significant bit of the first byte).
+    fn flip_bit(&mut self, bit: usize) {
+        if let Some(byte) = self.data.get_mut(bit / 8) {
+            *byte ^= 1 << (bit % 8);
+        }
+    }
+}
+
+impl embedded_can::Frame for MockFrame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        let (id, extended) = Self::split_id(id.into());
+        Self::build(id, extended, data)
+    }
+
+    fn new_remote(id: impl Into<Id>, dlc: usize) -> Option<Self> {
+        let (id, extended) = Self::split_id(id.into());
+        if dlc > 8 {
+            return None;
+        }
+        Some(MockFrame {
+            id,
+            extended,
+            remote: true,
+            dlc: u8::try_from(dlc).ok()?,
+            data: [0; 8],
+        })
+    }
+
+    fn is_extended(&self) -> bool {
+        self.extended
+    }
+
+    fn is_remote_frame(&self) -> bool {
+        self.remote
+    }
+
+    fn id(&self) -> Id {
+        // The constructors validated the raw value, so the fallbacks are unreachable.
+        if self.extended {
+            Id::Extended(ExtendedId::new(self.id).unwrap_or(ExtendedId::MAX))
+        } else {
+            let raw = u16::try_from(self.id).unwrap_or(u16::MAX);
+            Id::Standard(StandardId::new(raw).unwrap_or(StandardId::MAX))
+        }
+    }
+
+    fn dlc(&self) -> usize {
+        usize::from(self.dlc)
+    }
+
+    /// The data bytes; empty for a remote frame (whose DLC is only a request).
+    fn data(&self) -> &[u8] {
+        if self.remote {
+            &[]
+        } else {
+            self.data.get(..usize::from(self.dlc)).unwrap_or(&[])
+        }
+    }
+}
+
+/// An error returned by an [`Endpoint`]: an injected bus error, an RX overrun, or
+/// [`ErrorKind::Other`] from the mock itself.
+///
+/// Which kinds can occur:
+/// * [`ErrorKind::Overrun`]: frames were dropped because this endpoint's RX FIFO was
+///   full (reported once by the next `receive`), or injected with
+///   [`Endpoint::inject_error`].
+/// * [`ErrorKind::Bit`], [`Stuff`](ErrorKind::Stuff), [`Form`](ErrorKind::Form),
+///   [`Acknowledge`](ErrorKind::Acknowledge): a random `tx_error` fault from `transmit`.
+/// * [`ErrorKind::Stuff`], [`Crc`](ErrorKind::Crc), [`Form`](ErrorKind::Form): a random
+///   `rx_error` fault from `receive`.
+/// * [`ErrorKind::Other`]: never produced by random faults, only by
+///   [`Endpoint::inject_error`], by a blocking `receive` with nothing to receive, or if
+///   the bus state were ever found borrowed (which the design rules out).
+/// * Any kind at all can be injected explicitly with [`Endpoint::inject_error`].
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct MockError {
+    /// What went wrong.
+    pub kind: ErrorKind,
+}
+
+impl MockError {
+    /// An error of the given kind.
+    pub const fn new(kind: ErrorKind) -> Self {
+        MockError { kind }
+    }
+}
+
+impl From<ErrorKind> for MockError {
+    fn from(kind: ErrorKind) -> Self {
+        MockError { kind }
+    }
+}
+
+impl embedded_can::Error for MockError {
+    fn kind(&self) -> ErrorKind {
+        self.kind
+    }
+}
+
+impl fmt::Display for MockError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "mock CAN bus: {}", self.kind)
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for MockError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let kind = match self.kind {
+            ErrorKind::Overrun => "Overrun",
+            ErrorKind::Bit => "Bit",
+            ErrorKind::Stuff => "Stuff",
+            ErrorKind::Crc => "Crc",
+            ErrorKind::Form => "Form",
+            ErrorKind::Acknowledge => "Acknowledge",
+            _ => "Other",
+        };
+        defmt::write!(f, "MockError {{ kind: {=str} }}", kind)
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for MockError {}
+
+/// Fault probabilities, each in `[0, 1]`: 0 never happens, 1 always happens (values at
+/// or below 0, and NaN, count as 0; values at or above 1 count as 1).
+///
+/// Faults on the wire are decided once per frame put on the wire, in this order: `loss`
+/// (nobody receives it; nothing else is decided), then `corruption`, then `duplication`.
+/// A PRNG draw is made only for faults whose probability is above 0.
+#[derive(Clone, Copy, PartialEq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Faults {
+    /// Probability that a frame on the wire reaches no receiver (counted in
+    /// [`BusStats::lost`]).
+    pub loss: f32,
+    /// Probability that a data frame with DLC > 0 has one random data bit flipped, as if
+    /// the bus CRC had missed it. Decided **per frame**: every receiver, and both copies
+    /// of a duplicated frame, see the same corrupted data. Identifier, DLC and remote
+    /// frames are never corrupted.
+    pub corruption: f32,
+    /// Probability that a frame is delivered twice in a row to every receiver (as when
+    /// a transmitter misses the acknowledgement and resends).
+    pub duplication: f32,
+    /// Probability, per call of `transmit` (nb or blocking), that the call fails with a
+    /// random transmitter error ([`ErrorKind::Bit`], `Stuff`, `Form` or `Acknowledge`)
+    /// and the frame is not queued.
+    pub tx_error: f32,
+    /// Probability, per call of `receive` (nb or blocking, whether or not a frame is
+    /// waiting), that the call fails with a random receiver error
+    /// ([`ErrorKind::Stuff`], `Crc` or `Form`); no queued frame is consumed.
+    pub rx_error: f32,
+}
+
+impl Faults {
+    /// No faults at all (the default).
+    pub const NONE: Faults = Faults {
+        loss: 0.0,
+        corruption: 0.0,
+        duplication: 0.0,
+        tx_error: 0.0,
+        rx_error: 0.0,
+    };
+}
+
+/// Counters of what happened on a [`Bus`] since it was created; each saturates at
+/// `u32::MAX`.
+///
+/// With `R` receivers per frame (the taken endpoints other than the sender; constant when
+/// every endpoint is taken before traffic starts), these always hold:
+///
+/// * `delivered + overruns == (sent - lost + duplicated) * R`
+/// * frames accepted by `transmit` == `sent + displaced +` [`Bus::pending`]
+/// * `lost + corrupted <= sent`, `lost + duplicated <= sent` (a lost frame is neither
+///   corrupted nor duplicated)
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BusStats {
+    /// Frames that left a TX mailbox and went on the wire (lost ones included).
+    pub sent: u32,
+    /// Frame copies placed into RX FIFOs (one per receiver, two per receiver for a
+    /// duplicated frame).
+    pub delivered: u32,
+    /// Frames on the wire that the `loss` fault removed (each counted once, whatever the
+    /// number of receivers).
+    pub lost: u32,
+    /// Frames on the wire that the `corruption` fault altered (counted once per frame).
+    pub corrupted: u32,
+    /// Frames on the wire that the `duplication` fault delivered twice (counted once per
+    /// frame).
+    pub duplicated: u32,
+    /// Frame copies dropped because the receiver's RX FIFO was full (one per receiver per
+    /// copy; the `Overrun` error is reported once however many were dropped).
+    pub overruns: u32,
+    /// Pending frames replaced in their mailbox by a higher-priority frame and handed
+    /// back by `transmit` as `Ok(Some(displaced))`; they never went on the wire.
+    pub displaced: u32,
+    /// Errors returned because of the `tx_error` and `rx_error` faults or
+    /// [`Endpoint::inject_error`] (not overruns, not the blocking receive's "nothing to
+    /// receive").
+    pub injected_errors: u32,
+}
+
+fn bump(counter: &mut u32) {
+    *counter = counter.saturating_add(1);
+}
+
+/// A frame waiting in a TX mailbox; `seq` orders frames of equal priority.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    frame: MockFrame,
+    seq: u64,
+}
+
+/// The state of one endpoint.
+#[derive(Debug)]
+struct Node<const QUEUE: usize> {
+    taken: bool,
+    mailboxes: usize,
+    slots: [Option<Pending>; MAX_MAILBOXES],
+    rx: Deque<MockFrame, QUEUE>,
+    overrun: bool,
+    injected: Option<ErrorKind>,
+}
+
+impl<const QUEUE: usize> Node<QUEUE> {
+    const NEW: Self = Node {
+        taken: false,
+        mailboxes: DEFAULT_MAILBOXES,
+        slots: [None; MAX_MAILBOXES],
+        rx: Deque::new(),
+        overrun: false,
+        injected: None,
+    };
+
+    fn pending(&self) -> usize {
+        self.slots.iter().flatten().count()
+    }
+
+    fn has_free_mailbox(&self) -> bool {
+        self.pending() < self.mailboxes
+    }
+}
+
+#[derive(Debug)]
+struct State<const ENDPOINTS: usize, const QUEUE: usize> {
+    rng: fastrand::Rng,
+    faults: Faults,
+    auto_deliver: bool,
+    next_seq: u64,
+    stats: BusStats,
+    nodes: [Node<QUEUE>; ENDPOINTS],
+}
+
+/// Draws `true` with probability `p` (no draw when `p` is not above 0).
+fn roll(rng: &mut fastrand::Rng, p: f32) -> bool {
+    p > 0.0 && rng.f32() < p
+}
+
+fn pick(rng: &mut fastrand::Rng, kinds: &[ErrorKind]) -> ErrorKind {
+    kinds
+        .get(rng.usize(..kinds.len()))
+        .copied()
+        .unwrap_or(ErrorKind::Other)
+}
+
+const fn other() -> MockError {
+    MockError::new(ErrorKind::Other)
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> State<ENDPOINTS, QUEUE> {
+    /// The explicit injected error, else a random one; counts it.
+    fn take_error(&mut self, index: usize, p: f32, kinds: &[ErrorKind]) -> Result<(), MockError> {
+        let node = self.nodes.get_mut(index).ok_or(other())?;
+        let kind = match node.injected.take() {
+            Some(kind) => kind,
+            None if roll(&mut self.rng, p) => pick(&mut self.rng, kinds),
+            None => return Ok(()),
+        };
+        bump(&mut self.stats.injected_errors);
+        Err(MockError::new(kind))
+    }
+
+    /// Puts `frame` in a mailbox of endpoint `index`, displacing if needed.
+    fn enqueue(
+        &mut self,
+        index: usize,
+        frame: MockFrame,
+    ) -> nb::Result<Option<MockFrame>, MockError> {
+        let seq = self.next_seq;
+        let node = self.nodes.get_mut(index).ok_or(other())?;
+        let new = Pending { frame, seq };
+        let displaced = if node.has_free_mailbox() {
+            let slot = node
+                .slots
+                .iter_mut()
+                .find(|slot| slot.is_none())
+                .ok_or(other())?;
+            *slot = Some(new);
+            None
+        } else {
+            let worst = node
+                .slots
+                .iter_mut()
+                .flatten()
+                .max_by_key(|p| (p.frame.arbitration_key(), p.seq))
+                .filter(|p| p.frame.arbitration_key() > frame.arbitration_key())
+                .ok_or(nb::Error::WouldBlock)?;
+            let old = core::mem::replace(worst, new);
+            bump(&mut self.stats.displaced);
+            Some(old.frame)
+        };
+        self.next_seq = self.next_seq.wrapping_add(1);
+        Ok(displaced)
+    }
+
+    /// Puts the highest-priority pending frame on the wire.
+    fn deliver_one(&mut self) -> Option<MockFrame> {
+        let mut best: Option<(u32, u64, usize, usize)> = None;
+        for (i, node) in self.nodes.iter().enumerate() {
+            for (j, slot) in node.slots.iter().enumerate() {
+                if let Some(p) = slot {
+                    let key = (p.frame.arbitration_key(), p.seq, i, j);
+                    if best.is_none_or(|b| (key.0, key.1) < (b.0, b.1)) {
+                        best = Some(key);
+                    }
+                }
+            }
+        }
+        let (_, _, i, j) = best?;
+        let pending = self.nodes.get_mut(i)?.slots.get_mut(j)?.take()?;
+        bump(&mut self.stats.sent);
+        self.broadcast(i, pending.frame);
+        Some(pending.frame)
+    }
+
+    fn deliver_all(&mut self) -> usize {
+        let mut count = 0;
+        while self.deliver_one().is_some() {
+            count += 1;
+        }
+        count
+    }
+
+    /// Applies the wire faults and queues the frame at every other taken endpoint.
+    fn broadcast(&mut self, from: usize, mut frame: MockFrame) {
+        let State {
+            rng,
+            faults,
+            stats,
+            nodes,
+            ..
+        } = self;
+        if roll(rng, faults.loss) {
+            bump(&mut stats.lost);
+            return;
+        }
+        let bits = if frame.remote {
+            0
+        } else {
+            usize::from(frame.dlc) * 8
+        };
+        if bits > 0 && roll(rng, faults.corruption) {
+            frame.flip_bit(rng.usize(..bits));
+            bump(&mut stats.corrupted);
+        }
+        let copies = if roll(rng, faults.duplication) {
+            bump(&mut stats.duplicated);
+            2
+        } else {
+            1
+        };
+        for _ in 0..copies {
+            for (i, node) in nodes.iter_mut().enumerate() {
+                if i == from || !node.taken {
+                    continue;
+                }
+                if node.rx.push_back(frame).is_ok() {
+                    bump(&mut stats.delivered);
+                } else {
+                    node.overrun = true;
+                    bump(&mut stats.overruns);
+                }
+            }
+        }
+    }
+
+    /// The checks every `receive` makes before looking at the FIFO.
+    fn receive_errors(&mut self, index: usize) -> Result<(), MockError> {
+        let p = self.faults.rx_error;
+        // An explicitly injected error comes first, then a pending overrun, then faults.
+        if self.nodes.get(index).is_some_and(|n| n.injected.is_some()) {
+            return self.take_error(index, p, &RX_ERROR_KINDS);
+        }
+        let node = self.nodes.get_mut(index).ok_or(other())?;
+        if core::mem::take(&mut node.overrun) {
+            return Err(MockError::new(ErrorKind::Overrun));
+        }
+        self.take_error(index, p, &RX_ERROR_KINDS)
+    }
+
+    fn pop(&mut self, index: usize) -> Option<MockFrame> {
+        self.nodes.get_mut(index)?.rx.pop_front()
+    }
+}
+
+/// An in-memory CAN bus of `ENDPOINTS` nodes, each with an RX FIFO of `QUEUE` frames.
+///
+/// All methods take `&self`: the state lives in a [`RefCell`], and [`Endpoint`]s hold a
+/// shared reference to the bus. The bus never runs caller code while its state is
+/// borrowed, so the internal borrow cannot fail; should it ever, `transmit` and
+/// `receive` return [`ErrorKind::Other`], queries return empty values and configuration
+/// calls do nothing. `Bus` is not `Sync`: share it within one thread (or one
+/// execution context of the firmware).
+///
+/// Memory: roughly `ENDPOINTS * (16 * QUEUE + 32 * MAX_MAILBOXES)` bytes plus a few
+/// words, all inline; nothing is allocated.
+#[derive(Debug)]
+pub struct Bus<const ENDPOINTS: usize, const QUEUE: usize> {
+    state: RefCell<State<ENDPOINTS, QUEUE>>,
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> Bus<ENDPOINTS, QUEUE> {
+    /// A bus with no faults, auto-delivery on, [`DEFAULT_MAILBOXES`] mailboxes per
+    /// endpoint, and its PRNG seeded with `seed`.
+    pub const fn new(seed: u64) -> Self {
+        Bus {
+            state: RefCell::new(State {
+                rng: fastrand::Rng::with_seed(seed),
+                faults: Faults::NONE,
+                auto_deliver: true,
+                next_seq: 0,
+                stats: BusStats {
+                    sent: 0,
+                    delivered: 0,
+                    lost: 0,
+                    corrupted: 0,
+                    duplicated: 0,
+                    overruns: 0,
+                    displaced: 0,
+                    injected_errors: 0,
+                },
+                nodes: [Node::NEW; ENDPOINTS],
+            }),
+        }
+    }
+
+    /// The bus with these faults (builder form of [`Bus::set_faults`]).
+    #[must_use]
+    pub fn with_faults(mut self, faults: Faults) -> Self {
+        self.state.get_mut().faults = faults;
+        self
+    }
+
+    /// Changes the faults; takes effect from the next call, so faults can change mid-run.
+    pub fn set_faults(&self, faults: Faults) {
+        if let Ok(mut state) = self.state.try_borrow_mut() {
+            state.faults = faults;
+        }
+    }
+
+    /// The faults in force.
+    pub fn faults(&self) -> Faults {
+        self.state
+            .try_borrow()
+            .map(|state| state.faults)
+            .unwrap_or_default()
+    }
+
+    /// Sets the number of TX mailboxes of `endpoint` to `n` (1 to [`MAX_MAILBOXES`]).
+    ///
+    /// Returns `false`, changing nothing, if `endpoint` or `n` is out of range. Frames
+    /// already pending stay pending even if there are now more of them than `n`; the
+    /// mailboxes then count as full until enough have been delivered.
+    pub fn set_mailboxes(&self, endpoint: usize, n: usize) -> bool {
+        if !(1..=MAX_MAILBOXES).contains(&n) {
+            return false;
+        }
+        let Ok(mut state) = self.state.try_borrow_mut() else {
+            return false;
+        };
+        match state.nodes.get_mut(endpoint) {
+            Some(node) => {
+                node.mailboxes = n;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Turns auto-delivery on (the default) or off.
+    ///
+    /// On: every successful `transmit` puts all pending frames on the wire before
+    /// returning. Off: frames wait in their mailboxes for [`Bus::deliver`] or
+    /// [`Bus::deliver_one`] (or a blocking call that needs room). Turning it on delivers
+    /// whatever is pending at once.
+    pub fn set_auto_deliver(&self, on: bool) {
+        if let Ok(mut state) = self.state.try_borrow_mut() {
+            state.auto_deliver = on;
+            if on {
+                state.deliver_all();
+            }
+        }
+    }
+
+    /// Takes endpoint `index`; `None` if it is out of range or was taken before.
+    ///
+    /// The endpoint joins the bus now: it receives the frames sent from now on. It stays
+    /// on the bus when dropped (its RX FIFO keeps filling) and cannot be taken again.
+    pub fn endpoint(&self, index: usize) -> Option<Endpoint<'_, ENDPOINTS, QUEUE>> {
+        let mut state = self.state.try_borrow_mut().ok()?;
+        let node = state.nodes.get_mut(index)?;
+        if node.taken {
+            return None;
+        }
+        node.taken = true;
+        Some(Endpoint { bus: self, index })
+    }
+
+    /// Puts every pending frame of every endpoint on the wire, highest priority first
+    /// (lowest [`MockFrame::arbitration_key`], then the order they were transmitted in).
+    /// Returns how many frames went on the wire.
+    pub fn deliver(&self) -> usize {
+        self.state
+            .try_borrow_mut()
+            .map(|mut state| state.deliver_all())
+            .unwrap_or(0)
+    }
+
+    /// Puts the single highest-priority pending frame on the wire and returns it as it
+    /// was transmitted (before any wire fault); `None` if nothing was pending.
+    pub fn deliver_one(&self) -> Option<MockFrame> {
+        self.state.try_borrow_mut().ok()?.deliver_one()
+    }
+
+    /// Frames waiting in TX mailboxes, all endpoints together.
+    pub fn pending(&self) -> usize {
+        self.state
+            .try_borrow()
+            .map(|state| state.nodes.iter().map(Node::pending).sum())
+            .unwrap_or(0)
+    }
+
+    /// Makes the next `transmit` or `receive` (nb or blocking, whichever comes first) of
+    /// `endpoint` fail with exactly `kind`; see [`Endpoint::inject_error`]. For use once
+    /// the endpoint has been moved into a driver. Returns `false` if `endpoint` is out of
+    /// range.
+    pub fn inject_error(&self, endpoint: usize, kind: ErrorKind) -> bool {
+        let Ok(mut state) = self.state.try_borrow_mut() else {
+            return false;
+        };
+        match state.nodes.get_mut(endpoint) {
+            Some(node) => {
+                node.injected = Some(kind);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> BusStats {
+        self.state
+            .try_borrow()
+            .map(|state| state.stats)
+            .unwrap_or_default()
+    }
+}
+
+/// One node of a [`Bus`]: implements [`embedded_can::nb::Can`] and
+/// [`embedded_can::blocking::Can`].
+pub struct Endpoint<'a, const ENDPOINTS: usize, const QUEUE: usize> {
+    bus: &'a Bus<ENDPOINTS, QUEUE>,
+    index: usize,
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> fmt::Debug for Endpoint<'_, ENDPOINTS, QUEUE> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Endpoint")
+            .field("index", &self.index)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> Endpoint<'_, ENDPOINTS, QUEUE> {
+    /// This endpoint's index on the bus.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+
+    /// Makes the next `transmit` or `receive` (nb or blocking, whichever comes first)
+    /// fail with exactly `kind`, once; a frame being transmitted is not queued, a frame
+    /// waiting to be received stays queued. A second injection before that call replaces
+    /// the first. Counted in [`BusStats::injected_errors`].
+    pub fn inject_error(&self, kind: ErrorKind) {
+        self.bus.inject_error(self.index, kind);
+    }
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> embedded_can::nb::Can
+    for Endpoint<'_, ENDPOINTS, QUEUE>
+{
+    type Frame = MockFrame;
+    type Error = MockError;
+
+    /// Queues `frame` in a TX mailbox; see the [module documentation](crate::mock) for
+    /// displacement and delivery. Fails first with an injected error, then with a
+    /// `tx_error` fault.
+    fn transmit(&mut self, frame: &MockFrame) -> nb::Result<Option<MockFrame>, MockError> {
+        let mut state = self.bus.state.try_borrow_mut().map_err(|_| other())?;
+        let p = state.faults.tx_error;
+        state.take_error(self.index, p, &TX_ERROR_KINDS)?;
+        let displaced = state.enqueue(self.index, *frame)?;
+        if state.auto_deliver {
+            state.deliver_all();
+        }
+        Ok(displaced)
+    }
+
+    /// Pops the oldest frame of the RX FIFO, or `Err(WouldBlock)` if it is empty.
+    /// Before that, fails with an injected error, then once with `Overrun` after frames
+    /// were dropped, then with an `rx_error` fault.
+    fn receive(&mut self) -> nb::Result<MockFrame, MockError> {
+        let mut state = self.bus.state.try_borrow_mut().map_err(|_| other())?;
+        state.receive_errors(self.index)?;
+        state.pop(self.index).ok_or(nb::Error::WouldBlock)
+    }
+}
+
+impl<const ENDPOINTS: usize, const QUEUE: usize> embedded_can::blocking::Can
+    for Endpoint<'_, ENDPOINTS, QUEUE>
+{
+    type Frame = MockFrame;
+    type Error = MockError;
+
+    /// Queues `frame`, never displacing another: if this endpoint's mailboxes are full
+    /// (only possible with auto-delivery off), it first puts pending frames of the whole
+    /// bus on the wire, in arbitration order, until one of its mailboxes is free, which
+    /// is what waiting would achieve on a real bus. Errors as for the nb `transmit`.
+    fn transmit(&mut self, frame: &MockFrame) -> Result<(), MockError> {
+        let mut state = self.bus.state.try_borrow_mut().map_err(|_| other())?;
+        let p = state.faults.tx_error;
+        state.take_error(self.index, p, &TX_ERROR_KINDS)?;
+        // Each round delivers one pending frame, so this ends.
+        while !state
+            .nodes
+            .get(self.index)
+            .ok_or(other())?
+            .has_free_mailbox()
+        {
+            state.deliver_one().ok_or(other())?;
+        }
+        state.enqueue(self.index, *frame).map_err(|e| match e {
+            nb::Error::Other(e) => e,
+            nb::Error::WouldBlock => other(),
+        })?;
+        if state.auto_deliver {
+            state.deliver_all();
+        }
+        Ok(())
+    }
+
+    /// Receives a frame without ever blocking forever: the errors are those of the nb
+    /// `receive`; then, while the RX FIFO is empty, pending frames of the whole bus are
+    /// put on the wire one at a time in arbitration order; if the FIFO is still empty
+    /// when nothing is pending any more, returns `Err(MockError { kind: Other })`
+    /// instead of waiting for a frame that cannot come.
+    fn receive(&mut self) -> Result<MockFrame, MockError> {
+        let mut state = self.bus.state.try_borrow_mut().map_err(|_| other())?;
+        state.receive_errors(self.index)?;
+        // Each round delivers one pending frame, so this ends.
+        loop {
+            if let Some(frame) = state.pop(self.index) {
+                return Ok(frame);
+            }
+            state.deliver_one().ok_or(other())?;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_can::blocking;
+    use embedded_can::nb::Can;
+    use embedded_can::Frame;
+
+    fn ext(id: u32) -> MockFrame {
+        MockFrame::extended(id, &id.to_le_bytes()).unwrap()
+    }
+
+    fn std_frame(id: u16) -> MockFrame {
+        MockFrame::standard(id, &[id as u8]).unwrap()
+    }
+
+    fn nb_err(kind: ErrorKind) -> nb::Error<MockError> {
+        nb::Error::Other(MockError::new(kind))
+    }
+
+    #[test]
+    fn frame_implements_the_frame_trait() {
+        let sid = StandardId::new(0x7FF).unwrap();
+        let f = MockFrame::new(sid, &[1, 2, 3]).unwrap();
+        assert!(f.is_standard() && !f.is_extended());
+        assert!(f.is_data_frame() && !f.is_remote_frame());
+        assert_eq!(f.id(), Id::Standard(sid));
+        assert_eq!((f.dlc(), f.data()), (3, &[1u8, 2, 3][..]));
+        assert_eq!(f.raw_id(), 0x7FF);
+
+        let eid = ExtendedId::new(0x1FFF_FFFF).unwrap();
+        let f = MockFrame::new(eid, &[0; 8]).unwrap();
+        assert!(f.is_extended());
+        assert_eq!(f.id(), Id::Extended(eid));
+        assert_eq!(f.dlc(), 8);
+        assert_eq!(MockFrame::new(eid, &[0; 9]), None);
+        assert_eq!(MockFrame::new(eid, &[]).unwrap().data(), &[] as &[u8]);
+
+        let r = MockFrame::new_remote(eid, 5).unwrap();
+        assert!(r.is_remote_frame() && !r.is_data_frame());
+        assert_eq!((r.dlc(), r.data()), (5, &[] as &[u8]));
+        assert_eq!(MockFrame::new_remote(sid, 9), None);
+        assert_ne!(r, MockFrame::new(eid, &[0; 5]).unwrap());
+
+        // Range checks of the helpers.
+        assert_eq!(MockFrame::standard(0x800, &[]), None);
+        assert!(MockFrame::standard(0x7FF, &[]).is_some());
+        assert_eq!(MockFrame::extended(0x2000_0000, &[]), None);
+        assert_eq!(MockFrame::extended(0x1FFF_FFFF, &[0; 9]), None);
+        let e = MockFrame::extended(0x0000_0F01, &[9; 8]).unwrap();
+        assert_eq!(
+            e,
+            MockFrame::new(ExtendedId::new(0xF01).unwrap(), &[9; 8]).unwrap()
+        );
+        // Same raw id, different format: different frames.
+        assert_ne!(
+            MockFrame::extended(0x100, &[]).unwrap(),
+            MockFrame::standard(0x100, &[]).unwrap()
+        );
+    }
+
+    #[test]
+    fn arbitration_key_follows_can_arbitration() {
+        let sid = |id| StandardId::new(id).unwrap();
+        let eid = |id| ExtendedId::new(id).unwrap();
+        let key = |f: MockFrame| f.arbitration_key();
+        // Within a format: lower id wins, data beats remote.
+        assert!(key(ext(0x10)) < key(ext(0x11)));
+        assert!(key(std_frame(0x10)) < key(std_frame(0x11)));
+        let d = MockFrame::new(eid(0x55), &[]).unwrap();
+        let r = MockFrame::new_remote(eid(0x55), 0).unwrap();
+        assert!(key(d) < key(r));
+        let d = MockFrame::new(sid(0x55), &[]).unwrap();
+        let r = MockFrame::new_remote(sid(0x55), 0).unwrap();
+        assert!(key(d) < key(r));
+        // A standard frame beats an extended one with the same 11-bit base id, even as a
+        // remote frame; but equal *raw* ids put the extended frame's base at 0.
+        assert!(key(std_frame(0x100)) < key(ext(0x100 << 18)));
+        assert!(key(MockFrame::new_remote(sid(0x100), 0).unwrap()) < key(ext(0x100 << 18)));
+        assert!(key(ext(0x100 << 18)) < key(MockFrame::new_remote(eid(0x100 << 18), 0).unwrap()));
+        assert!(key(ext(0x100)) < key(std_frame(0x100)));
+        // Mixed formats compare on the 11-bit base id first.
+        assert!(key(std_frame(0x001)) < key(ext(0x0004_0000)));
+        assert!(key(ext(0x0004_0000)) < key(std_frame(0x002)));
+        assert!(key(ext(0x0003_FFFF)) < key(std_frame(0x001)));
+        assert!(key(std_frame(0x7FF)) < key(ext(0x1FFF_FFFF)));
+    }
+
+    #[test]
+    fn broadcast_reaches_every_other_endpoint_not_the_sender() {
+        let bus: Bus<4, 4> = Bus::new(1);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let mut c = bus.endpoint(2).unwrap();
+        let f = ext(0x123);
+        assert_eq!(a.transmit(&f), Ok(None));
+        assert_eq!(b.receive(), Ok(f));
+        assert_eq!(c.receive(), Ok(f));
+        assert_eq!(a.receive(), Err(nb::Error::WouldBlock));
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        // Endpoint 3 joins only now: it did not get the earlier frame, but gets later ones.
+        let mut d = bus.endpoint(3).unwrap();
+        assert_eq!(d.receive(), Err(nb::Error::WouldBlock));
+        let g = ext(0x456);
+        assert_eq!(c.transmit(&g), Ok(None));
+        assert_eq!(a.receive(), Ok(g));
+        assert_eq!(b.receive(), Ok(g));
+        assert_eq!(d.receive(), Ok(g));
+        assert_eq!(c.receive(), Err(nb::Error::WouldBlock));
+        let s = bus.stats();
+        assert_eq!((s.sent, s.delivered), (2, 5));
+        assert_eq!(bus.pending(), 0);
+    }
+
+    #[test]
+    fn rx_fifo_keeps_transmission_order() {
+        let bus: Bus<2, 8> = Bus::new(1);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        // Descending priority order and mixed formats: auto-delivery sends each at once.
+        let frames = [
+            ext(0x500),
+            std_frame(0x7),
+            ext(0x400),
+            ext(0x1),
+            std_frame(0x300),
+        ];
+        for f in &frames {
+            assert_eq!(a.transmit(f), Ok(None));
+        }
+        for f in &frames {
+            assert_eq!(b.receive(), Ok(*f));
+        }
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+    }
+
+    #[test]
+    fn full_mailboxes_displace_lower_priority_or_would_block() {
+        let bus: Bus<2, 8> = Bus::new(1);
+        bus.set_auto_deliver(false);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        for id in [0x10, 0x30, 0x20] {
+            assert_eq!(a.transmit(&ext(id)), Ok(None));
+        }
+        assert_eq!(bus.pending(), 3);
+        // 0x25 beats the lowest-priority pending frame, 0x30, which comes back.
+        assert_eq!(a.transmit(&ext(0x25)), Ok(Some(ext(0x30))));
+        // Nothing pending has lower priority than these (equal ids are not displaced).
+        assert_eq!(a.transmit(&ext(0x40)), Err(nb::Error::WouldBlock));
+        assert_eq!(a.transmit(&ext(0x25)), Err(nb::Error::WouldBlock));
+        // Data beats remote of the same id.
+        let remote = MockFrame::new_remote(ExtendedId::new(0x25).unwrap(), 0).unwrap();
+        assert_eq!(a.transmit(&remote), Err(nb::Error::WouldBlock));
+        // Mixed formats: standard 0x000 beats every pending extended frame (base id 0,
+        // then IDE), so it displaces the lowest of them, extended 0x25.
+        assert_eq!(a.transmit(&std_frame(0x000)), Ok(Some(ext(0x25))));
+        // Standard 0x001 (base 1) loses to all pending extended frames (base 0).
+        assert_eq!(a.transmit(&std_frame(0x001)), Err(nb::Error::WouldBlock));
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        assert_eq!(bus.deliver(), 3);
+        for f in [std_frame(0x000), ext(0x10), ext(0x20)] {
+            assert_eq!(b.receive(), Ok(f));
+        }
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        let s = bus.stats();
+        assert_eq!((s.sent, s.displaced, s.delivered), (3, 2, 3));
+        // Accepted = 3 + 2 displacing transmits = sent + displaced + pending.
+        assert_eq!(bus.pending(), 0);
+
+        // A remote frame pending is displaced by the data frame of the same id.
+        bus.set_mailboxes(0, 1);
+        assert_eq!(a.transmit(&remote), Ok(None));
+        assert_eq!(a.transmit(&ext(0x25)), Ok(Some(remote)));
+    }
+
+    #[test]
+    fn deliver_one_sends_highest_priority_first_across_endpoints() {
+        let bus: Bus<3, 8> = Bus::new(1);
+        bus.set_auto_deliver(false);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let mut c = bus.endpoint(2).unwrap();
+        assert_eq!(a.transmit(&ext(0x300)), Ok(None));
+        assert_eq!(a.transmit(&ext(0x100)), Ok(None));
+        assert_eq!(b.transmit(&ext(0x200)), Ok(None));
+        assert_eq!(c.transmit(&ext(0x050)), Ok(None));
+        assert_eq!(b.transmit(&ext(0x200)), Ok(None)); // same id: after the first
+        assert_eq!(c.receive(), Err(nb::Error::WouldBlock));
+
+        assert_eq!(bus.deliver_one(), Some(ext(0x050)));
+        assert_eq!(a.receive(), Ok(ext(0x050)));
+        assert_eq!(b.receive(), Ok(ext(0x050)));
+        assert_eq!(c.receive(), Err(nb::Error::WouldBlock));
+        assert_eq!(bus.pending(), 4);
+
+        assert_eq!(bus.deliver_one(), Some(ext(0x100)));
+        assert_eq!(bus.deliver_one(), Some(ext(0x200)));
+        assert_eq!(bus.deliver_one(), Some(ext(0x200)));
+        assert_eq!(bus.deliver_one(), Some(ext(0x300)));
+        assert_eq!(bus.deliver_one(), None);
+        assert_eq!(bus.deliver(), 0);
+        for f in [ext(0x100), ext(0x200), ext(0x200), ext(0x300)] {
+            assert_eq!(c.receive(), Ok(f));
+        }
+        // Turning auto-delivery back on flushes pending frames.
+        assert_eq!(a.transmit(&ext(0x1)), Ok(None));
+        assert_eq!(bus.pending(), 1);
+        bus.set_auto_deliver(true);
+        assert_eq!(bus.pending(), 0);
+        assert_eq!(c.receive(), Ok(ext(0x1)));
+    }
+
+    #[test]
+    fn mailbox_count_is_configurable() {
+        let bus: Bus<2, 8> = Bus::new(1);
+        bus.set_auto_deliver(false);
+        assert!(!bus.set_mailboxes(0, 0));
+        assert!(!bus.set_mailboxes(0, MAX_MAILBOXES + 1));
+        assert!(!bus.set_mailboxes(2, 1));
+        assert!(bus.set_mailboxes(0, MAX_MAILBOXES));
+        let mut a = bus.endpoint(0).unwrap();
+        for id in 0..MAX_MAILBOXES as u32 {
+            assert_eq!(a.transmit(&ext(0x100 + id)), Ok(None));
+        }
+        assert_eq!(a.transmit(&ext(0x200)), Err(nb::Error::WouldBlock));
+        // Fewer mailboxes than pending frames: full until enough are delivered.
+        assert!(bus.set_mailboxes(0, 2));
+        assert_eq!(a.transmit(&ext(0x200)), Err(nb::Error::WouldBlock));
+        for _ in 0..MAX_MAILBOXES - 1 {
+            assert!(bus.deliver_one().is_some());
+        }
+        assert_eq!(a.transmit(&ext(0x200)), Ok(None));
+        assert_eq!(a.transmit(&ext(0x201)), Err(nb::Error::WouldBlock));
+    }
+
+    #[test]
+    fn overrun_is_reported_once_and_keeps_queued_frames() {
+        let bus: Bus<2, 2> = Bus::new(1);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        for id in 1..=4 {
+            assert_eq!(a.transmit(&ext(id)), Ok(None));
+        }
+        assert_eq!(b.receive(), Err(nb_err(ErrorKind::Overrun)));
+        assert_eq!(b.receive(), Ok(ext(1)));
+        assert_eq!(b.receive(), Ok(ext(2)));
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        let s = bus.stats();
+        assert_eq!((s.sent, s.delivered, s.overruns), (4, 2, 2));
+        // After draining, no further overrun.
+        assert_eq!(a.transmit(&ext(5)), Ok(None));
+        assert_eq!(b.receive(), Ok(ext(5)));
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+    }
+
+    /// Runs a fixed mixed workload and records everything the receivers saw.
+    fn workload(seed: u64) -> (std::vec::Vec<nb::Result<MockFrame, MockError>>, BusStats) {
+        let faults = Faults {
+            loss: 0.1,
+            corruption: 0.2,
+            duplication: 0.1,
+            tx_error: 0.05,
+            rx_error: 0.05,
+        };
+        let bus: Bus<3, 4> = Bus::new(seed).with_faults(faults);
+        let mut eps = [
+            bus.endpoint(0).unwrap(),
+            bus.endpoint(1).unwrap(),
+            bus.endpoint(2).unwrap(),
+        ];
+        let mut seen = std::vec::Vec::new();
+        for i in 0..300u32 {
+            let k = (i % 3) as usize;
+            let r = eps[k].transmit(&ext(i)).map(|_| ext(u32::MAX >> 3));
+            seen.push(r);
+            for ep in eps.iter_mut() {
+                seen.push(ep.receive());
+            }
+        }
+        (seen, bus.stats())
+    }
+
+    #[test]
+    fn same_seed_and_faults_give_the_same_run() {
+        let (run1, stats1) = workload(7);
+        let (run2, stats2) = workload(7);
+        assert_eq!(run1, run2);
+        assert_eq!(stats1, stats2);
+        assert!(stats1.lost > 0 && stats1.corrupted > 0 && stats1.duplicated > 0);
+        assert!(stats1.injected_errors > 0);
+        // The seed matters.
+        let (run3, _) = workload(8);
+        assert_ne!(run1, run3);
+    }
+
+    #[test]
+    fn wire_fault_rates_and_counters_add_up() {
+        const N: u32 = 10_000;
+        let bus: Bus<3, 4> = Bus::new(0xC0FFEE).with_faults(Faults {
+            loss: 0.05,
+            corruption: 0.05,
+            duplication: 0.05,
+            ..Faults::NONE
+        });
+        let mut a = bus.endpoint(0).unwrap();
+        let mut rx = [bus.endpoint(1).unwrap(), bus.endpoint(2).unwrap()];
+        let mut received = [0u32; 2];
+        let mut altered = [std::vec::Vec::new(), std::vec::Vec::new()];
+        for i in 0..N {
+            let data = [i as u8, (i >> 8) as u8, 0xA5, 0x5A, 0xFF, 0, 0x0F, 0xF0];
+            let f = MockFrame::extended(i, &data).unwrap();
+            assert_eq!(a.transmit(&f), Ok(None));
+            for (r, ep) in rx.iter_mut().enumerate() {
+                while let Ok(g) = ep.receive() {
+                    received[r] += 1;
+                    assert_eq!(g.raw_id(), i);
+                    if g != f {
+                        let flipped: u32 = g
+                            .data()
+                            .iter()
+                            .zip(f.data())
+                            .map(|(x, y)| (x ^ y).count_ones())
+                            .sum();
+                        assert_eq!(flipped, 1, "corruption flips exactly one bit");
+                        altered[r].push(i);
+                    }
+                }
+            }
+        }
+        let s = bus.stats();
+        assert_eq!(s.sent, N);
+        assert!((400..600).contains(&s.lost), "lost {}", s.lost);
+        assert!(
+            (380..580).contains(&s.corrupted),
+            "corrupted {}",
+            s.corrupted
+        );
+        assert!(
+            (380..580).contains(&s.duplicated),
+            "duplicated {}",
+            s.duplicated
+        );
+        assert_eq!(s.overruns, 0);
+        // Every frame not lost reaches both receivers once, twice if duplicated.
+        assert_eq!(
+            s.delivered + s.overruns,
+            (s.sent - s.lost + s.duplicated) * 2
+        );
+        assert_eq!(received, [s.delivered / 2, s.delivered / 2]);
+        // Corruption is decided per frame: both receivers saw the same frames altered.
+        altered[0].dedup();
+        altered[1].dedup();
+        assert_eq!(altered[0], altered[1]);
+        assert_eq!(altered[0].len() as u32, s.corrupted);
+        assert_eq!(s.injected_errors, 0);
+    }
+
+    #[test]
+    fn overruns_are_accounted_for_under_faults() {
+        let bus: Bus<3, 3> = Bus::new(99).with_faults(Faults {
+            loss: 0.1,
+            duplication: 0.3,
+            ..Faults::NONE
+        });
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let _c = bus.endpoint(2).unwrap(); // never reads: overruns
+        let mut got = 0u32;
+        let mut drain = |b: &mut Endpoint<'_, 3, 3>| loop {
+            match b.receive() {
+                Ok(_) => got += 1,
+                Err(nb::Error::WouldBlock) => break,
+                Err(e) => assert_eq!(e, nb_err(ErrorKind::Overrun)),
+            }
+        };
+        for i in 0..1000 {
+            assert_eq!(a.transmit(&ext(i)), Ok(None));
+            if i % 2 == 0 {
+                drain(&mut b);
+            }
+        }
+        drain(&mut b);
+        let s = bus.stats();
+        assert!(s.overruns > 900, "{s:?}");
+        assert_eq!(
+            s.delivered + s.overruns,
+            (s.sent - s.lost + s.duplicated) * 2
+        );
+        // b read all its frames; c never read and holds exactly QUEUE of them.
+        assert_eq!(s.delivered, got + 3);
+    }
+
+    #[test]
+    fn corruption_flips_exactly_one_data_bit() {
+        let bus: Bus<2, 4> = Bus::new(5).with_faults(Faults {
+            corruption: 1.0,
+            ..Faults::NONE
+        });
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let mut bytes_hit = [false; 8];
+        for i in 0..200u32 {
+            let len = (i % 8 + 1) as usize;
+            let data = [0x00, 0xFF, 0x55, 0xAA, 0x0F, 0xF0, 0x12, 0x34];
+            let f = MockFrame::extended(0x100, &data[..len]).unwrap();
+            a.transmit(&f).unwrap();
+            let g = b.receive().unwrap();
+            assert_eq!((g.raw_id(), g.is_extended(), g.dlc()), (0x100, true, len));
+            let diffs: std::vec::Vec<(usize, u8)> = g
+                .data()
+                .iter()
+                .zip(f.data())
+                .enumerate()
+                .filter(|(_, (x, y))| x != y)
+                .map(|(k, (x, y))| (k, x ^ y))
+                .collect();
+            assert_eq!(diffs.len(), 1);
+            assert_eq!(diffs[0].1.count_ones(), 1);
+            bytes_hit[diffs[0].0] = true;
+        }
+        assert!(bytes_hit.iter().all(|&hit| hit), "flips land in every byte");
+        // Frames without data bits are never corrupted nor counted.
+        let empty = MockFrame::extended(0x100, &[]).unwrap();
+        let remote = MockFrame::new_remote(ExtendedId::new(0x100).unwrap(), 8).unwrap();
+        for f in [empty, remote] {
+            a.transmit(&f).unwrap();
+            assert_eq!(b.receive(), Ok(f));
+        }
+        assert_eq!(bus.stats().corrupted, 200);
+    }
+
+    #[test]
+    fn duplication_and_loss_and_mid_run_changes() {
+        let bus: Bus<2, 4> = Bus::new(5).with_faults(Faults {
+            duplication: 1.0,
+            ..Faults::NONE
+        });
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        a.transmit(&ext(1)).unwrap();
+        assert_eq!(b.receive(), Ok(ext(1)));
+        assert_eq!(b.receive(), Ok(ext(1)));
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        bus.set_faults(Faults {
+            loss: 1.0,
+            ..Faults::NONE
+        });
+        assert_eq!(bus.faults().loss, 1.0);
+        a.transmit(&ext(2)).unwrap();
+        assert_eq!(b.receive(), Err(nb::Error::WouldBlock));
+        bus.set_faults(Faults::default());
+        a.transmit(&ext(3)).unwrap();
+        assert_eq!(b.receive(), Ok(ext(3)));
+        let s = bus.stats();
+        assert_eq!((s.sent, s.lost, s.duplicated, s.delivered), (3, 1, 1, 3));
+    }
+
+    #[test]
+    fn error_fault_rates_and_kinds() {
+        let bus: Bus<2, 4> = Bus::new(3).with_faults(Faults {
+            tx_error: 0.1,
+            rx_error: 0.1,
+            ..Faults::NONE
+        });
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let (mut tx_errors, mut rx_errors, mut received) = (0u32, 0u32, 0u32);
+        for i in 0..10_000 {
+            match a.transmit(&ext(i)) {
+                Ok(None) => {}
+                Err(nb::Error::Other(e)) => {
+                    assert!(TX_ERROR_KINDS.contains(&e.kind), "{e:?}");
+                    tx_errors += 1;
+                }
+                other => panic!("{other:?}"),
+            }
+            // Drain: an rx error consumes no frame, so keep going until WouldBlock.
+            loop {
+                match b.receive() {
+                    Ok(_) => received += 1,
+                    Err(nb::Error::WouldBlock) => break,
+                    Err(nb::Error::Other(e)) => {
+                        assert!(RX_ERROR_KINDS.contains(&e.kind), "{e:?}");
+                        rx_errors += 1;
+                    }
+                }
+            }
+        }
+        let s = bus.stats();
+        assert!((800..1200).contains(&tx_errors), "tx errors {tx_errors}");
+        // Receive is called about 10 000 + rx_errors + received times.
+        assert!((1800..2600).contains(&rx_errors), "rx errors {rx_errors}");
+        assert_eq!(s.injected_errors, tx_errors + rx_errors);
+        assert_eq!(s.sent, 10_000 - tx_errors);
+        // Nothing is lost to an rx error: every delivered frame was received.
+        assert_eq!(received, s.delivered);
+        assert_eq!(received, s.sent);
+    }
+
+    #[test]
+    fn injected_errors_reach_the_caller_exactly_once() {
+        let bus: Bus<2, 4> = Bus::new(1);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        for kind in [
+            ErrorKind::Bit,
+            ErrorKind::Acknowledge,
+            ErrorKind::Other,
+            ErrorKind::Overrun,
+        ] {
+            a.inject_error(kind);
+            assert_eq!(a.transmit(&ext(1)), Err(nb_err(kind)));
+            assert_eq!(b.receive(), Err(nb::Error::WouldBlock), "frame not queued");
+            assert_eq!(a.transmit(&ext(2)), Ok(None));
+            b.inject_error(kind);
+            assert_eq!(b.receive(), Err(nb_err(kind)));
+            assert_eq!(b.receive(), Ok(ext(2)), "frame kept");
+        }
+        // Through the bus, and through the blocking API.
+        assert!(bus.inject_error(1, ErrorKind::Crc));
+        assert!(!bus.inject_error(2, ErrorKind::Crc));
+        assert_eq!(
+            blocking::Can::receive(&mut b),
+            Err(MockError::new(ErrorKind::Crc))
+        );
+        assert!(bus.inject_error(0, ErrorKind::Stuff));
+        assert_eq!(
+            blocking::Can::transmit(&mut a, &ext(3)),
+            Err(MockError::new(ErrorKind::Stuff))
+        );
+        assert_eq!(bus.stats().injected_errors, 10);
+        // An injected error comes before a pending overrun.
+        for i in 0..5 {
+            a.transmit(&ext(i)).unwrap();
+        }
+        b.inject_error(ErrorKind::Form);
+        assert_eq!(b.receive(), Err(nb_err(ErrorKind::Form)));
+        assert_eq!(b.receive(), Err(nb_err(ErrorKind::Overrun)));
+        assert_eq!(b.receive(), Ok(ext(0)));
+        // Display and the Error trait.
+        let e = MockError::new(ErrorKind::Crc);
+        assert_eq!(embedded_can::Error::kind(&e), ErrorKind::Crc);
+        assert!(std::format!("{e}").starts_with("mock CAN bus: "));
+        assert_eq!(MockError::from(ErrorKind::Bit).kind, ErrorKind::Bit);
+    }
+
+    #[test]
+    fn blocking_can_delivers_when_it_must_and_never_hangs() {
+        let bus: Bus<3, 4> = Bus::new(1);
+        bus.set_auto_deliver(false);
+        bus.set_mailboxes(0, 1);
+        let mut a = bus.endpoint(0).unwrap();
+        let mut b = bus.endpoint(1).unwrap();
+        let mut c = bus.endpoint(2).unwrap();
+        assert_eq!(Can::transmit(&mut c, &ext(0x5)), Ok(None));
+        assert_eq!(blocking::Can::transmit(&mut a, &ext(0x10)), Ok(()));
+        // a's only mailbox is full: the bus runs (c's higher-priority frame first,
+        // then a's) until a has room; no displacement.
+        assert_eq!(blocking::Can::transmit(&mut a, &ext(0x20)), Ok(()));
+        assert_eq!(bus.stats().displaced, 0);
+        assert_eq!(bus.pending(), 1);
+        assert_eq!(Can::receive(&mut b), Ok(ext(0x5)));
+        assert_eq!(Can::receive(&mut b), Ok(ext(0x10)));
+        assert_eq!(Can::receive(&mut b), Err(nb::Error::WouldBlock));
+        // Blocking receive delivers the pending frame it is waiting for.
+        assert_eq!(blocking::Can::receive(&mut b), Ok(ext(0x20)));
+        assert_eq!(bus.pending(), 0);
+        // Nothing pending, nothing queued: an error instead of blocking forever.
+        assert_eq!(
+            blocking::Can::receive(&mut b),
+            Err(MockError::new(ErrorKind::Other))
+        );
+        // Pending frames that never reach this endpoint (its own) also end in Other.
+        assert_eq!(Can::transmit(&mut b, &ext(0x30)), Ok(None));
+        assert_eq!(
+            blocking::Can::receive(&mut b),
+            Err(MockError::new(ErrorKind::Other))
+        );
+        assert_eq!(bus.pending(), 0);
+        assert_eq!(blocking::Can::receive(&mut c), Ok(ext(0x10)));
+        // With auto-delivery, blocking transmit sends at once.
+        bus.set_auto_deliver(true);
+        assert_eq!(blocking::Can::transmit(&mut c, &ext(0x40)), Ok(()));
+        assert_eq!(bus.pending(), 0);
+    }
+
+    #[test]
+    fn endpoints_are_taken_once() {
+        let bus: Bus<2, 4> = Bus::new(1);
+        {
+            let a = bus.endpoint(0).unwrap();
+            assert_eq!(std::format!("{a:?}"), "Endpoint { index: 0, .. }");
+            assert_eq!(a.index(), 0);
+            assert!(bus.endpoint(0).is_none());
+            assert!(bus.endpoint(2).is_none());
+        }
+        assert!(bus.endpoint(0).is_none(), "not even after drop");
+        assert_eq!(bus.endpoint(1).map(|e| e.index()), Some(1));
+        assert!(bus.endpoint(1).is_none());
+    }
+}
