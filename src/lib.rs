@@ -15,6 +15,7 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod driver;
 pub mod geo;
 pub mod interface;
 pub mod link;
@@ -24,4 +25,6 @@ pub mod time;
 pub mod video;
 pub mod wire;
 
+pub use driver::{Blocking, Gimbal};
+pub use link::{Config, Event};
 pub use time::Instant;
