@@ -139,7 +139,6 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
             link: Link::new(config),
             errors: DriverErrors::default(),
             max_rx_per_poll: DEFAULT_MAX_RX_PER_POLL,
-            now: Instant::from_millis(0),
         }
     }
 

@@ -312,12 +312,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// Queues a command. A pointing command (see [`Command::is_pointing`]) cancels a rate
     /// hold. A full queue hands the command back and cancels nothing.
-    pub fn send(
-        &mut self,
-        command: impl Into<Command>,
-        now: Instant,
-    ) -> Result<(), QueueFull<Command>> {
-        let _ = now;
+    pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         let command = command.into();
         if self.tx.push_control(command.to_frame()).is_err() {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);

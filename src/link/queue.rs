@@ -181,7 +181,7 @@ mod tests {
         assert_eq!(q.put_vehicle(f(ids::ATTITUDE, 6)), Ok(false));
         q.push_control(f(ids::CONTROL, 7)).unwrap();
         q.push_control(f(ids::CONTROL, 8)).unwrap();
-        assert_eq!(q.len(), 7 - 1);
+        assert_eq!(q.len(), 7); // 2 text, 3 vehicle (GPS replaced in place), 2 control
         let order: Vec<u8> = core::iter::from_fn(|| q.pop()).map(|f| f.data[0]).collect();
         assert_eq!(order, [7, 8, 6, 5, 3, 1, 2]);
         assert!(q.is_empty());
