@@ -585,3 +585,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.assembler.stats()
     }
 }
+
+#[cfg(test)]
+mod tests;
