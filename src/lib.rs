@@ -26,5 +26,10 @@ pub mod video;
 pub mod wire;
 
 pub use driver::{Blocking, Gimbal};
+
+// The README's examples are compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 pub use link::{Config, Event};
 pub use time::Instant;
