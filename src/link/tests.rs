@@ -7,7 +7,12 @@ use crate::wire::vehicle::{Altitude, Attitude, Gps};
 
 /// Polls every `step` ms from `from` to `to` (exclusive), draining the queue into a log of
 /// (time, frame).
-fn run<const Q: usize, const T: usize>(link: &mut Link<Q, T>, from: u32, to: u32, step: u32) -> Vec<(u32, Frame)> {
+fn run<const Q: usize, const T: usize>(
+    link: &mut Link<Q, T>,
+    from: u32,
+    to: u32,
+    step: u32,
+) -> Vec<(u32, Frame)> {
     let mut out = Vec::new();
     let mut t = from;
     while t.wrapping_sub(from) < to.wrapping_sub(from) {
@@ -49,8 +54,15 @@ fn vehicle_frames_at_their_periods_without_drift() {
     assert_eq!(count(&log, ids::GPS), 50);
     assert_eq!(count(&log, ids::ALTITUDE), 50);
     // Deadlines, not poll times: attitude k is sent at 100·k ms exactly.
-    let att: Vec<u32> = log.iter().filter(|(_, f)| f.id == ids::ATTITUDE).map(|(t, _)| *t).collect();
-    assert!(att.iter().enumerate().all(|(k, &t)| t == 100 * k as u32), "{att:?}");
+    let att: Vec<u32> = log
+        .iter()
+        .filter(|(_, f)| f.id == ids::ATTITUDE)
+        .map(|(t, _)| *t)
+        .collect();
+    assert!(
+        att.iter().enumerate().all(|(k, &t)| t == 100 * k as u32),
+        "{att:?}"
+    );
 }
 
 #[test]
@@ -63,7 +75,11 @@ fn stale_data_is_not_pushed_and_fresh_data_resumes_at_once() {
     assert_eq!(count(&log, ids::GPS), 6);
     feed_vehicle(&mut link, 3000);
     let log = run(&mut link, 3000, 3001, 1);
-    assert_eq!(log.len(), 3, "all three pushed as soon as data is fresh again");
+    assert_eq!(
+        log.len(),
+        3,
+        "all three pushed as soon as data is fresh again"
+    );
 }
 
 #[test]
@@ -88,7 +104,10 @@ fn latest_vehicle_value_wins_when_not_yet_sent() {
     link.set_gps(Gps::new(2.0, 2.0).unwrap(), Instant::from_millis(200));
     link.poll(Instant::from_millis(200)); // the first push was never taken by a driver
     let f = link.next_transmit().unwrap();
-    assert_eq!(VehicleFrame::decode(f.id, &f.data).unwrap(), VehicleFrame::Gps(Gps::new(2.0, 2.0).unwrap()));
+    assert_eq!(
+        VehicleFrame::decode(f.id, &f.data).unwrap(),
+        VehicleFrame::Gps(Gps::new(2.0, 2.0).unwrap())
+    );
     assert_eq!(link.next_transmit(), None);
     assert_eq!(link.stats().superseded, 1);
 }
@@ -128,19 +147,32 @@ fn rate_hold_repeats_every_50_ms_and_dead_man_stops_it() {
 #[test]
 fn stop_rate_sends_one_zero_and_pointing_commands_cancel() {
     let mut link: Link = Link::new(Config::default());
-    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(0)).unwrap();
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(0))
+        .unwrap();
     link.stop_rate();
     let log = run(&mut link, 0, 500, 1);
-    assert_eq!(rate_frames(&log).iter().map(|(_, r)| *r).collect::<Vec<_>>(), [Rate::new(1.0, 0.0).unwrap(), Rate::ZERO]);
+    assert_eq!(
+        rate_frames(&log)
+            .iter()
+            .map(|(_, r)| *r)
+            .collect::<Vec<_>>(),
+        [Rate::new(1.0, 0.0).unwrap(), Rate::ZERO]
+    );
     // A pointing command cancels the hold: no more repeats, no zero frame.
-    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(500)).unwrap();
-    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap())).unwrap();
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(500))
+        .unwrap();
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
     let log = run(&mut link, 500, 1500, 1);
     assert_eq!(rate_frames(&log).len(), 1);
     assert!(!link.is_rate_holding());
     // A non-pointing command (palette) keeps it.
-    link.set_rate(Rate::new(2.0, 0.0).unwrap(), Instant::from_millis(1500)).unwrap();
-    link.send(DualLightCommand::Palette(crate::wire::control::Palette::Lava)).unwrap();
+    link.set_rate(Rate::new(2.0, 0.0).unwrap(), Instant::from_millis(1500))
+        .unwrap();
+    link.send(DualLightCommand::Palette(
+        crate::wire::control::Palette::Lava,
+    ))
+    .unwrap();
     assert!(link.is_rate_holding());
 }
 
@@ -161,14 +193,29 @@ fn full_queue_hands_back_and_zero_rate_is_never_lost() {
     link.set_rate(r, Instant::from_millis(0)).unwrap();
     link.stop_rate();
     let log = run(&mut link, 0, 10, 1);
-    assert_eq!(rate_frames(&log).iter().map(|(_, r)| *r).collect::<Vec<_>>(), [r, Rate::ZERO]);
-    assert_eq!(link.send_text(b"0123456789abcdefXYZ"), Err(TextQueueError::NoRoom { needed: 3, free: 2 }));
-    assert!(matches!(link.send_text(b""), Err(TextQueueError::Invalid(_))));
+    assert_eq!(
+        rate_frames(&log)
+            .iter()
+            .map(|(_, r)| *r)
+            .collect::<Vec<_>>(),
+        [r, Rate::ZERO]
+    );
+    assert_eq!(
+        link.send_text(b"0123456789abcdefXYZ"),
+        Err(TextQueueError::NoRoom { needed: 3, free: 2 })
+    );
+    assert!(matches!(
+        link.send_text(b""),
+        Err(TextQueueError::Invalid(_))
+    ));
     assert!(!link.has_transmit(), "nothing of a refused text was queued");
 }
 
 fn postback_frames(link: &mut Link, at: u32, pitch: i16) {
-    let p = Postback { pitch, ..Postback::default() };
+    let p = Postback {
+        pitch,
+        ..Postback::default()
+    };
     for d in p.to_can_frames() {
         link.receive(ids::POSTBACK, &d, Instant::from_millis(at));
     }
@@ -181,7 +228,11 @@ fn link_up_down_and_latest_postback() {
     postback_frames(&mut link, 1000, -100);
     assert_eq!(link.next_event(), Some(Event::LinkUp));
     assert!(matches!(link.next_event(), Some(Event::Postback(p)) if p.pitch == -100));
-    assert_eq!(link.latest_postback(Instant::from_millis(1300)).map(|(p, age)| (p.pitch, age)), Some((-100, 300)));
+    assert_eq!(
+        link.latest_postback(Instant::from_millis(1300))
+            .map(|(p, age)| (p.pitch, age)),
+        Some((-100, 300))
+    );
     link.poll(Instant::from_millis(2500));
     assert!(link.is_up(), "exactly 1.5 s is still up");
     link.poll(Instant::from_millis(2501));
@@ -221,7 +272,11 @@ fn displaced_frames_are_requeued_and_refused_frames_go_back() {
     // The driver took the command and handed back the text frame it displaced.
     link.transmit_done(Some(t1));
     assert_eq!((link.stats().requeued, link.stats().frames_sent), (1, 1));
-    assert_eq!(link.next_transmit(), Some(t1), "the displaced frame goes out again first");
+    assert_eq!(
+        link.next_transmit(),
+        Some(t1),
+        "the displaced frame goes out again first"
+    );
     link.transmit_refused(t1);
     assert_eq!(link.next_transmit(), Some(t1));
     assert_eq!(c.id, ids::CONTROL);
@@ -238,7 +293,8 @@ fn schedules_hold_across_the_tick_wrap() {
             feed_vehicle(&mut link, t);
         }
         if t.wrapping_sub(start) % 100 == 0 {
-            link.set_rate(Rate::new(5.0, 0.0).unwrap(), Instant::from_millis(t)).unwrap();
+            link.set_rate(Rate::new(5.0, 0.0).unwrap(), Instant::from_millis(t))
+                .unwrap();
         }
         log.extend(run(&mut link, t, t.wrapping_add(1), 1));
         t = t.wrapping_add(1);
