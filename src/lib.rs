@@ -20,6 +20,7 @@ pub mod interface;
 pub mod link;
 #[cfg(feature = "mock")]
 pub mod mock;
+pub mod sim;
 pub mod time;
 pub mod video;
 pub mod wire;
