@@ -43,8 +43,9 @@
 //!     gimbal.set_gps(Gps::new(47.397_742, 8.545_594).unwrap(), now);
 //!     gimbal.poll(now).unwrap();
 //!     while let Some(event) = gimbal.next_event() {
-//!         if let Event::Postback(p) = event {
-//!             let _ = p.heading_deg();
+//!         if event == Event::Postback {
+//!             let (status, _age_ms) = gimbal.latest_postback(now).unwrap();
+//!             let _ = status.heading_deg();
 //!         }
 //!     }
 //! }

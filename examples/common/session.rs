@@ -74,7 +74,10 @@ impl<'a, W: Write> Session<'a, W> {
         let _ = self.gimbal.poll(now);
         while let Some(event) = self.gimbal.next_event() {
             match event {
-                Event::Postback(p) => {
+                Event::Postback => {
+                    let Some((p, _)) = self.gimbal.latest_postback(now) else {
+                        continue;
+                    };
                     self.latest = Some(p);
                     let (s, ms) = self.seconds();
                     let _ = writeln!(

@@ -25,7 +25,8 @@
 //!     link.receive(ids::POSTBACK, &data, now);
 //! }
 //! assert_eq!(link.next_event(), Some(Event::LinkUp));
-//! assert!(matches!(link.next_event(), Some(Event::Postback(p)) if p.pitch == -4500));
+//! assert_eq!(link.next_event(), Some(Event::Postback));
+//! assert_eq!(link.latest_postback(now).map(|(p, _age)| p.pitch), Some(-4500));
 //! # Ok::<(), idu_gimbal::wire::RangeError>(())
 //! ```
 
@@ -36,9 +37,9 @@ pub mod text;
 
 use core::fmt;
 
-use crate::geo::{self, Position};
+use crate::geo::Position;
 use crate::time::Instant;
-use crate::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
+use crate::wire::control::{Command, GimbalCommand, Rate};
 use crate::wire::postback::{GimbalType, Postback};
 use crate::wire::vehicle::{Altitude, Attitude, Gps, VehicleFrame};
 use crate::wire::{ids, text as wire_text, Frame};
@@ -96,8 +97,9 @@ impl Default for Config {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
-    /// A valid postback arrived.
-    Postback(Postback),
+    /// A valid postback arrived: read it with [`Link::latest_postback`]. (Events stay
+    /// small so that a queue of them costs little RAM; the postback itself is kept once.)
+    Postback,
     /// The first valid postback after start or after the link was down.
     LinkUp,
     /// No valid postback within the link timeout.
@@ -108,7 +110,7 @@ pub enum Event {
     /// gimbal holds the last reachable aim. Raised once each time the target leaves reach.
     TargetUnreachable {
         /// The elevation the target needs, in 0.01°.
-        elevation_cdeg: i32,
+        elevation_cdeg: i16,
     },
 }
 
@@ -190,7 +192,9 @@ impl std::error::Error for TextQueueError {}
 
 #[derive(Clone, Copy, Debug)]
 struct VehicleSource {
-    latest: Option<(Frame, Instant)>,
+    /// The latest value's 8 data bytes, if any was set.
+    data: Option<[u8; 8]>,
+    stamp: Instant,
     next: Instant,
     /// Push at the next poll, whatever `next` says (new data after none or stale data).
     due: bool,
@@ -198,7 +202,8 @@ struct VehicleSource {
 
 impl VehicleSource {
     const EMPTY: Self = VehicleSource {
-        latest: None,
+        data: None,
+        stamp: Instant::from_millis(0),
         next: Instant::from_millis(0),
         due: true,
     };
@@ -209,14 +214,11 @@ enum RateState {
     Idle,
     Holding {
         rate: Rate,
-        frame: Frame,
         refreshed: Instant,
         next: Instant,
     },
     /// The hold ended; its zero-rate frame waits for room in the queue.
-    Stopping {
-        zero: Frame,
-    },
+    Stopping,
 }
 
 /// Advances a deadline by one period; after a long gap, resynchronises to `now` so that it
@@ -229,6 +231,27 @@ fn advance(deadline: Instant, period: u32, now: Instant) -> Instant {
         next
     }
 }
+
+/// The earliest of the deadlines offered to it, as seen from `now` (wrap-safe).
+struct Earliest {
+    now: Instant,
+    ahead: u32,
+}
+
+impl Earliest {
+    fn offer(&mut self, at: Instant) {
+        let ahead = if at.is_at_or_after(self.now) {
+            at.millis_since(self.now)
+        } else {
+            0
+        };
+        self.ahead = self.ahead.min(ahead);
+    }
+}
+
+/// The longest a poll may be skipped even when no deadline is near: keeps every deadline
+/// within the wrap-safe range of `Instant`.
+const MAX_QUIET_MS: u32 = 60_000;
 
 /// The sans-IO link to one gimbal; see the [module docs](self).
 ///
@@ -244,6 +267,9 @@ pub struct Link<const Q: usize = 8, const T: usize = 16> {
     point: Option<point::PointAt>,
     latest: Option<(Postback, Instant)>,
     up: bool,
+    /// Nothing is due before `quiet_until` unless `dirty`: the idle poll's fast path.
+    dirty: bool,
+    quiet_until: Instant,
     events: heapless::Deque<Event, 8>,
     stats: LinkStats,
 }
@@ -264,6 +290,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             point: None,
             latest: None,
             up: false,
+            dirty: true,
+            quiet_until: Instant::from_millis(0),
             events: heapless::Deque::new(),
             stats: LinkStats::default(),
         }
@@ -288,19 +316,22 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- receiving ----
 
     /// Takes a received frame with a 29-bit extended ID.
+    #[inline]
     pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) {
         self.stats.frames_received = self.stats.frames_received.wrapping_add(1);
         if id != ids::POSTBACK {
             self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
             return;
         }
+        // The assembler's expiry and the link's health deadline may move.
+        self.dirty = true;
         if let Some(p) = self.assembler.feed(id, data, now) {
             self.latest = Some((p, now));
             if !self.up {
                 self.up = true;
                 self.event(Event::LinkUp);
             }
-            self.event(Event::Postback(p));
+            self.event(Event::Postback);
         }
     }
 
@@ -329,10 +360,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- commands ----
 
     /// Queues a command. A pointing command (see [`Command::is_pointing`]) cancels a rate
-    /// hold. A full queue hands the command back and cancels nothing.
+    /// hold and a point-at. A full queue hands the command back and cancels nothing.
     pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         let command = command.into();
-        if self.tx.push_control(command.to_frame()).is_err() {
+        if self.tx.push_control(command.encode()).is_err() {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             return Err(QueueFull(command));
         }
@@ -346,12 +377,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     /// Starts, changes or refreshes a rate hold on the gimbal: the rate command is repeated
-    /// every `rate_repeat_ms` while this is called again within `rate_deadman_ms`.
+    /// every `rate_repeat_ms` while this is called again within `rate_deadman_ms`. A rate
+    /// hold is a pointing command: it ends a point-at.
     ///
     /// Starting a hold or changing its rate queues the command at once; a full queue hands
     /// the rate back and leaves the hold as it was. Refreshing the same rate queues nothing.
     pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        let period = self.config.rate_repeat_ms;
+        self.dirty = true;
         match &mut self.rate {
             RateState::Holding {
                 rate: held,
@@ -362,18 +394,19 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 Ok(())
             }
             _ => {
-                let frame = Command::from(GimbalCommand::Rate(rate)).to_frame();
-                if self.tx.push_control(frame).is_err() {
+                if self
+                    .tx
+                    .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
+                    .is_err()
+                {
                     self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
                     return Err(QueueFull(rate));
                 }
                 self.rate = RateState::Holding {
                     rate,
-                    frame,
                     refreshed: now,
-                    next: now.add_millis(period),
+                    next: now.add_millis(self.config.rate_repeat_ms),
                 };
-                // A rate hold is a pointing command: it ends a point-at.
                 self.point = None;
                 Ok(())
             }
@@ -394,12 +427,15 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     fn end_rate_hold(&mut self) {
-        let zero = Command::from(GimbalCommand::Rate(Rate::ZERO)).to_frame();
-        self.rate = match self.tx.push_control(zero) {
+        self.dirty = true;
+        self.rate = match self
+            .tx
+            .push_control(Command::from(GimbalCommand::Rate(Rate::ZERO)).encode())
+        {
             Ok(()) => RateState::Idle,
-            Err(zero) => {
+            Err(_) => {
                 self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-                RateState::Stopping { zero }
+                RateState::Stopping
             }
         };
     }
@@ -408,7 +444,11 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
         let frames = wire_text::chunks(text).map_err(TextQueueError::Invalid)?;
         let free = self.tx.text_free();
-        self.tx.push_text(frames).map_err(|needed| {
+        let slots = frames.map(|f| queue::TextSlot {
+            data: f.data,
+            last: f.id == ids::TEXT_END,
+        });
+        self.tx.push_text(slots).map_err(|needed| {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             TextQueueError::NoRoom { needed, free }
         })
@@ -417,11 +457,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- vehicle data ----
 
     fn set_vehicle(&mut self, index: usize, frame: VehicleFrame, stamp: Instant) {
+        self.dirty = true;
         if let Some(source) = self.vehicle.get_mut(index) {
-            if source.latest.is_none() {
+            if source.data.is_none() {
                 source.due = true;
             }
-            source.latest = Some((frame.to_frame(), stamp));
+            source.data = Some(frame.encode());
+            source.stamp = stamp;
         }
     }
 
@@ -449,6 +491,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
+    /// The latest value of vehicle source `index` if it is fresh at `now`.
+    fn fresh_vehicle(&self, index: usize, now: Instant) -> Option<VehicleFrame> {
+        let source = self.vehicle.get(index)?;
+        let data = source.data?;
+        if Self::age(source.stamp, now) > self.config.vehicle_stale_ms {
+            return None;
+        }
+        let id = *queue::VEHICLE_IDS.get(index)?;
+        VehicleFrame::decode(id, &data).ok()
+    }
+
     /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
     /// the gimbal references its heading to north rather than to the nose.
     pub fn attitude_is_pushed(&self, now: Instant) -> bool {
@@ -457,8 +510,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The latest vehicle attitude set, fresh or not.
     pub fn attitude(&self) -> Option<Attitude> {
-        let (frame, _) = self.vehicle.get(ATTITUDE)?.latest?;
-        match VehicleFrame::decode(frame.id, &frame.data) {
+        let data = self.vehicle.get(ATTITUDE)?.data?;
+        match VehicleFrame::decode(ids::ATTITUDE, &data) {
             Ok(VehicleFrame::Attitude(a)) => Some(a),
             _ => None,
         }
@@ -467,87 +520,125 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- time ----
 
     /// Runs the schedules up to `now`: vehicle pushes, the rate hold and its dead-man, link
-    /// health, and expiry of partial postbacks.
+    /// health, point-at, and expiry of partial postbacks.
+    ///
+    /// When nothing is due and nothing changed since the last poll, this returns after one
+    /// comparison.
+    #[inline]
     pub fn poll(&mut self, now: Instant) {
+        if !self.dirty && !now.is_at_or_after(self.quiet_until) {
+            return;
+        }
+        self.poll_all(now);
+    }
+
+    fn poll_all(&mut self, now: Instant) {
+        self.dirty = false;
+        let mut earliest = Earliest {
+            now,
+            ahead: MAX_QUIET_MS,
+        };
         self.assembler.expire(now);
-        self.poll_rate(now);
-        self.poll_vehicle(now);
-        self.poll_point(now);
+        if let Some(at) = self.assembler.expiry() {
+            earliest.offer(at);
+        }
+        self.poll_rate(now, &mut earliest);
+        self.poll_vehicle(now, &mut earliest);
+        self.poll_point(now, &mut earliest);
         if let Some((_, at)) = self.latest {
             if self.up && now.millis_since(at) > self.config.link_timeout_ms {
                 self.up = false;
                 self.event(Event::LinkDown);
             }
+            if self.up {
+                earliest.offer(at.add_millis(self.config.link_timeout_ms.saturating_add(1)));
+            }
         }
+        self.quiet_until = now.add_millis(earliest.ahead);
     }
 
-    fn poll_rate(&mut self, now: Instant) {
+    fn poll_rate(&mut self, now: Instant, earliest: &mut Earliest) {
         match self.rate {
             RateState::Idle => {}
-            RateState::Stopping { zero } => {
-                if self.tx.push_control(zero).is_ok() {
+            RateState::Stopping => {
+                if self
+                    .tx
+                    .push_control(Command::from(GimbalCommand::Rate(Rate::ZERO)).encode())
+                    .is_ok()
+                {
                     self.rate = RateState::Idle;
+                } else {
+                    // Retry at every poll until there is room.
+                    self.dirty = true;
                 }
             }
             RateState::Holding {
                 rate,
-                frame,
                 refreshed,
                 next,
             } => {
-                if now.millis_since(refreshed) > self.config.rate_deadman_ms {
+                let deadman = self.config.rate_deadman_ms;
+                if now.millis_since(refreshed) > deadman {
                     self.end_rate_hold();
                     self.event(Event::RateHoldExpired);
-                } else if now.is_at_or_after(next) {
-                    if self.tx.push_control(frame).is_ok() {
-                        let next = advance(next, self.config.rate_repeat_ms, now);
+                    return;
+                }
+                let mut next = next;
+                if now.is_at_or_after(next) {
+                    if self
+                        .tx
+                        .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
+                        .is_ok()
+                    {
+                        next = advance(next, self.config.rate_repeat_ms, now);
                         self.rate = RateState::Holding {
                             rate,
-                            frame,
                             refreshed,
                             next,
                         };
                     } else {
                         // Try again at the next poll.
                         self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+                        self.dirty = true;
                     }
                 }
+                earliest.offer(next);
+                earliest.offer(refreshed.add_millis(deadman.saturating_add(1)));
             }
         }
     }
 
-    fn poll_vehicle(&mut self, now: Instant) {
+    fn poll_vehicle(&mut self, now: Instant, earliest: &mut Earliest) {
         let periods = [
             self.config.attitude_period_ms,
             self.config.gps_period_ms,
             self.config.altitude_period_ms,
         ];
         let stale = self.config.vehicle_stale_ms;
-        for (source, period) in self.vehicle.iter_mut().zip(periods) {
-            let Some((frame, stamp)) = source.latest else {
-                continue;
-            };
-            if period == 0 {
+        for (slot, (source, period)) in self.vehicle.iter_mut().zip(periods).enumerate() {
+            if source.data.is_none() || period == 0 {
                 continue;
             }
-            if Self::age(stamp, now) > stale {
-                // Push again as soon as fresh data arrives.
+            if Self::age(source.stamp, now) > stale {
+                // Push again as soon as fresh data arrives (which marks the link dirty).
                 source.due = true;
                 continue;
             }
-            if !(source.due || now.is_at_or_after(source.next)) {
-                continue;
+            if source.due || now.is_at_or_after(source.next) {
+                source.next = if source.due {
+                    now.add_millis(period)
+                } else {
+                    advance(source.next, period, now)
+                };
+                source.due = false;
+                if self.tx.mark_vehicle(slot) {
+                    self.stats.superseded = self.stats.superseded.wrapping_add(1);
+                }
+                self.stats.vehicle_pushes = self.stats.vehicle_pushes.wrapping_add(1);
             }
-            source.next = if source.due {
-                now.add_millis(period)
-            } else {
-                advance(source.next, period, now)
-            };
-            source.due = false;
-            if let Ok(true) = self.tx.put_vehicle(frame) {
-                self.stats.superseded = self.stats.superseded.wrapping_add(1);
-            }
-            self.stats.vehicle_pushes = self.stats.vehicle_pushes.wrapping_add(1);
+            earliest.offer(source.next);
+            // Going stale changes what fresh data will do: wake up for it too.
+            earliest.offer(source.stamp.add_millis(stale.saturating_add(1)));
         }
     }
 
@@ -559,6 +650,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         if let RateState::Holding { .. } = self.rate {
             self.rate = RateState::Idle;
         }
+        self.dirty = true;
         self.point = Some(point::PointAt::new(target));
     }
 
@@ -572,90 +664,99 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.point.map(|p| p.target)
     }
 
-    fn fresh_vehicle(&self, index: usize, now: Instant) -> Option<VehicleFrame> {
-        let (frame, stamp) = self.vehicle.get(index)?.latest?;
-        if Self::age(stamp, now) > self.config.vehicle_stale_ms {
-            return None;
+    fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
+        let Some(mut p) = self.point else { return };
+        if p.due || now.is_at_or_after(p.next) {
+            p.next = if p.due {
+                now.add_millis(self.config.point_at_period_ms)
+            } else {
+                advance(p.next, self.config.point_at_period_ms, now)
+            };
+            p.due = false;
+            if let (Some(VehicleFrame::Gps(gps)), Some(VehicleFrame::Altitude(alt))) = (
+                self.fresh_vehicle(GPS, now),
+                self.fresh_vehicle(ALTITUDE, now),
+            ) {
+                // North-referenced while attitude is pushed; otherwise nose-referenced, which
+                // needs the vehicle heading (none fresh: the aim cannot be known).
+                let reference = if self.attitude_is_pushed(now) {
+                    Some(point::Reference::North)
+                } else {
+                    match self.fresh_vehicle(ATTITUDE, now) {
+                        Some(VehicleFrame::Attitude(att)) => {
+                            Some(point::Reference::Nose(att.heading_centideg()))
+                        }
+                        _ => None,
+                    }
+                };
+                if let Some(reference) = reference {
+                    self.aim(&mut p, gps, alt, reference);
+                }
+            }
         }
-        VehicleFrame::decode(frame.id, &frame.data).ok()
+        earliest.offer(p.next);
+        self.point = Some(p);
     }
 
-    fn poll_point(&mut self, now: Instant) {
-        let Some(mut p) = self.point else { return };
-        if !(p.due || now.is_at_or_after(p.next)) {
-            return;
-        }
-        p.next = if p.due {
-            now.add_millis(self.config.point_at_period_ms)
-        } else {
-            advance(p.next, self.config.point_at_period_ms, now)
-        };
-        p.due = false;
-        self.point = Some(p);
-        let (Some(VehicleFrame::Gps(gps)), Some(VehicleFrame::Altitude(alt))) = (
-            self.fresh_vehicle(GPS, now),
-            self.fresh_vehicle(ALTITUDE, now),
-        ) else {
-            return;
-        };
-        let Ok(vehicle) = Position::new(gps.lat_deg(), gps.lon_deg(), alt.metres()) else {
-            return;
-        };
-        let Ok(aim) = geo::look_at(&vehicle, &p.target) else {
-            return;
-        };
-        let bearing = if self.attitude_is_pushed(now) {
-            aim.bearing_deg
-        } else {
-            match self.fresh_vehicle(ATTITUDE, now) {
-                Some(VehicleFrame::Attitude(att)) => aim.bearing_deg - f64::from(att.heading_deg()),
-                _ => return,
+    fn aim(
+        &mut self,
+        p: &mut point::PointAt,
+        gps: Gps,
+        alt: Altitude,
+        reference: point::Reference,
+    ) {
+        match (p.solve)(&p.target, gps, alt, reference) {
+            point::Aim::Unknown => {}
+            point::Aim::Unreachable { elevation_cdeg } => {
+                if !p.unreachable {
+                    p.unreachable = true;
+                    self.event(Event::TargetUnreachable { elevation_cdeg });
+                }
             }
-        };
-        let (Ok(heading), Ok(pitch)) = (
-            Heading::new(point::wrap_360(bearing) as f32),
-            Pitch::new(aim.elevation_deg as f32),
-        ) else {
-            if !p.unreachable {
-                p.unreachable = true;
-                self.point = Some(p);
-                self.event(Event::TargetUnreachable {
-                    elevation_cdeg: libm::round(aim.elevation_deg * 100.0) as i32,
-                });
+            point::Aim::At(heading, pitch) => {
+                p.unreachable = false;
+                let wire = (heading.deci(), pitch.deci());
+                if !point::moved(p.sent, wire, self.config.point_at_deadband_mdeg) {
+                    return;
+                }
+                if self.tx.control_free() < 2 {
+                    // Both or neither; try again at the next poll.
+                    self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+                    p.due = true;
+                    self.dirty = true;
+                    return;
+                }
+                let _ = self
+                    .tx
+                    .push_control(Command::from(GimbalCommand::Heading(heading)).encode());
+                let _ = self
+                    .tx
+                    .push_control(Command::from(GimbalCommand::Pitch(pitch)).encode());
+                p.sent = Some(wire);
             }
-            return;
-        };
-        p.unreachable = false;
-        let aim_wire = (heading.deci(), pitch.deci());
-        if !point::moved(p.sent, aim_wire, self.config.point_at_deadband_mdeg) {
-            self.point = Some(p);
-            return;
         }
-        if self.tx.control_free() < 2 {
-            // Both or neither; try again at the next poll.
-            self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-            p.due = true;
-        } else {
-            let _ = self
-                .tx
-                .push_control(Command::from(GimbalCommand::Heading(heading)).to_frame());
-            let _ = self
-                .tx
-                .push_control(Command::from(GimbalCommand::Pitch(pitch)).to_frame());
-            p.sent = Some(aim_wire);
-        }
-        self.point = Some(p);
     }
 
     // ---- transmitting ----
 
     /// Takes the next frame to transmit, highest priority first. Report what happened to
     /// it with [`Link::transmit_done`] or [`Link::transmit_refused`].
+    #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
-        self.tx.pop()
+        Some(match self.tx.pop()? {
+            queue::Next::Control(data) => Frame::new(ids::CONTROL, data),
+            queue::Next::Vehicle(slot) => {
+                let id = *queue::VEHICLE_IDS.get(slot)?;
+                Frame::new(id, self.vehicle.get(slot)?.data?)
+            }
+            queue::Next::Text(t) => {
+                Frame::new(if t.last { ids::TEXT_END } else { ids::TEXT }, t.data)
+            }
+        })
     }
 
     /// Whether frames wait for transmission.
+    #[inline]
     pub fn has_transmit(&self) -> bool {
         !self.tx.is_empty()
     }
@@ -667,7 +768,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         if let Some(frame) = displaced {
             // The displaced frame had been counted as sent; it is not yet.
             self.stats.frames_sent = self.stats.frames_sent.wrapping_sub(1);
-            match self.tx.requeue(frame) {
+            match self.tx.requeue(frame.id, frame.data) {
                 Requeued::Queued => self.stats.requeued = self.stats.requeued.wrapping_add(1),
                 Requeued::Superseded => {
                     self.stats.superseded = self.stats.superseded.wrapping_add(1)
@@ -680,7 +781,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// The driver did not take the frame last taken (it was busy or failed): it goes back
     /// to the front of its class.
     pub fn transmit_refused(&mut self, frame: Frame) {
-        if self.tx.unpop(frame) == Requeued::NoRoom {
+        if self.tx.requeue(frame.id, frame.data) == Requeued::NoRoom {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
         }
     }

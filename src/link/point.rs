@@ -18,8 +18,56 @@
 //! - Any other pointing command, a rate hold, or [`Link::stop_pointing`](super::Link::stop_pointing)
 //!   cancels it.
 
-use crate::geo::Position;
+use crate::geo::{look_at, Position};
 use crate::time::Instant;
+use crate::wire::control::{Heading, Pitch};
+use crate::wire::vehicle::{Altitude, Gps};
+
+/// What the heading command is relative to.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Reference {
+    /// True north (attitude is pushed).
+    North,
+    /// The vehicle's nose, whose heading is given in 0.01°.
+    Nose(i16),
+}
+
+/// The outcome of one aim computation.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Aim {
+    /// Heading and pitch commands to send.
+    At(Heading, Pitch),
+    /// The target needs this elevation (0.01°), outside the pitch range.
+    Unreachable { elevation_cdeg: i16 },
+    /// No aim (vehicle position invalid, or the target at the vehicle).
+    Unknown,
+}
+
+/// Computes the aim. Reached only through [`PointAt::solve`], a function pointer that
+/// [`PointAt::new`] stores: firmware that never points at a location never references
+/// this, and the linker drops it with all its double-precision geodesy.
+pub(crate) fn solve(target: &Position, gps: Gps, alt: Altitude, reference: Reference) -> Aim {
+    let Ok(vehicle) = Position::new(gps.lat_deg(), gps.lon_deg(), alt.metres()) else {
+        return Aim::Unknown;
+    };
+    let Ok(angles) = look_at(&vehicle, target) else {
+        return Aim::Unknown;
+    };
+    let bearing = match reference {
+        Reference::North => angles.bearing_deg,
+        Reference::Nose(heading_cdeg) => angles.bearing_deg - f64::from(heading_cdeg) / 100.0,
+    };
+    let Ok(pitch) = Pitch::new(angles.elevation_deg as f32) else {
+        // |elevation| <= 90°, so the centidegrees fit an i16.
+        return Aim::Unreachable {
+            elevation_cdeg: libm::round(angles.elevation_deg * 100.0) as i16,
+        };
+    };
+    match Heading::new(wrap_360(bearing) as f32) {
+        Ok(heading) => Aim::At(heading, pitch),
+        Err(_) => Aim::Unknown,
+    }
+}
 
 /// State of an active point-at.
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +78,7 @@ pub(crate) struct PointAt {
     /// Heading and pitch last sent, in wire units (0.1°).
     pub(crate) sent: Option<(u16, i16)>,
     pub(crate) unreachable: bool,
+    pub(crate) solve: fn(&Position, Gps, Altitude, Reference) -> Aim,
 }
 
 impl PointAt {
@@ -40,6 +89,7 @@ impl PointAt {
             due: true,
             sent: None,
             unreachable: false,
+            solve,
         }
     }
 }

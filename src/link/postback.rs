@@ -195,6 +195,11 @@ impl PostbackAssembler {
         self.count = 0;
     }
 
+    /// When a partial message held now would expire, if one is held.
+    pub fn expiry(&self) -> Option<Instant> {
+        (self.count != 0).then(|| self.last.add_millis(self.max_gap_ms.saturating_add(1)))
+    }
+
     /// Discards a partial message whose last frame is more than the gap bound before `now`.
     /// Call it periodically so that a message cut short is counted when it is, not when the
     /// next frame happens to arrive.

@@ -1,17 +1,16 @@
 //! The transmit queue: control frames before vehicle frames before text.
 //!
 //! - Control frames wait in a FIFO of `Q` slots. A full FIFO is an error to the caller.
-//! - Vehicle frames have one slot per kind (attitude, GPS, altitude): the latest value
-//!   wins, so a newer frame replaces one not yet sent (counted as superseded). Within the
-//!   class they leave in CAN priority order (attitude `FF13`, GPS `FF15`, altitude `FF16`).
+//! - Vehicle frames are a pending flag per kind (attitude, GPS, altitude): the frame is
+//!   built from the latest value when it leaves, so a newer value always wins over one not
+//!   yet sent. Within the class they leave in CAN priority order (attitude `FF13`, GPS
+//!   `FF15`, altitude `FF16`).
 //! - Text frames wait in a FIFO of `T` slots; a text is queued all or nothing.
 //!
-//! A frame taken for transmission and not accepted by the CAN driver goes back to the front
-//! of its class; a frame the driver hands back, displaced from a mailbox, is re-queued the
-//! same way (see [`Link::transmit_refused`](super::Link::transmit_refused) and
-//! [`Link::transmit_done`](super::Link::transmit_done)).
+//! Slots hold only the 8 data bytes (and, for text, whether the frame ends its message):
+//! the ID follows from the class.
 
-use crate::wire::{ids, Frame};
+use crate::wire::ids;
 use heapless::Deque;
 
 /// The priority class of a frame.
@@ -20,46 +19,54 @@ use heapless::Deque;
 pub enum Class {
     /// Control commands (`0x00000F01`).
     Control,
-    /// Vehicle frames (attitude, GPS, altitude).
-    Vehicle,
-    /// Text frames and anything else.
+    /// Vehicle frames (attitude, GPS, altitude), by slot (0 attitude, 1 GPS, 2 altitude).
+    Vehicle(usize),
+    /// Text frames.
     Text,
+    /// Not a frame this crate sends.
+    Foreign,
 }
+
+/// Vehicle frame IDs by slot, in CAN priority order.
+pub const VEHICLE_IDS: [u32; 3] = [ids::ATTITUDE, ids::GPS, ids::ALTITUDE];
 
 impl Class {
     /// The class of a frame with this ID.
     pub const fn of(id: u32) -> Class {
         match id {
             ids::CONTROL => Class::Control,
-            ids::ATTITUDE | ids::GPS | ids::ALTITUDE => Class::Vehicle,
-            _ => Class::Text,
+            ids::ATTITUDE => Class::Vehicle(0),
+            ids::GPS => Class::Vehicle(1),
+            ids::ALTITUDE => Class::Vehicle(2),
+            ids::TEXT | ids::TEXT_END => Class::Text,
+            _ => Class::Foreign,
         }
     }
 }
 
-const VEHICLE_IDS: [u32; 3] = [ids::ATTITUDE, ids::GPS, ids::ALTITUDE];
-
-fn vehicle_slot(id: u32) -> Option<usize> {
-    VEHICLE_IDS.iter().position(|&v| v == id)
+/// One queued text frame.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) struct TextSlot {
+    pub(crate) data: [u8; 8],
+    /// The last frame of its text (sent on `0x02008202`).
+    pub(crate) last: bool,
 }
 
-/// What happened to a frame offered back to the queue.
+/// What leaves the queue next.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(crate) enum Requeued {
-    /// Back at the front of its class.
-    Queued,
-    /// A newer vehicle frame of the same kind is waiting: the old one is superseded.
-    Superseded,
-    /// No room (cannot happen for a frame just popped; see `TxQueue::unpop`).
-    NoRoom,
+pub(crate) enum Next {
+    Control([u8; 8]),
+    Vehicle(usize),
+    Text(TextSlot),
 }
 
 /// The transmit queue; see the [module docs](self).
 #[derive(Clone, Debug)]
 pub struct TxQueue<const Q: usize, const T: usize> {
-    control: Deque<Frame, Q>,
-    vehicle: [Option<Frame>; 3],
-    text: Deque<Frame, T>,
+    control: Deque<[u8; 8], Q>,
+    text: Deque<TextSlot, T>,
+    /// Bit `i` set: vehicle slot `i` waits.
+    vehicle: u8,
 }
 
 impl<const Q: usize, const T: usize> Default for TxQueue<Q, T> {
@@ -73,19 +80,20 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     pub const fn new() -> Self {
         TxQueue {
             control: Deque::new(),
-            vehicle: [None; 3],
             text: Deque::new(),
+            vehicle: 0,
         }
     }
 
     /// Frames waiting.
     pub fn len(&self) -> usize {
-        self.control.len() + self.vehicle.iter().flatten().count() + self.text.len()
+        self.control.len() + self.vehicle.count_ones() as usize + self.text.len()
     }
 
     /// Whether nothing is waiting.
+    #[inline]
     pub fn is_empty(&self) -> bool {
-        self.control.is_empty() && self.text.is_empty() && self.vehicle.iter().all(Option::is_none)
+        self.control.is_empty() && self.vehicle == 0 && self.text.is_empty()
     }
 
     /// Free control slots.
@@ -98,24 +106,25 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         T - self.text.len()
     }
 
-    /// Queues a control frame; hands it back when the FIFO is full.
-    pub fn push_control(&mut self, frame: Frame) -> Result<(), Frame> {
-        self.control.push_back(frame)
+    /// Queues a control frame's data; hands it back when the FIFO is full.
+    pub fn push_control(&mut self, data: [u8; 8]) -> Result<(), [u8; 8]> {
+        self.control.push_back(data)
     }
 
-    /// Puts a vehicle frame in its slot. Returns `true` when it replaced an unsent one.
-    /// A frame that is not a vehicle frame is handed back.
-    pub fn put_vehicle(&mut self, frame: Frame) -> Result<bool, Frame> {
-        match vehicle_slot(frame.id).and_then(|i| self.vehicle.get_mut(i)) {
-            Some(slot) => Ok(slot.replace(frame).is_some()),
-            None => Err(frame),
-        }
+    /// Marks vehicle slot `slot` as waiting. Returns `true` when it already was (the value
+    /// not yet sent is superseded by the latest).
+    pub fn mark_vehicle(&mut self, slot: usize) -> bool {
+        let bit = 1u8 << (slot & 7);
+        let was = self.vehicle & bit != 0;
+        self.vehicle |= bit;
+        was
     }
 
-    /// Queues all of `frames` as text, or none of them when they do not all fit.
-    pub fn push_text<I>(&mut self, frames: I) -> Result<(), usize>
+    /// Queues a text's frames (8 data bytes each; the last one ends the text), all of them
+    /// or none when they do not all fit. Gives back how many were needed on failure.
+    pub(crate) fn push_text<I>(&mut self, frames: I) -> Result<(), usize>
     where
-        I: ExactSizeIterator<Item = Frame>,
+        I: ExactSizeIterator<Item = TextSlot>,
     {
         let need = frames.len();
         if need > self.text_free() {
@@ -128,82 +137,117 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         Ok(())
     }
 
-    /// The next frame to transmit, removed from the queue.
-    pub fn pop(&mut self) -> Option<Frame> {
-        if let Some(f) = self.control.pop_front() {
-            return Some(f);
+    /// Takes what leaves next.
+    #[inline]
+    pub(crate) fn pop(&mut self) -> Option<Next> {
+        if let Some(d) = self.control.pop_front() {
+            return Some(Next::Control(d));
         }
-        if let Some(f) = self.vehicle.iter_mut().find_map(Option::take) {
-            return Some(f);
+        if self.vehicle != 0 {
+            let slot = self.vehicle.trailing_zeros() as usize;
+            self.vehicle &= self.vehicle - 1;
+            return Some(Next::Vehicle(slot));
         }
-        self.text.pop_front()
+        self.text.pop_front().map(Next::Text)
     }
 
-    /// Puts a frame back at the front of its class: for a frame popped and then refused by
-    /// the driver (there is always room for it, since it was just popped).
-    pub(crate) fn unpop(&mut self, frame: Frame) -> Requeued {
-        self.requeue(frame)
-    }
-
-    /// Re-queues a frame the CAN driver handed back at the front of its class.
-    pub(crate) fn requeue(&mut self, frame: Frame) -> Requeued {
-        let result = match Class::of(frame.id) {
-            Class::Control => self.control.push_front(frame).map(|()| Requeued::Queued),
-            Class::Text => self.text.push_front(frame).map(|()| Requeued::Queued),
-            Class::Vehicle => match vehicle_slot(frame.id).and_then(|i| self.vehicle.get_mut(i)) {
-                Some(slot @ None) => {
-                    *slot = Some(frame);
-                    Ok(Requeued::Queued)
+    /// Puts a frame back at the front of its class: for a frame popped and refused by the
+    /// driver, or one the driver handed back from a mailbox. Returns `false` when a control
+    /// or text FIFO is full (cannot happen for a frame just popped) or the ID is foreign.
+    /// A vehicle frame whose slot is already waiting again is superseded, not an error.
+    pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8]) -> Requeued {
+        match Class::of(id) {
+            Class::Control => self
+                .control
+                .push_front(data)
+                .map_or(Requeued::NoRoom, |()| Requeued::Queued),
+            Class::Text => self
+                .text
+                .push_front(TextSlot {
+                    data,
+                    last: id == ids::TEXT_END,
+                })
+                .map_or(Requeued::NoRoom, |()| Requeued::Queued),
+            Class::Vehicle(slot) => {
+                if self.mark_vehicle(slot) {
+                    Requeued::Superseded
+                } else {
+                    Requeued::Queued
                 }
-                Some(Some(_)) => Ok(Requeued::Superseded),
-                None => Err(frame),
-            },
-        };
-        result.unwrap_or(Requeued::NoRoom)
+            }
+            Class::Foreign => Requeued::NoRoom,
+        }
     }
+}
+
+/// What happened to a frame offered back to the queue.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Requeued {
+    /// Back at the front of its class.
+    Queued,
+    /// A newer vehicle value of the same kind waits: the old one is superseded.
+    Superseded,
+    /// No room, or not a frame of this crate.
+    NoRoom,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn f(id: u32, tag: u8) -> Frame {
-        Frame::new(id, [tag; 8])
+    fn text(tag: u8, last: bool) -> TextSlot {
+        TextSlot {
+            data: [tag; 8],
+            last,
+        }
+    }
+
+    fn drain<const Q: usize, const T: usize>(q: &mut TxQueue<Q, T>) -> Vec<Next> {
+        core::iter::from_fn(|| q.pop()).collect()
     }
 
     #[test]
-    fn priority_order_and_latest_vehicle_wins() {
+    fn priority_order_and_vehicle_flags() {
         let mut q = TxQueue::<4, 4>::new();
-        q.push_text([f(ids::TEXT, 1), f(ids::TEXT_END, 2)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter())
             .unwrap();
-        assert_eq!(q.put_vehicle(f(ids::ALTITUDE, 3)), Ok(false));
-        assert_eq!(q.put_vehicle(f(ids::GPS, 4)), Ok(false));
-        assert_eq!(q.put_vehicle(f(ids::GPS, 5)), Ok(true)); // replaces 4
-        assert_eq!(q.put_vehicle(f(ids::ATTITUDE, 6)), Ok(false));
-        q.push_control(f(ids::CONTROL, 7)).unwrap();
-        q.push_control(f(ids::CONTROL, 8)).unwrap();
-        assert_eq!(q.len(), 7); // 2 text, 3 vehicle (GPS replaced in place), 2 control
-        let order: Vec<u8> = core::iter::from_fn(|| q.pop()).map(|f| f.data[0]).collect();
-        assert_eq!(order, [7, 8, 6, 5, 3, 1, 2]);
+        assert!(!q.mark_vehicle(2));
+        assert!(!q.mark_vehicle(1));
+        assert!(q.mark_vehicle(1), "already waiting: superseded");
+        assert!(!q.mark_vehicle(0));
+        q.push_control([7; 8]).unwrap();
+        q.push_control([8; 8]).unwrap();
+        assert_eq!(q.len(), 7); // 2 control, 3 vehicle, 2 text
+        assert_eq!(
+            drain(&mut q),
+            [
+                Next::Control([7; 8]),
+                Next::Control([8; 8]),
+                Next::Vehicle(0),
+                Next::Vehicle(1),
+                Next::Vehicle(2),
+                Next::Text(text(1, false)),
+                Next::Text(text(2, true)),
+            ]
+        );
         assert!(q.is_empty());
     }
 
     #[test]
     fn full_control_fifo_hands_the_frame_back() {
         let mut q = TxQueue::<2, 2>::new();
-        q.push_control(f(ids::CONTROL, 1)).unwrap();
-        q.push_control(f(ids::CONTROL, 2)).unwrap();
-        assert_eq!(q.push_control(f(ids::CONTROL, 3)), Err(f(ids::CONTROL, 3)));
-        assert_eq!(q.put_vehicle(f(ids::CONTROL, 9)), Err(f(ids::CONTROL, 9)));
+        q.push_control([1; 8]).unwrap();
+        q.push_control([2; 8]).unwrap();
+        assert_eq!(q.push_control([3; 8]), Err([3; 8]));
     }
 
     #[test]
     fn text_is_all_or_nothing() {
         let mut q = TxQueue::<2, 3>::new();
-        q.push_text([f(ids::TEXT, 1), f(ids::TEXT_END, 2)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter())
             .unwrap();
         assert_eq!(
-            q.push_text([f(ids::TEXT, 3), f(ids::TEXT_END, 4)].into_iter()),
+            q.push_text([text(3, false), text(4, true)].into_iter()),
             Err(2)
         );
         assert_eq!(q.len(), 2);
@@ -212,20 +256,27 @@ mod tests {
     #[test]
     fn requeue_goes_to_the_front_of_its_class() {
         let mut q = TxQueue::<2, 2>::new();
-        q.push_text([f(ids::TEXT, 1), f(ids::TEXT_END, 2)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter())
             .unwrap();
-        let first = q.pop().unwrap();
-        assert_eq!(q.requeue(first), Requeued::Queued);
-        assert_eq!(q.pop().unwrap().data[0], 1);
-        // A displaced vehicle frame whose slot holds a newer one is superseded.
-        q.put_vehicle(f(ids::GPS, 5)).unwrap();
-        assert_eq!(q.requeue(f(ids::GPS, 4)), Requeued::Superseded);
-        assert_eq!(q.pop(), Some(f(ids::GPS, 5)));
-        assert_eq!(q.requeue(f(ids::GPS, 4)), Requeued::Queued);
-        // Control back in front of newer control frames.
-        q.push_control(f(ids::CONTROL, 8)).unwrap();
-        assert_eq!(q.requeue(f(ids::CONTROL, 7)), Requeued::Queued);
-        assert_eq!(q.requeue(f(ids::CONTROL, 6)), Requeued::NoRoom);
-        assert_eq!(q.pop().unwrap().data[0], 7);
+        let Some(Next::Text(first)) = q.pop() else {
+            panic!()
+        };
+        assert_eq!(q.requeue(ids::TEXT, first.data), Requeued::Queued);
+        assert_eq!(q.pop(), Some(Next::Text(text(1, false))));
+        // The end frame keeps its ID through a requeue.
+        assert_eq!(q.pop(), Some(Next::Text(text(2, true))));
+        assert_eq!(q.requeue(ids::TEXT_END, [2; 8]), Requeued::Queued);
+        assert_eq!(q.pop(), Some(Next::Text(text(2, true))));
+        // A displaced vehicle frame whose slot waits again is superseded.
+        q.mark_vehicle(1);
+        assert_eq!(q.requeue(ids::GPS, [0; 8]), Requeued::Superseded);
+        assert_eq!(q.pop(), Some(Next::Vehicle(1)));
+        assert_eq!(q.requeue(ids::GPS, [0; 8]), Requeued::Queued);
+        // Control goes back in front of newer control frames.
+        q.push_control([8; 8]).unwrap();
+        assert_eq!(q.requeue(ids::CONTROL, [7; 8]), Requeued::Queued);
+        assert_eq!(q.requeue(ids::CONTROL, [6; 8]), Requeued::NoRoom);
+        assert_eq!(q.pop(), Some(Next::Control([7; 8])));
+        assert_eq!(q.requeue(0x123, [0; 8]), Requeued::NoRoom);
     }
 }

@@ -227,7 +227,14 @@ fn link_up_down_and_latest_postback() {
     assert!(!link.is_up());
     postback_frames(&mut link, 1000, -100);
     assert_eq!(link.next_event(), Some(Event::LinkUp));
-    assert!(matches!(link.next_event(), Some(Event::Postback(p)) if p.pitch == -100));
+    assert_eq!(link.next_event(), Some(Event::Postback));
+    assert_eq!(
+        link.latest_postback(Instant::from_millis(1000))
+            .unwrap()
+            .0
+            .pitch,
+        -100
+    );
     assert_eq!(
         link.latest_postback(Instant::from_millis(1300))
             .map(|(p, age)| (p.pitch, age)),
@@ -449,5 +456,107 @@ mod point_at {
             link.pointing_target().is_some(),
             "a camera command does not cancel it"
         );
+    }
+}
+
+mod fast_path {
+    use super::*;
+    use crate::geo::Position;
+    use crate::wire::control::Pitch;
+    use proptest::prelude::*;
+
+    #[derive(Clone, Debug)]
+    enum Op {
+        Wait(u32),
+        Rate(i16),
+        StopRate,
+        Pitch,
+        Vehicle { stamp_back: u32 },
+        Postback,
+        PostbackFrame(u8),
+        PointAt,
+        Text,
+    }
+
+    fn op() -> impl Strategy<Value = Op> {
+        prop_oneof![
+            8 => (0u32..400).prop_map(Op::Wait),
+            2 => (-500i16..500).prop_map(Op::Rate),
+            1 => Just(Op::StopRate),
+            1 => Just(Op::Pitch),
+            3 => (0u32..1500).prop_map(|stamp_back| Op::Vehicle { stamp_back }),
+            2 => Just(Op::Postback),
+            1 => (0u8..4).prop_map(Op::PostbackFrame),
+            1 => Just(Op::PointAt),
+            1 => Just(Op::Text),
+        ]
+    }
+
+    fn apply(link: &mut Link, op: &Op, now: Instant) {
+        match *op {
+            Op::Wait(_) => {}
+            Op::Rate(r) => {
+                let _ = link.set_rate(Rate::from_centi(r, 0).unwrap(), now);
+            }
+            Op::StopRate => link.stop_rate(),
+            Op::Pitch => {
+                let _ = link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()));
+            }
+            Op::Vehicle { stamp_back } => {
+                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
+                link.set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
+                link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
+            }
+            Op::Postback => {
+                for d in Postback::default().to_can_frames() {
+                    link.receive(ids::POSTBACK, &d, now);
+                }
+            }
+            Op::PostbackFrame(i) => {
+                let d = Postback::default().to_can_frames()[usize::from(i)];
+                link.receive(ids::POSTBACK, &d, now);
+            }
+            Op::PointAt => link.point_at(Position::new(47.001, 8.001, 400.0).unwrap()),
+            Op::Text => {
+                let _ = link.send_text(b"HELLO");
+            }
+        }
+    }
+
+    fn drain(link: &mut Link) -> (Vec<Frame>, Vec<Event>) {
+        let frames = core::iter::from_fn(|| {
+            let f = link.next_transmit();
+            if f.is_some() {
+                link.transmit_done(None);
+            }
+            f
+        })
+        .collect();
+        (frames, core::iter::from_fn(|| link.next_event()).collect())
+    }
+
+    proptest! {
+        /// Polling every millisecond through the idle fast path does exactly what full
+        /// polls do.
+        #[test]
+        fn fast_path_equals_full_polls(ops in proptest::collection::vec(op(), 1..60), start: u32) {
+            let mut fast: Link = Link::new(Config::default());
+            let mut full: Link = Link::new(Config::default());
+            let mut t = start;
+            for op in &ops {
+                let steps = if let Op::Wait(ms) = *op { ms } else { 1 };
+                apply(&mut fast, op, Instant::from_millis(t));
+                apply(&mut full, op, Instant::from_millis(t));
+                for _ in 0..steps {
+                    let now = Instant::from_millis(t);
+                    fast.poll(now);
+                    full.poll_all(now);
+                    prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
+                    t = t.wrapping_add(1);
+                }
+            }
+            prop_assert_eq!(fast.stats(), full.stats());
+        }
     }
 }
