@@ -211,7 +211,13 @@ mod report {
             self.push(what, value, unit, Some(max));
         }
 
-        fn push(&mut self, what: &'static str, value: f32, unit: &'static str, budget: Option<f32>) {
+        fn push(
+            &mut self,
+            what: &'static str,
+            value: f32,
+            unit: &'static str,
+            budget: Option<f32>,
+        ) {
             let row = Row {
                 what,
                 value,
@@ -252,6 +258,75 @@ mod report {
 }
 
 #[cfg(target_os = "none")]
+mod replay {
+    //! A minimal `embedded_can::nb::Can` for measuring the driver: it hands out frames from
+    //! a fixed cycle, as many as the bench makes available, and accepts every transmission.
+    //! Its frame type is bxcan's, the one the STM32 firmware uses, and its own cost (a few
+    //! loads and stores a frame) stands in for reading bxcan's receive FIFO, which takes
+    //! about as many register accesses.
+
+    use core::cell::Cell;
+
+    use bxcan::Frame as CanFrame;
+    use embedded_can::ErrorKind;
+
+    /// Frames in the replay cycle (a power of two).
+    pub const CYCLE: usize = 16;
+
+    pub struct Source {
+        frames: [CanFrame; CYCLE],
+        next: Cell<usize>,
+        available: Cell<u32>,
+        sent: Cell<u32>,
+    }
+
+    impl Source {
+        pub fn new(frames: [CanFrame; CYCLE]) -> Self {
+            Source {
+                frames,
+                next: Cell::new(0),
+                available: Cell::new(0),
+                sent: Cell::new(0),
+            }
+        }
+
+        /// Makes `n` more frames receivable.
+        #[inline(always)]
+        pub fn make_available(&self, n: u32) {
+            self.available.set(self.available.get() + n);
+        }
+
+        pub fn sent(&self) -> u32 {
+            self.sent.get()
+        }
+    }
+
+    pub struct ReplayCan<'a>(pub &'a Source);
+
+    impl embedded_can::nb::Can for ReplayCan<'_> {
+        type Frame = CanFrame;
+        type Error = ErrorKind;
+
+        fn transmit(&mut self, _frame: &CanFrame) -> nb::Result<Option<CanFrame>, ErrorKind> {
+            self.0.sent.set(self.0.sent.get().wrapping_add(1));
+            Ok(None)
+        }
+
+        fn receive(&mut self) -> nb::Result<CanFrame, ErrorKind> {
+            let s = self.0;
+            let available = s.available.get();
+            if available == 0 {
+                return Err(nb::Error::WouldBlock);
+            }
+            s.available.set(available - 1);
+            let i = s.next.get();
+            s.next.set((i + 1) % CYCLE);
+            Ok(s.frames[i].clone())
+        }
+    }
+}
+
+#[cfg(target_os = "none")]
 mod fw {
     use core::hint::black_box;
 
@@ -259,11 +334,20 @@ mod fw {
     use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch};
     use idu_gimbal::wire::ids;
     use idu_gimbal::wire::postback::Postback;
+    use idu_gimbal::wire::vehicle::{Attitude, Gps};
     use idu_gimbal::Instant;
+
+    use bxcan::{ExtendedId, Frame as CanFrame};
+    use idu_gimbal::{Config, Event, Gimbal};
 
     use crate::crcs;
     use crate::meter::Meter;
+    use crate::replay::{ReplayCan, Source, CYCLE};
     use crate::report::Table;
+
+    /// Budgets from issue 4 (guest instructions, thumbv7em, opt-level "s").
+    const BUDGET_RX_FRAME: f32 = 150.0;
+    const BUDGET_IDLE_POLL: f32 = 60.0;
 
     /// Messages per batch in the amortized postback measurements.
     const MESSAGES: u32 = 512;
@@ -297,6 +381,7 @@ mod fw {
             m.loop_overhead()
         );
 
+        bench_driver(&mut m, &mut table);
         bench_assembler(&mut m, &mut table);
         bench_encode(&mut m, &mut table);
         bench_crc(&mut m, &mut table);
@@ -313,6 +398,170 @@ mod fw {
             }
         );
         crate::qemu::exit(ok)
+    }
+
+    fn ext_frame(id: u32, data: [u8; 8]) -> CanFrame {
+        let Some(id) = ExtendedId::new(id) else {
+            crate::qemu::exit(false)
+        };
+        CanFrame::new_data(id, data)
+    }
+
+    /// The replay cycle: four postback messages (16 frames).
+    fn postback_cycle() -> [CanFrame; CYCLE] {
+        let msgs = messages();
+        core::array::from_fn(|i| ext_frame(ids::POSTBACK, msgs[i / 4][i % 4]))
+    }
+
+    /// The driver (`Gimbal::poll`) over the replay CAN: the whole receive path from the
+    /// CAN driver's `receive` to the event queue, and an idle poll.
+    fn bench_driver(m: &mut Meter, table: &mut Table) {
+        const N: u32 = 512;
+        let source = Source::new(postback_cycle());
+        let mut gimbal: Gimbal<_> = Gimbal::new(ReplayCan(&source), Config::default());
+        let mut t = 1000u32;
+
+        // Idle poll on a fresh driver: nothing received, nothing due, nothing to send.
+        let idle_fresh = m.per_op(N, |_| {
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+        });
+
+        // A whole postback per poll, the application taking the event each time; and the
+        // same loop with nothing received, to isolate the receive path's marginal cost.
+        let drain = |g: &mut Gimbal<ReplayCan<'_>>| {
+            while let Some(e) = g.next_event() {
+                black_box(e);
+            }
+        };
+        let whole = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            source.make_available(4);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let empty = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let per_frame = (whole - empty) / 4.0;
+
+        // One frame per poll (a poll as each frame arrives), idle part included.
+        let one_per_poll = m.per_op(4 * N, |i| {
+            if i & 3 == 0 {
+                t = t.wrapping_add(1);
+            }
+            source.make_available(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+
+        // Idle poll with the link up (a postback within the link timeout).
+        let now = Instant::from_millis(t);
+        let idle_up = m.per_op(N, |_| {
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if !gimbal.is_link_up() {
+            println!("driver bench: link should be up");
+            crate::qemu::exit(false);
+        }
+
+        // Vehicle data set and fresh, nothing due: the schedules' checks.
+        if let (Ok(gps), Ok(att)) = (Gps::new(47.4, 8.5), Attitude::new(0.0, 0.0, 10.0)) {
+            gimbal.set_gps(gps, now);
+            gimbal.set_attitude(att, now);
+        }
+        black_box(gimbal.poll(now).is_ok()); // pushes the first values
+        let idle_vehicle = m.per_op(N, |_| {
+            black_box(gimbal.poll(now).is_ok());
+        });
+
+        // Queue one command and send it in the next poll (encode, queue, transmit).
+        let Ok(pitch) = Pitch::new(-45.0) else {
+            crate::qemu::exit(false)
+        };
+        let sent_before = source.sent();
+        let send_poll = m.per_op(N, |_| {
+            black_box(gimbal.send(black_box(GimbalCommand::Pitch(pitch))).is_ok());
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if source.sent() - sent_before != 3 * N {
+            println!(
+                "driver bench: {} commands sent, expected {}",
+                source.sent() - sent_before,
+                3 * N
+            );
+            crate::qemu::exit(false);
+        }
+
+        let stats = gimbal.stats().link;
+        let expected = 3 * N + 3 * N; // whole messages + one frame per poll, 3n of each
+        if stats.postbacks != expected || stats.crc_errors != 0 || stats.events_dropped != 0 {
+            println!("driver bench: unexpected stats {:?}", stats);
+            crate::qemu::exit(false);
+        }
+
+        // Frames on a foreign ID, 8 per poll.
+        let foreign = Source::new(core::array::from_fn(|_| {
+            ext_frame(ids::CONTROL, [0x0F, 0x03, 0, 0, 0, 0, 0, 0])
+        }));
+        let mut g2: Gimbal<_> = Gimbal::new(ReplayCan(&foreign), Config::default());
+        let idle2 = m.per_op(N, |_| {
+            black_box(g2.poll(now).is_ok());
+        });
+        let eight = m.per_op(N, |_| {
+            foreign.make_available(8);
+            black_box(g2.poll(now).is_ok());
+        });
+        if g2.stats().link.ignored_frames != 8 * 3 * N {
+            println!("driver bench: foreign frames not all ignored");
+            crate::qemu::exit(false);
+        }
+
+        table.budget(
+            "driver: per received postback frame, amortized (Gimbal::poll, marginal)",
+            per_frame,
+            "",
+            BUDGET_RX_FRAME,
+        );
+        table.add(
+            "driver: poll receiving one whole postback (4 frames), event taken",
+            whole,
+            "",
+        );
+        table.add(
+            "driver: poll with one postback frame (one poll per frame)",
+            one_per_poll,
+            "",
+        );
+        table.budget(
+            "driver: idle poll (fresh driver, nothing to do)",
+            idle_fresh,
+            "",
+            BUDGET_IDLE_POLL,
+        );
+        table.add("driver: idle poll, link up", idle_up, "");
+        table.add(
+            "driver: idle poll, vehicle data fresh, nothing due",
+            idle_vehicle,
+            "",
+        );
+        table.add(
+            "driver: send one command + poll that transmits it",
+            send_poll - idle_vehicle,
+            "",
+        );
+        table.add(
+            "driver: per frame on a foreign ID (8 per poll, marginal)",
+            (eight - idle2) / 8.0,
+            "",
+        );
+        table.add(
+            "size_of Gimbal<C, 8, 16> (RAM, bytes; C zero-sized here: +4)",
+            core::mem::size_of::<Gimbal<ReplayCan<'static>>>() as f32 - 4.0,
+            "B",
+        );
+        black_box(Event::LinkUp);
     }
 
     /// The link's postback reassembly alone (no CAN driver).
@@ -332,8 +581,16 @@ mod fw {
             println!("assembler bench: unexpected stats {:?}", s);
             crate::qemu::exit(false);
         }
-        table.add("assembler: one complete postback message (4 frames)", per_message, "");
-        table.add("assembler: per postback frame, amortized", per_message / 4.0, "");
+        table.add(
+            "assembler: one complete postback message (4 frames)",
+            per_message,
+            "",
+        );
+        table.add(
+            "assembler: per postback frame, amortized",
+            per_message / 4.0,
+            "",
+        );
 
         // Frame-by-frame breakdown: each feed timed alone.
         let mut per_frame = [0f32; 4];
@@ -341,9 +598,8 @@ mod fw {
             let frames = &msgs[(i & 3) as usize];
             now = now.wrapping_add(1);
             for (k, f) in frames.iter().enumerate() {
-                per_frame[k] += m.once(|| {
-                    asm.feed(ids::POSTBACK, black_box(f), Instant::from_millis(now))
-                });
+                per_frame[k] +=
+                    m.once(|| asm.feed(ids::POSTBACK, black_box(f), Instant::from_millis(now)));
             }
         }
         for (k, what) in [
@@ -396,7 +652,8 @@ mod fw {
             *b = x as u8;
         }
         let want = crcs::bench_crc_nibble16(&buf);
-        let impls: [(&'static str, &'static str, fn(&[u8]) -> u16); 3] = [
+        type Crc16 = fn(&[u8]) -> u16;
+        let impls: [(&str, &str, Crc16); 3] = [
             (
                 "CRC per byte: idu_gimbal (256-entry table, 512 B)",
                 "CRC over 25 bytes: idu_gimbal",
