@@ -48,7 +48,10 @@ mod fw {
         const SJW: u32 = 1;
         assert!(1 + BS1 + BS2 == TQ_PER_BIT);
         let prescaler = PCLK1_HZ / (CAN_BITRATE * TQ_PER_BIT);
-        assert!(prescaler * CAN_BITRATE * TQ_PER_BIT == PCLK1_HZ, "bit rate not exact");
+        assert!(
+            prescaler * CAN_BITRATE * TQ_PER_BIT == PCLK1_HZ,
+            "bit rate not exact"
+        );
         ((SJW - 1) << 24) | ((BS2 - 1) << 20) | ((BS1 - 1) << 16) | (prescaler - 1)
     };
 
@@ -82,8 +85,7 @@ mod fw {
 
     #[entry]
     fn main() -> ! {
-        let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take())
-        else {
+        let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
             panic!("peripherals taken twice");
         };
 
@@ -92,7 +94,11 @@ mod fw {
                 .sysclk(SYSCLK_HZ.Hz())
                 .pclk1(PCLK1_HZ.Hz()),
         );
-        assert_eq!(rcc.clocks.pclk1().raw(), PCLK1_HZ, "CAN bit timing needs PCLK1 = 42 MHz");
+        assert_eq!(
+            rcc.clocks.pclk1().raw(),
+            PCLK1_HZ,
+            "CAN bit timing needs PCLK1 = 42 MHz"
+        );
 
         // The millisecond tick.
         let mut syst = cp.SYST;
