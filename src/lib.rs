@@ -74,6 +74,7 @@ pub mod interface;
 pub mod link;
 #[cfg(feature = "mock")]
 pub mod mock;
+pub mod sim;
 pub mod time;
 pub mod video;
 pub mod wire;

@@ -29,14 +29,16 @@
 //! # Ok::<(), idu_gimbal::wire::RangeError>(())
 //! ```
 
+mod point;
 pub mod postback;
 pub mod queue;
 pub mod text;
 
 use core::fmt;
 
+use crate::geo::{self, Position};
 use crate::time::Instant;
-use crate::wire::control::{Command, GimbalCommand, Rate};
+use crate::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
 use crate::wire::postback::{GimbalType, Postback};
 use crate::wire::vehicle::{Altitude, Attitude, Gps, VehicleFrame};
 use crate::wire::{ids, text as wire_text, Frame};
@@ -65,6 +67,11 @@ pub struct Config {
     pub link_timeout_ms: u32,
     /// Bound on the gap between frames of one postback (default 100).
     pub postback_max_gap_ms: u32,
+    /// Period at which [`Link::point_at`] recomputes the aim (default 100: 10 Hz).
+    pub point_at_period_ms: u32,
+    /// [`Link::point_at`] re-commands the gimbal only when the aim moved by more than this,
+    /// in millidegrees (default 100: 0.1°).
+    pub point_at_deadband_mdeg: u32,
 }
 
 impl Default for Config {
@@ -78,6 +85,8 @@ impl Default for Config {
             rate_deadman_ms: 250,
             link_timeout_ms: 1500,
             postback_max_gap_ms: postback::DEFAULT_MAX_GAP_MS,
+            point_at_period_ms: 100,
+            point_at_deadband_mdeg: 100,
         }
     }
 }
@@ -94,6 +103,12 @@ pub enum Event {
     LinkDown,
     /// A rate hold was not refreshed in time: one zero-rate command was queued.
     RateHoldExpired,
+    /// [`Link::point_at`]'s target needs a pitch outside the gimbal's [-100°, 60°]; the
+    /// gimbal holds the last reachable aim. Raised once each time the target leaves reach.
+    TargetUnreachable {
+        /// The elevation the target needs, in 0.01°.
+        elevation_cdeg: i32,
+    },
 }
 
 /// Counters for diagnosing a bus. All wrap at `u32::MAX`.
@@ -225,6 +240,7 @@ pub struct Link<const Q: usize = 8, const T: usize = 16> {
     /// Attitude, GPS, altitude.
     vehicle: [VehicleSource; 3],
     rate: RateState,
+    point: Option<point::PointAt>,
     latest: Option<(Postback, Instant)>,
     up: bool,
     events: heapless::Deque<Event, 8>,
@@ -244,6 +260,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             assembler: PostbackAssembler::with_max_gap(config.postback_max_gap_ms),
             vehicle: [VehicleSource::EMPTY; 3],
             rate: RateState::Idle,
+            point: None,
             latest: None,
             up: false,
             events: heapless::Deque::new(),
@@ -322,6 +339,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             if let RateState::Holding { .. } = self.rate {
                 self.rate = RateState::Idle;
             }
+            self.point = None;
         }
         Ok(())
     }
@@ -454,6 +472,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.assembler.expire(now);
         self.poll_rate(now);
         self.poll_vehicle(now);
+        self.poll_point(now);
         if let Some((_, at)) = self.latest {
             if self.up && now.millis_since(at) > self.config.link_timeout_ms {
                 self.up = false;
@@ -529,6 +548,102 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
+    // ---- pointing at a location ----
+
+    /// Keeps the gimbal pointed at `target` while the vehicle moves; see
+    /// [`point`](self#pointing-at-a-location). Cancels a rate hold.
+    pub fn point_at(&mut self, target: Position) {
+        if let RateState::Holding { .. } = self.rate {
+            self.rate = RateState::Idle;
+        }
+        self.point = Some(point::PointAt::new(target));
+    }
+
+    /// Stops pointing at a location (the gimbal keeps its last aim).
+    pub fn stop_pointing(&mut self) {
+        self.point = None;
+    }
+
+    /// The target being pointed at, if any.
+    pub fn pointing_target(&self) -> Option<Position> {
+        self.point.map(|p| p.target)
+    }
+
+    fn fresh_vehicle(&self, index: usize, now: Instant) -> Option<VehicleFrame> {
+        let (frame, stamp) = self.vehicle.get(index)?.latest?;
+        if Self::age(stamp, now) > self.config.vehicle_stale_ms {
+            return None;
+        }
+        VehicleFrame::decode(frame.id, &frame.data).ok()
+    }
+
+    fn poll_point(&mut self, now: Instant) {
+        let Some(mut p) = self.point else { return };
+        if !(p.due || now.is_at_or_after(p.next)) {
+            return;
+        }
+        p.next = if p.due {
+            now.add_millis(self.config.point_at_period_ms)
+        } else {
+            advance(p.next, self.config.point_at_period_ms, now)
+        };
+        p.due = false;
+        self.point = Some(p);
+        let (Some(VehicleFrame::Gps(gps)), Some(VehicleFrame::Altitude(alt))) = (
+            self.fresh_vehicle(GPS, now),
+            self.fresh_vehicle(ALTITUDE, now),
+        ) else {
+            return;
+        };
+        let Ok(vehicle) = Position::new(gps.lat_deg(), gps.lon_deg(), alt.metres()) else {
+            return;
+        };
+        let Ok(aim) = geo::look_at(&vehicle, &p.target) else {
+            return;
+        };
+        let bearing = if self.attitude_is_fresh(now) {
+            aim.bearing_deg
+        } else {
+            match self.attitude() {
+                Some(att) => aim.bearing_deg - f64::from(att.heading_deg()),
+                None => return,
+            }
+        };
+        let (Ok(heading), Ok(pitch)) = (
+            Heading::new(point::wrap_360(bearing) as f32),
+            Pitch::new(aim.elevation_deg as f32),
+        ) else {
+            if !p.unreachable {
+                p.unreachable = true;
+                self.point = Some(p);
+                self.event(Event::TargetUnreachable {
+                    elevation_cdeg: libm::round(aim.elevation_deg * 100.0) as i32,
+                });
+            }
+            return;
+        };
+        p.unreachable = false;
+        let aim_wire = (heading.deci(), pitch.deci());
+        if !point::moved(p.sent, aim_wire, self.config.point_at_deadband_mdeg) {
+            self.point = Some(p);
+            return;
+        }
+        if self.tx.control_free() < 2 {
+            // Both or neither; try again at the next poll.
+            self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+            p.due = true;
+        } else {
+            let _ = self
+                .tx
+                .push_control(Command::from(GimbalCommand::Heading(heading)).to_frame());
+            let _ = self
+                .tx
+                .push_control(Command::from(GimbalCommand::Pitch(pitch)).to_frame());
+            p.sent = Some(aim_wire);
+        }
+        self.point = Some(p);
+    }
+
     // ---- transmitting ----
 
     /// Takes the next frame to transmit, highest priority first. Report what happened to
@@ -583,6 +698,11 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// The postback assembler's own counters.
     pub fn assembler_stats(&self) -> postback::AssemblerStats {
         self.assembler.stats()
+    }
+
+    /// The postback assembler.
+    pub fn assembler(&self) -> &PostbackAssembler {
+        &self.assembler
     }
 }
 

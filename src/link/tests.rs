@@ -44,7 +44,7 @@ fn vehicle_frames_at_their_periods_without_drift() {
     // Fresh data every 20 ms; poll every 7 ms (not a divisor of the periods) for 10 s.
     let mut t = 0u32;
     while t < 10_000 {
-        if t % 20 == 0 {
+        if t.is_multiple_of(20) {
             feed_vehicle(&mut link, t);
         }
         log.extend(run(&mut link, t, t + 1, 1));
