@@ -36,6 +36,10 @@ case "$name" in
         fi
         exec probe-rs run --chip STM32F405RGTx "$elf" "$@"
         ;;
+    footprint_*)
+        echo "$name is a size-measurement build, not meant to run: see scripts/size-report.sh" >&2
+        exit 2
+        ;;
     *)
         echo "qemu-run.sh: no runner for '$name' (expected qemu_* or stm32f405)" >&2
         exit 2

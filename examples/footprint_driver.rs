@@ -67,6 +67,7 @@ fn main() -> ! {
                 Event::LinkUp => 1,
                 Event::LinkDown => 2,
                 Event::RateHoldExpired => 3,
+                Event::TargetUnreachable { elevation_cdeg } => elevation_cdeg as u32,
             });
         }
         output(gimbal.stats().link.postbacks);

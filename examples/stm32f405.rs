@@ -168,6 +168,10 @@ mod fw {
                     Event::LinkUp => defmt::info!("gimbal link up"),
                     Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
                     Event::RateHoldExpired => defmt::info!("rate hold expired: gimbal stopped"),
+                    Event::TargetUnreachable { elevation_cdeg } => defmt::warn!(
+                        "look-at target out of the gimbal's pitch range (needs {=i32} cdeg)",
+                        elevation_cdeg
+                    ),
                 }
             }
 
