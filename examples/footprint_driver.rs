@@ -19,7 +19,7 @@ fn main() -> ! {
     let Some(gimbal) =
         cortex_m::singleton!(: Gimbal<RegCan> = Gimbal::new(RegCan, Config::default()))
     else {
-        loop {}
+        cortex_m::asm::udf()
     };
     footprint::use_mem_builtins();
     loop {
