@@ -34,3 +34,6 @@ fi
 
 step "cargo test --workspace --all-features"
 cargo test --workspace --all-features
+
+step "host_sim: the driver against the simulated gimbal, scripted"
+cargo run --quiet --example host_sim --features mock,std

@@ -229,6 +229,17 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         self.link.stop_rate()
     }
 
+    /// Keeps the gimbal pointed at a ground target while the vehicle moves (see
+    /// [`Link::point_at`]).
+    pub fn point_at(&mut self, target: crate::geo::Position) {
+        self.link.point_at(target)
+    }
+
+    /// Stops pointing at a target (see [`Link::stop_pointing`]).
+    pub fn stop_pointing(&mut self) {
+        self.link.stop_pointing()
+    }
+
     /// Queues a text message, all or nothing (see [`Link::send_text`]).
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
         self.link.send_text(text)

@@ -30,6 +30,8 @@ struct Bench<'a> {
     sim_pending: Vec<Frame>,
     sim_received: u32,
     sniffed: u32,
+    /// Driver errors on the simulator's and the sniffer's endpoints.
+    sim_errors: u32,
     now: u32,
 }
 
@@ -47,6 +49,7 @@ impl<'a> Bench<'a> {
             sim_pending: Vec::new(),
             sim_received: 0,
             sniffed: 0,
+            sim_errors: 0,
             now: start,
         }
     }
@@ -71,7 +74,7 @@ impl<'a> Bench<'a> {
                     }
                 }
                 Err(nb::Error::WouldBlock) => break,
-                Err(nb::Error::Other(_)) => {}
+                Err(nb::Error::Other(_)) => self.sim_errors += 1,
             }
         }
         if let Some(p) = self.sim.poll(now) {
@@ -86,7 +89,11 @@ impl<'a> Bench<'a> {
                 Ok(_) => {
                     self.sim_pending.remove(0);
                 }
-                Err(_) => break,
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(_)) => {
+                    self.sim_errors += 1;
+                    break;
+                }
             }
         }
         loop {
@@ -96,7 +103,7 @@ impl<'a> Bench<'a> {
                     self.seen.push((self.now, f.raw_id(), f.data().to_vec()));
                 }
                 Err(nb::Error::WouldBlock) => break,
-                Err(nb::Error::Other(_)) => {}
+                Err(nb::Error::Other(_)) => self.sim_errors += 1,
             }
         }
         self.now = self.now.wrapping_add(1);
@@ -428,4 +435,81 @@ fn the_tick_wraps_mid_run_without_a_hiccup() {
     assert_eq!(b.latest().pitch, -6000);
     assert!(!b.events.iter().any(|(_, e)| *e == Event::LinkDown));
     assert_eq!(b.gimbal.stats().link.dropped_partials, 0);
+}
+
+#[test]
+fn blocking_drivers_work_through_the_adapter() {
+    use idu_gimbal::Blocking;
+    let bus = TestBus::new(7);
+    let can = Blocking::new(bus.endpoint(0).unwrap(), |ep: &mut Endpoint<'_, E, RXQ>| {
+        ep.rx_pending() > 0
+    });
+    let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+    let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
+    let mut sim_can = bus.endpoint(1).unwrap();
+    gimbal
+        .send(GimbalCommand::Pitch(Pitch::new(-20.0).unwrap()))
+        .unwrap();
+    for t in 0..1600u32 {
+        let now = Instant::from_millis(t);
+        gimbal.poll(now).unwrap(); // never blocks: rx_ready says whether a frame waits
+        while let Ok(f) = Can::receive(&mut sim_can) {
+            sim.receive(f.raw_id(), f.data(), now).unwrap();
+        }
+        sim.poll(now);
+        while let Some(f) = sim.pop_frame() {
+            Can::transmit(&mut sim_can, &MockFrame::extended(f.id, &f.data).unwrap()).unwrap();
+        }
+    }
+    assert_eq!(
+        gimbal
+            .latest_postback(Instant::from_millis(1600))
+            .unwrap()
+            .0
+            .pitch,
+        -2000
+    );
+    // Errors from a blocking driver reach the caller with their kind and are counted.
+    bus.inject_error(0, embedded_can::ErrorKind::Bit);
+    gimbal.send(GimbalCommand::Recenter).unwrap();
+    let e = gimbal.poll(Instant::from_millis(1600)).unwrap_err();
+    assert_eq!(e.0, embedded_can::ErrorKind::Bit);
+    assert_eq!(gimbal.stats().driver_errors.bit, 1);
+    // The command was not lost: the next poll sends it.
+    gimbal.poll(Instant::from_millis(1601)).unwrap();
+    assert!(Can::receive(&mut sim_can).is_ok_and(|f| f.data()[1] == 0x03));
+    // release() hands back the adapter, and the adapter the driver it wraps.
+    assert_eq!(gimbal.release().release().index(), 0);
+}
+
+#[test]
+fn driver_errors_are_counted_and_never_stop_the_driver() {
+    let bus = TestBus::new(8);
+    let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 0);
+    bus.set_faults(Faults {
+        rx_error: 0.2,
+        tx_error: 0.2,
+        ..Faults::default()
+    });
+    b.gimbal
+        .send(GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()))
+        .unwrap();
+    for _ in 0..100 {
+        push_vehicle(&mut b);
+        b.run(20);
+    }
+    let errors = b.gimbal.stats().driver_errors;
+    assert!(errors.total() > 100, "{errors:?}");
+    assert_eq!(
+        errors.total(),
+        bus.stats().injected_errors - b_sim_errors(&b)
+    );
+    // Despite a fifth of all calls failing, the command got through and postbacks flow.
+    assert_eq!(b.latest().pitch, -3000);
+    assert!(b.gimbal.is_link_up());
+}
+
+/// Errors the simulator side's endpoint saw (the bench ignores them).
+fn b_sim_errors(b: &Bench) -> u32 {
+    b.sim_errors
 }

@@ -45,7 +45,8 @@ use crate::wire::{ids, text as wire_text, Frame};
 use postback::PostbackAssembler;
 use queue::{Requeued, TxQueue};
 
-/// Timing of the link. Every field is in milliseconds.
+/// Timing of the link. Every field is in milliseconds unless it says otherwise. A vehicle
+/// push period of 0 disables that push.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
@@ -372,6 +373,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     refreshed: now,
                     next: now.add_millis(period),
                 };
+                // A rate hold is a pointing command: it ends a point-at.
+                self.point = None;
                 Ok(())
             }
         }
@@ -446,13 +449,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// Whether attitude is being pushed (fresh data), so that the gimbal references its
-    /// heading to north rather than to the nose.
-    pub fn attitude_is_fresh(&self, now: Instant) -> bool {
-        self.vehicle
-            .get(ATTITUDE)
-            .and_then(|s| s.latest)
-            .is_some_and(|(_, stamp)| Self::age(stamp, now) <= self.config.vehicle_stale_ms)
+    /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
+    /// the gimbal references its heading to north rather than to the nose.
+    pub fn attitude_is_pushed(&self, now: Instant) -> bool {
+        self.config.attitude_period_ms != 0 && self.fresh_vehicle(ATTITUDE, now).is_some()
     }
 
     /// The latest vehicle attitude set, fresh or not.
@@ -527,6 +527,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             let Some((frame, stamp)) = source.latest else {
                 continue;
             };
+            if period == 0 {
+                continue;
+            }
             if Self::age(stamp, now) > stale {
                 // Push again as soon as fresh data arrives.
                 source.due = true;
@@ -601,12 +604,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         let Ok(aim) = geo::look_at(&vehicle, &p.target) else {
             return;
         };
-        let bearing = if self.attitude_is_fresh(now) {
+        let bearing = if self.attitude_is_pushed(now) {
             aim.bearing_deg
         } else {
-            match self.attitude() {
-                Some(att) => aim.bearing_deg - f64::from(att.heading_deg()),
-                None => return,
+            match self.fresh_vehicle(ATTITUDE, now) {
+                Some(VehicleFrame::Attitude(att)) => aim.bearing_deg - f64::from(att.heading_deg()),
+                _ => return,
             }
         };
         let (Ok(heading), Ok(pitch)) = (

@@ -6,10 +6,11 @@
 //! when either differs from what it last sent by more than the dead-band (default 0.1°):
 //! gimbals jitter when re-commanded needlessly.
 //!
-//! - While attitude is being pushed (fresh attitude data), the gimbal references headings
-//!   to north, so the heading sent is the true bearing. Otherwise it references them to the
-//!   vehicle's nose, and the heading sent is the bearing minus the vehicle heading of the
-//!   latest attitude set (none set: nothing is sent).
+//! - While attitude is being pushed (its push enabled and the data fresh), the gimbal
+//!   references headings to north, so the heading sent is the true bearing. Otherwise (the
+//!   attitude push disabled with a period of 0) it references them to the vehicle's nose,
+//!   and the heading sent is the bearing minus the heading of the fresh attitude the
+//!   application set. Without fresh attitude nothing is sent: the heading cannot be known.
 //! - A target whose elevation is outside the gimbal's pitch range [-100°, 60°] raises
 //!   [`Event::TargetUnreachable`](super::Event::TargetUnreachable) once, and the gimbal
 //!   holds the last reachable aim: nothing is clamped.

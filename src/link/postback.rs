@@ -1,13 +1,18 @@
 //! Reassembling postbacks from their four CAN frames.
 //!
 //! The frames carry no sequence number, and on a real bus frames are lost, repeated and
-//! corrupted. The assembler keeps the last four frames received on the postback ID as a
-//! sliding window. Whenever the window is full and its oldest frame begins with `EB 90`,
-//! the window is a candidate message: its CRC decides. A data frame that happens to begin
-//! with `EB 90` therefore cannot abort a good message around it (a restart-on-header
+//! corrupted. The assembler treats the frames received on the postback ID as a sliding
+//! window of four: whenever the window is full and its oldest frame begins with `EB 90`,
+//! the window is a candidate message, and its CRC decides. A data frame that happens to
+//! begin with `EB 90` therefore cannot abort a good message around it (a restart-on-header
 //! state machine would lose that message), and a real header that follows a lost frame
 //! still starts its own candidate. Frames more than `max_gap_ms` apart never belong to one
 //! message: a longer gap discards the window.
+//!
+//! Only a window that starts with a header can ever become a candidate, so the assembler
+//! keeps just that: a frame that arrives with nothing held is kept only if it begins with
+//! `EB 90`, and after a failed candidate the window moves on to the next header it holds.
+//! A good message costs four 8-byte copies and one CRC.
 //!
 //! Every frame fed on the postback ID ends in exactly one place, which the counters show:
 //! `frames == 4 * messages + discarded_frames + pending()`.
@@ -28,7 +33,7 @@
 //! ```
 
 use crate::time::Instant;
-use crate::wire::postback::{self, Packet, Postback};
+use crate::wire::postback::{self, Postback};
 
 /// Default bound on the gap between two frames of one message, in milliseconds.
 pub const DEFAULT_MAX_GAP_MS: u32 = 100;
@@ -55,27 +60,16 @@ pub struct AssemblerStats {
     pub discarded_frames: u32,
 }
 
-#[derive(Clone, Copy, Debug, Default)]
-struct Slot {
-    data: [u8; 8],
-    /// This frame began a candidate whose CRC has already been checked (and failed).
-    evaluated: bool,
-}
-
-impl Slot {
-    fn is_header(&self) -> bool {
-        matches!(self.data, [0xEB, 0x90, ..])
-    }
+fn is_header(frame: &[u8; 8]) -> bool {
+    matches!(frame, [0xEB, 0x90, ..])
 }
 
 /// Reassembles postbacks from CAN frames; see the [module docs](self).
 #[derive(Clone, Debug)]
 pub struct PostbackAssembler {
-    window: [Slot; postback::FRAMES],
-    /// Index of the oldest frame in `window`.
-    head: usize,
-    /// Frames in the window.
-    count: usize,
+    /// The window; when `count > 0`, `frames[0]` begins with `EB 90`.
+    frames: [[u8; 8]; postback::FRAMES],
+    count: u8,
     last: Instant,
     max_gap_ms: u32,
     stats: AssemblerStats,
@@ -97,11 +91,7 @@ impl PostbackAssembler {
     /// `max_gap_ms` apart.
     pub const fn with_max_gap(max_gap_ms: u32) -> Self {
         PostbackAssembler {
-            window: [Slot {
-                data: [0; 8],
-                evaluated: false,
-            }; postback::FRAMES],
-            head: 0,
+            frames: [[0; 8]; postback::FRAMES],
             count: 0,
             last: Instant::from_millis(0),
             max_gap_ms,
@@ -124,7 +114,7 @@ impl PostbackAssembler {
 
     /// Frames held that may still become part of a message.
     pub fn pending(&self) -> usize {
-        self.count
+        usize::from(self.count)
     }
 
     /// The gap bound in milliseconds.
@@ -132,85 +122,76 @@ impl PostbackAssembler {
         self.max_gap_ms
     }
 
-    fn slot(&self, i: usize) -> Slot {
-        self.window
-            .get((self.head + i) % postback::FRAMES)
-            .copied()
-            .unwrap_or_default()
-    }
-
     /// Takes one received frame. Frames on other IDs are not the assembler's business and
     /// are ignored (not counted). Returns a postback when this frame completes a good one.
+    #[inline]
     pub fn feed(&mut self, id: u32, data: &[u8], now: Instant) -> Option<Postback> {
         if id != postback::ID {
             return None;
         }
-        let stats = &mut self.stats;
-        stats.frames = stats.frames.wrapping_add(1);
-        let Ok(data) = <[u8; 8]>::try_from(data) else {
-            stats.malformed = stats.malformed.wrapping_add(1);
-            stats.discarded_frames = stats.discarded_frames.wrapping_add(1);
-            self.discard();
+        self.stats.frames = self.stats.frames.wrapping_add(1);
+        let Ok(data) = <&[u8; 8]>::try_from(data) else {
+            self.stats.malformed = self.stats.malformed.wrapping_add(1);
+            self.discard(1);
             return None;
         };
-        if self.count > 0 && now.millis_since(self.last) > self.max_gap_ms {
-            self.discard();
+        if self.count != 0 && now.millis_since(self.last) > self.max_gap_ms {
+            self.discard(0);
+        }
+        if self.count == 0 && !is_header(data) {
+            self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(1);
+            return None;
         }
         self.last = now;
-        if self.count == postback::FRAMES {
-            // The oldest frame leaves the window without having become part of a message.
-            self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(1);
-            self.head = (self.head + 1) % postback::FRAMES;
-            self.count -= 1;
-        }
-        let at = (self.head + self.count) % postback::FRAMES;
-        if let Some(slot) = self.window.get_mut(at) {
-            *slot = Slot {
-                data,
-                evaluated: false,
-            };
+        match self.frames.get_mut(usize::from(self.count)) {
+            Some(slot) => *slot = *data,
+            None => return None,
         }
         self.count += 1;
-        if self.count == postback::FRAMES && self.slot(0).is_header() {
-            return self.evaluate();
+        if usize::from(self.count) < postback::FRAMES {
+            return None;
         }
-        None
+        self.complete()
     }
 
-    fn evaluate(&mut self) -> Option<Postback> {
-        let mut bytes = [0u8; postback::CAN_LEN];
-        for (i, chunk) in bytes.chunks_exact_mut(8).enumerate() {
-            chunk.copy_from_slice(&self.slot(i).data);
-        }
-        let packet = Packet::new(&bytes[..]).ok()?;
-        if packet.check().is_ok() {
+    /// The window is full and starts with a header: the CRC decides.
+    fn complete(&mut self) -> Option<Postback> {
+        if let Some(p) = postback::decode_checked(self.frames.as_flattened()) {
             self.stats.messages = self.stats.messages.wrapping_add(1);
             self.count = 0;
-            return Some(Postback::from_packet(&packet));
+            return Some(p);
         }
-        let newer_header = (1..postback::FRAMES).any(|i| self.slot(i).is_header());
-        if newer_header {
-            self.stats.restarts = self.stats.restarts.wrapping_add(1);
-        } else {
-            self.stats.crc_errors = self.stats.crc_errors.wrapping_add(1);
-        }
-        if let Some(oldest) = self.window.get_mut(self.head) {
-            oldest.evaluated = true;
+        // Move on to the next header held, if any; the frames before it are discarded.
+        match self.frames.iter().skip(1).position(is_header) {
+            Some(i) => {
+                self.stats.restarts = self.stats.restarts.wrapping_add(1);
+                let drop = i + 1;
+                self.frames.copy_within(drop.., 0);
+                self.count -= drop as u8;
+                self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(drop as u32);
+            }
+            None => {
+                self.stats.crc_errors = self.stats.crc_errors.wrapping_add(1);
+                self.count = 0;
+                self.stats.discarded_frames = self
+                    .stats
+                    .discarded_frames
+                    .wrapping_add(postback::FRAMES as u32);
+            }
         }
         None
     }
 
-    /// Drops the window, counting its frames as discarded and the message in progress, if
-    /// any, as a dropped partial.
-    fn discard(&mut self) {
-        let in_progress = (0..self.count).any(|i| {
-            let s = self.slot(i);
-            s.is_header() && !s.evaluated
-        });
-        if in_progress {
+    /// Drops the window (a message in progress: a dropped partial) and counts its frames,
+    /// plus `extra`, as discarded.
+    fn discard(&mut self, extra: u32) {
+        if self.count != 0 {
             self.stats.dropped_partials = self.stats.dropped_partials.wrapping_add(1);
         }
-        self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(self.count as u32);
+        self.stats.discarded_frames = self
+            .stats
+            .discarded_frames
+            .wrapping_add(u32::from(self.count) + extra);
         self.count = 0;
     }
 
@@ -218,8 +199,8 @@ impl PostbackAssembler {
     /// Call it periodically so that a message cut short is counted when it is, not when the
     /// next frame happens to arrive.
     pub fn expire(&mut self, now: Instant) {
-        if self.count > 0 && now.millis_since(self.last) > self.max_gap_ms {
-            self.discard();
+        if self.count != 0 && now.millis_since(self.last) > self.max_gap_ms {
+            self.discard(0);
         }
     }
 }

@@ -7,8 +7,9 @@
 //! - Text frames wait in a FIFO of `T` slots; a text is queued all or nothing.
 //!
 //! A frame taken for transmission and not accepted by the CAN driver goes back to the front
-//! of its class ([`TxQueue::unpop`]); a frame the driver hands back, displaced from a
-//! mailbox, is re-queued the same way ([`TxQueue::requeue`]).
+//! of its class; a frame the driver hands back, displaced from a mailbox, is re-queued the
+//! same way (see [`Link::transmit_refused`](super::Link::transmit_refused) and
+//! [`Link::transmit_done`](super::Link::transmit_done)).
 
 use crate::wire::{ids, Frame};
 use heapless::Deque;

@@ -306,3 +306,148 @@ fn schedules_hold_across_the_tick_wrap() {
     assert_eq!(rates.len(), 200);
     assert!(rates.iter().all(|(_, r)| !r.is_zero()));
 }
+
+mod point_at {
+    use super::*;
+    use crate::geo::{look_at, Position};
+    use crate::wire::control::{Heading, Pitch};
+
+    fn vehicle(link: &mut Link, at: u32, lat: f64, lon: f64, alt: f64, heading: f32) {
+        let now = Instant::from_millis(at);
+        link.set_gps(Gps::new(lat, lon).unwrap(), now);
+        link.set_altitude(Altitude::new(alt).unwrap(), now);
+        link.set_attitude(Attitude::new(0.0, 0.0, heading).unwrap(), now);
+    }
+
+    fn aims(log: &[(u32, Frame)]) -> Vec<(u32, Command)> {
+        log.iter()
+            .filter(|(_, f)| f.id == ids::CONTROL)
+            .map(|(t, f)| (*t, Command::decode(&f.data).unwrap()))
+            .filter(|(_, c)| {
+                matches!(
+                    c,
+                    Command::Gimbal(GimbalCommand::Heading(_) | GimbalCommand::Pitch(_))
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sends_heading_and_pitch_from_the_exact_look_at() {
+        let mut link: Link = Link::new(Config::default());
+        let target = Position::new(47.001, 8.001, 400.0).unwrap();
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 10.0);
+        link.point_at(target);
+        let log = run(&mut link, 0, 1, 1);
+        let expected = look_at(&Position::new(47.0, 8.0, 500.0).unwrap(), &target).unwrap();
+        assert_eq!(
+            aims(&log).into_iter().map(|(_, c)| c).collect::<Vec<_>>(),
+            [
+                Command::from(GimbalCommand::Heading(
+                    Heading::new(expected.bearing_deg as f32).unwrap()
+                )),
+                Command::from(GimbalCommand::Pitch(
+                    Pitch::new(expected.elevation_deg as f32).unwrap()
+                )),
+            ],
+            "north-referenced while attitude is pushed"
+        );
+    }
+
+    #[test]
+    fn dead_band_and_10_hz() {
+        let mut link: Link = Link::new(Config::default());
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        // A static vehicle: one aim, then nothing for 2 s.
+        let mut log = Vec::new();
+        for t in (0..2000).step_by(10) {
+            vehicle(&mut link, t, 47.0, 8.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 10, 1));
+        }
+        assert_eq!(aims(&log).len(), 2);
+        // A vehicle moving east at 20 m/s: the bearing changes by more than 0.1° per 100 ms,
+        // so the aim is re-sent at 10 Hz, never faster.
+        let mut log = Vec::new();
+        for t in (2000..4000u32).step_by(10) {
+            let east_m = f64::from(t - 2000) * 0.02;
+            vehicle(&mut link, t, 47.0, 8.0 + east_m / 75_900.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 10, 1));
+        }
+        let headings: Vec<u32> = aims(&log)
+            .iter()
+            .filter(|(_, c)| matches!(c, Command::Gimbal(GimbalCommand::Heading(_))))
+            .map(|(t, _)| *t)
+            .collect();
+        assert!((18..=20).contains(&headings.len()), "{headings:?}");
+        assert!(headings.windows(2).all(|w| w[1] - w[0] >= 100));
+    }
+
+    #[test]
+    fn nose_referenced_when_attitude_is_not_pushed() {
+        let mut link: Link = Link::new(Config {
+            attitude_period_ms: 0,
+            ..Config::default()
+        });
+        let target = Position::new(47.0, 8.001, 500.0).unwrap(); // due east, same height
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 30.0);
+        link.point_at(target);
+        let log = run(&mut link, 0, 1, 1);
+        assert_eq!(
+            count(&log, ids::ATTITUDE),
+            0,
+            "the attitude push is disabled"
+        );
+        let Command::Gimbal(GimbalCommand::Heading(h)) = aims(&log)[0].1 else {
+            panic!()
+        };
+        // Bearing ~90°, vehicle heading 30°: 60° right of the nose.
+        assert!((h.degrees() - 60.0).abs() < 0.1, "{}", h.degrees());
+    }
+
+    #[test]
+    fn unreachable_target_raises_an_event_once_and_holds_the_aim() {
+        let mut link: Link = Link::new(Config::default());
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 0.0);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        assert_eq!(aims(&run(&mut link, 0, 1, 1)).len(), 2);
+        // The vehicle climbs far below a target... no: the target is now far above it.
+        link.point_at(Position::new(47.0001, 8.0, 2000.0).unwrap());
+        let mut log = Vec::new();
+        for t in (100..1100).step_by(100) {
+            vehicle(&mut link, t, 47.0, 8.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 100, 1));
+        }
+        assert!(aims(&log).is_empty(), "nothing is clamped and sent");
+        let events: Vec<Event> = core::iter::from_fn(|| link.next_event()).collect();
+        assert_eq!(events.len(), 1, "{events:?}");
+        let Event::TargetUnreachable { elevation_cdeg } = events[0] else {
+            panic!()
+        };
+        assert!(elevation_cdeg > 8000, "{elevation_cdeg}");
+    }
+
+    #[test]
+    fn cancelled_by_pointing_commands_and_rate_holds_and_waits_for_position() {
+        let mut link: Link = Link::new(Config::default());
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        assert!(
+            aims(&run(&mut link, 0, 500, 1)).is_empty(),
+            "no GPS yet: nothing sent"
+        );
+        vehicle(&mut link, 500, 47.0, 8.0, 500.0, 0.0);
+        assert_eq!(aims(&run(&mut link, 500, 501, 1)).len(), 2);
+        link.send(GimbalCommand::LookDown).unwrap();
+        assert_eq!(link.pointing_target(), None);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(600))
+            .unwrap();
+        assert_eq!(link.pointing_target(), None);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
+            .unwrap();
+        assert!(
+            link.pointing_target().is_some(),
+            "a camera command does not cancel it"
+        );
+    }
+}

@@ -458,6 +458,30 @@ impl Default for Postback {
     }
 }
 
+/// Decodes a message (either form), checking header and CRC: the fast path of the CAN
+/// assembler. The 27 bytes are destructured once, so every field is a known offset and no
+/// access is bounds-checked.
+#[inline]
+pub(crate) fn decode_checked(b: &[u8]) -> Option<Postback> {
+    let message: &[u8; MESSAGE_LEN] = b.get(..MESSAGE_LEN)?.try_into().ok()?;
+    let [h0, h1, _, _, _, _, _, _, _, _, _, _, _, _, _, d, g, t, m, p0, p1, hd0, hd1, m0, m1, c0, c1] =
+        *message;
+    if [h0, h1] != HEADER
+        || crc::checksum(message.get(field::CHECKED)?) != u16::from_le_bytes([c0, c1])
+    {
+        return None;
+    }
+    Some(Postback {
+        data_id: DataId::from_code(d),
+        gimbal_type: GimbalType::from_code(g),
+        tracking: t != 0,
+        mode: ControlMode::from_code(m),
+        pitch: i16::from_le_bytes([p0, p1]),
+        heading: u16::from_le_bytes([hd0, hd1]),
+        motor_heading: i16::from_le_bytes([m0, m1]),
+    })
+}
+
 impl Postback {
     /// Decodes a postback from its 27-byte stream form or 32-byte CAN form, checking the
     /// header and the CRC.
@@ -697,6 +721,17 @@ pub(crate) mod tests {
             prop_assert_eq!(reference_crc(&can[..25]).to_le_bytes(), [can[25], can[26]]);
             prop_assert_eq!(Postback::parse(&can), Ok(p));
             prop_assert_eq!(Postback::parse(&p.to_stream_bytes()), Ok(p));
+        }
+
+        /// The assembler's fast path and `parse` agree on any bytes, good or not.
+        #[test]
+        fn fast_path_agrees_with_parse(p in arb_postback(), flips in proptest::collection::vec(0usize..256, 0..3), len in 0usize..40) {
+            let mut b = p.to_can_bytes().to_vec();
+            for f in flips {
+                b[f / 8] ^= 1 << (f % 8);
+            }
+            b.resize(len.max(20), 0x5A);
+            prop_assert_eq!(decode_checked(&b), Postback::parse(&b).ok());
         }
 
         #[test]
