@@ -1,0 +1,695 @@
+//! Deterministic cost benchmarks on an emulated STM32F405 (QEMU `netduinoplus2`).
+//!
+//! Run with `scripts/bench.sh` (or `cargo bench-mcu`). The runner starts QEMU with
+//! `-icount shift=0`: the virtual clock then advances exactly 1 ns per guest instruction,
+//! and SysTick (clocked from the 168 MHz core clock model) counts virtual time. So a SysTick
+//! reading counts guest instructions, the same on every machine and every run.
+//!
+//! # Method
+//! * **Calibration.** A hand-written loop of `subs`/`bne` executes exactly 2 instructions
+//!   an iteration; timing it at two lengths gives instructions per SysTick tick (expected
+//!   125/21 = 5.95, one tick per 1/168 µs of virtual time).
+//! * **Amortized costs.** Each body runs `n` and `2n` times in the same loop; the
+//!   difference removes the fixed cost of the measurement, and the loop's own overhead
+//!   (measured the same way with an empty body) is subtracted. Inputs and outputs pass
+//!   through `core::hint::black_box` so nothing is folded at compile time.
+//! * **Per-call costs** (the frame-by-frame breakdown) time each call alone and subtract the
+//!   cost of an empty timed region; SysTick's resolution (6 instructions) averages out over
+//!   many calls.
+//! * A measurement during which SysTick wrapped (COUNTFLAG set) aborts the run.
+//!
+//! Exit status 0 when every budget of issue 4 is met, 1 otherwise (or on any fault).
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[path = "common/qemu.rs"]
+#[macro_use]
+mod qemu;
+
+#[cfg(target_os = "none")]
+mod meter {
+    //! SysTick as an instruction counter (see the crate docs above).
+
+    use core::hint::black_box;
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::SYST;
+
+    /// The largest SysTick reload value (24 bits).
+    const RELOAD: u32 = 0x00FF_FFFF;
+
+    pub struct Meter {
+        syst: SYST,
+        /// Instructions per tick as a fraction: `num / den`.
+        num: u64,
+        den: u64,
+        /// Ticks of an empty timed region.
+        empty: u32,
+        /// Instructions per iteration of the benchmark loop with an empty body.
+        loop_overhead: f32,
+    }
+
+    /// Exactly `2 * n + 1` instructions (for `n >= 1`): `subs` and `bne` per iteration,
+    /// plus the `mov` of the count.
+    #[inline(never)]
+    fn known_loop(n: u32) {
+        // SAFETY: register-only arithmetic and a local branch.
+        unsafe {
+            core::arch::asm!(
+                "1:",
+                "subs {0}, {0}, #1",
+                "bne 1b",
+                inout(reg) n => _,
+                options(nomem, nostack),
+            );
+        }
+    }
+
+    impl Meter {
+        pub fn new(mut syst: SYST) -> Self {
+            syst.disable_interrupt();
+            syst.set_clock_source(SystClkSource::Core);
+            syst.set_reload(RELOAD);
+            syst.clear_current();
+            syst.enable_counter();
+            let mut m = Meter {
+                syst,
+                num: 1,
+                den: 1,
+                empty: 0,
+                loop_overhead: 0.0,
+            };
+            m.empty = m.ticks(|| ());
+            const N: u32 = 200_000;
+            let t1 = m.ticks(|| known_loop(black_box(N)));
+            let t2 = m.ticks(|| known_loop(black_box(2 * N)));
+            m.num = 2 * u64::from(N);
+            m.den = u64::from(t2 - t1);
+            m.loop_overhead = m.per_iter(4096, |_| ());
+            m
+        }
+
+        /// Instructions per SysTick tick.
+        pub fn instructions_per_tick(&self) -> f32 {
+            self.num as f32 / self.den as f32
+        }
+
+        pub fn loop_overhead(&self) -> f32 {
+            self.loop_overhead
+        }
+
+        /// SysTick ticks spent in `f` (including the fixed cost of reading the counter).
+        #[inline(always)]
+        pub fn ticks<R>(&mut self, f: impl FnOnce() -> R) -> u32 {
+            let _ = self.syst.has_wrapped(); // reading COUNTFLAG clears it
+            let start = SYST::get_current();
+            black_box(f());
+            let end = SYST::get_current();
+            if self.syst.has_wrapped() {
+                println!("SysTick wrapped during a measurement: shorten it");
+                crate::qemu::exit(false);
+            }
+            start.wrapping_sub(end)
+        }
+
+        pub fn to_instructions(&self, ticks: f32) -> f32 {
+            ticks * self.num as f32 / self.den as f32
+        }
+
+        /// Instructions spent in `f`, less the cost of an empty timed region.
+        #[inline(always)]
+        pub fn once<R>(&mut self, f: impl FnOnce() -> R) -> f32 {
+            let t = self.ticks(f);
+            self.to_instructions(t as f32 - self.empty as f32)
+        }
+
+        /// Instructions per call of `body` (loop overhead included), from `n` and `2n`
+        /// iterations.
+        pub fn per_iter(&mut self, n: u32, mut body: impl FnMut(u32)) -> f32 {
+            let mut run = |count: u32| {
+                for i in 0..black_box(count) {
+                    body(black_box(i));
+                }
+            };
+            let t1 = self.ticks(|| run(n));
+            let t2 = self.ticks(|| run(2 * n));
+            self.to_instructions((t2 - t1) as f32) / n as f32
+        }
+
+        /// Instructions per call of `body`, loop overhead subtracted.
+        pub fn per_op(&mut self, n: u32, body: impl FnMut(u32)) -> f32 {
+            self.per_iter(n, body) - self.loop_overhead
+        }
+    }
+}
+
+#[cfg(target_os = "none")]
+mod crcs {
+    //! Three CRC-16/MODBUS implementations, kept out of line so that `nm` shows the code
+    //! and table size of each (scripts/bench.sh prints them).
+
+    /// The vendor document's nibble table (`crc_fly16`): 32 bytes of flash.
+    static NIBBLE: [u16; 16] = [
+        0x0000, 0xCC01, 0xD801, 0x1400, 0xF001, 0x3C00, 0x2800, 0xE401, 0xA001, 0x6C00, 0x7800,
+        0xB401, 0x5000, 0x9C01, 0x8801, 0x4400,
+    ];
+
+    /// The `crc` crate's CRC_16_MODBUS with its default 256-entry table (`Table<1>`).
+    static CRC_CRATE: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_MODBUS);
+
+    /// This crate's `wire::crc::checksum` (256-entry table, unrolled by four).
+    #[inline(never)]
+    pub fn bench_crc_crate_table256(buf: &[u8]) -> u16 {
+        idu_gimbal::wire::crc::checksum(buf)
+    }
+
+    /// The document's nibble-table algorithm, two lookups per byte.
+    #[inline(never)]
+    pub fn bench_crc_nibble16(buf: &[u8]) -> u16 {
+        let mut crc: u16 = 0xFFFF;
+        for &b in buf {
+            let b = u16::from(b);
+            let tmp = NIBBLE[usize::from((b ^ crc) & 15)] ^ (crc >> 4);
+            crc = NIBBLE[usize::from(((b >> 4) ^ tmp) & 15)] ^ (tmp >> 4);
+        }
+        crc
+    }
+
+    /// The `crc` crate (version 3), CRC_16_MODBUS.
+    #[inline(never)]
+    pub fn bench_crc_crc_crate(buf: &[u8]) -> u16 {
+        CRC_CRATE.checksum(buf)
+    }
+}
+
+#[cfg(target_os = "none")]
+mod report {
+    //! The result table.
+
+    pub struct Row {
+        pub what: &'static str,
+        pub value: f32,
+        pub unit: &'static str,
+        pub budget: Option<f32>,
+    }
+
+    pub struct Table {
+        rows: heapless::Vec<Row, 32>,
+    }
+
+    impl Table {
+        pub const fn new() -> Self {
+            Table {
+                rows: heapless::Vec::new(),
+            }
+        }
+
+        pub fn add(&mut self, what: &'static str, value: f32, unit: &'static str) {
+            self.push(what, value, unit, None);
+        }
+
+        pub fn budget(&mut self, what: &'static str, value: f32, unit: &'static str, max: f32) {
+            self.push(what, value, unit, Some(max));
+        }
+
+        fn push(
+            &mut self,
+            what: &'static str,
+            value: f32,
+            unit: &'static str,
+            budget: Option<f32>,
+        ) {
+            let row = Row {
+                what,
+                value,
+                unit,
+                budget,
+            };
+            if self.rows.push(row).is_err() {
+                println!("result table full");
+                crate::qemu::exit(false);
+            }
+        }
+
+        /// Prints the table (Markdown) and returns whether every budget was met.
+        pub fn print(&self) -> bool {
+            println!("| measurement | guest instructions | budget | verdict |");
+            println!("|---|---:|---:|---|");
+            let mut ok = true;
+            for r in &self.rows {
+                match r.budget {
+                    Some(max) => {
+                        let pass = r.value <= max;
+                        ok &= pass;
+                        println!(
+                            "| {} | {:.1} {} | <= {:.0} | {} |",
+                            r.what,
+                            r.value,
+                            r.unit,
+                            max,
+                            if pass { "ok" } else { "OVER BUDGET" }
+                        );
+                    }
+                    None => println!("| {} | {:.1} {} | | |", r.what, r.value, r.unit),
+                }
+            }
+            ok
+        }
+    }
+}
+
+#[cfg(target_os = "none")]
+mod replay {
+    //! A minimal `embedded_can::nb::Can` for measuring the driver: it hands out frames from
+    //! a fixed cycle, as many as the bench makes available, and accepts every transmission.
+    //! Its frame type is bxcan's, the one the STM32 firmware uses, and its own cost (a few
+    //! loads and stores a frame) stands in for reading bxcan's receive FIFO, which takes
+    //! about as many register accesses.
+
+    use core::cell::Cell;
+
+    use bxcan::Frame as CanFrame;
+    use embedded_can::ErrorKind;
+
+    /// Frames in the replay cycle (a power of two).
+    pub const CYCLE: usize = 16;
+
+    pub struct Source {
+        frames: [CanFrame; CYCLE],
+        next: Cell<usize>,
+        available: Cell<u32>,
+        sent: Cell<u32>,
+    }
+
+    impl Source {
+        pub fn new(frames: [CanFrame; CYCLE]) -> Self {
+            Source {
+                frames,
+                next: Cell::new(0),
+                available: Cell::new(0),
+                sent: Cell::new(0),
+            }
+        }
+
+        /// Makes `n` more frames receivable.
+        #[inline(always)]
+        pub fn make_available(&self, n: u32) {
+            self.available.set(self.available.get() + n);
+        }
+
+        pub fn sent(&self) -> u32 {
+            self.sent.get()
+        }
+    }
+
+    pub struct ReplayCan<'a>(pub &'a Source);
+
+    impl embedded_can::nb::Can for ReplayCan<'_> {
+        type Frame = CanFrame;
+        type Error = ErrorKind;
+
+        fn transmit(&mut self, _frame: &CanFrame) -> nb::Result<Option<CanFrame>, ErrorKind> {
+            self.0.sent.set(self.0.sent.get().wrapping_add(1));
+            Ok(None)
+        }
+
+        fn receive(&mut self) -> nb::Result<CanFrame, ErrorKind> {
+            let s = self.0;
+            let available = s.available.get();
+            if available == 0 {
+                return Err(nb::Error::WouldBlock);
+            }
+            s.available.set(available - 1);
+            let i = s.next.get();
+            s.next.set((i + 1) % CYCLE);
+            Ok(s.frames[i].clone())
+        }
+    }
+}
+
+#[cfg(target_os = "none")]
+mod fw {
+    use core::hint::black_box;
+
+    use idu_gimbal::link::postback::PostbackAssembler;
+    use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch};
+    use idu_gimbal::wire::ids;
+    use idu_gimbal::wire::postback::Postback;
+    use idu_gimbal::wire::vehicle::{Attitude, Gps};
+    use idu_gimbal::Instant;
+
+    use bxcan::{ExtendedId, Frame as CanFrame};
+    use idu_gimbal::{Config, Event, Gimbal};
+
+    use crate::crcs;
+    use crate::meter::Meter;
+    use crate::replay::{ReplayCan, Source, CYCLE};
+    use crate::report::Table;
+
+    /// Budgets from issue 4 (guest instructions, thumbv7em, opt-level "s").
+    const BUDGET_RX_FRAME: f32 = 150.0;
+    const BUDGET_IDLE_POLL: f32 = 60.0;
+
+    /// Messages per batch in the amortized postback measurements.
+    const MESSAGES: u32 = 512;
+
+    /// Four different postbacks as CAN frames, fed in turn.
+    fn messages() -> [[[u8; 8]; 4]; 4] {
+        let mut out = [[[0u8; 8]; 4]; 4];
+        for (i, m) in out.iter_mut().enumerate() {
+            let i16_ = i as i16;
+            *m = Postback {
+                pitch: -1500 * i16_,
+                heading: 9000 * i as u16,
+                motor_heading: 100 * i16_,
+                ..Postback::default()
+            }
+            .to_can_frames();
+        }
+        out
+    }
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        let Some(core) = cortex_m::Peripherals::take() else {
+            crate::qemu::exit(false)
+        };
+        let mut m = Meter::new(core.SYST);
+        let mut table = Table::new();
+        println!(
+            "qemu_bench: {:.3} instructions per SysTick tick (calibrated), loop overhead {:.1} per iteration",
+            m.instructions_per_tick(),
+            m.loop_overhead()
+        );
+
+        bench_driver(&mut m, &mut table);
+        bench_assembler(&mut m, &mut table);
+        bench_encode(&mut m, &mut table);
+        bench_crc(&mut m, &mut table);
+
+        println!();
+        let ok = table.print();
+        println!();
+        println!(
+            "{}",
+            if ok {
+                "qemu_bench: all budgets met"
+            } else {
+                "qemu_bench: BUDGET EXCEEDED"
+            }
+        );
+        crate::qemu::exit(ok)
+    }
+
+    fn ext_frame(id: u32, data: [u8; 8]) -> CanFrame {
+        let Some(id) = ExtendedId::new(id) else {
+            crate::qemu::exit(false)
+        };
+        CanFrame::new_data(id, data)
+    }
+
+    /// The replay cycle: four postback messages (16 frames).
+    fn postback_cycle() -> [CanFrame; CYCLE] {
+        let msgs = messages();
+        core::array::from_fn(|i| ext_frame(ids::POSTBACK, msgs[i / 4][i % 4]))
+    }
+
+    /// The driver (`Gimbal::poll`) over the replay CAN: the whole receive path from the
+    /// CAN driver's `receive` to the event queue, and an idle poll.
+    fn bench_driver(m: &mut Meter, table: &mut Table) {
+        const N: u32 = 512;
+        let source = Source::new(postback_cycle());
+        let mut gimbal: Gimbal<_> = Gimbal::new(ReplayCan(&source), Config::default());
+        let mut t = 1000u32;
+
+        // Idle poll on a fresh driver: nothing received, nothing due, nothing to send.
+        let idle_fresh = m.per_op(N, |_| {
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+        });
+
+        // A whole postback per poll, the application taking the event each time; and the
+        // same loop with nothing received, to isolate the receive path's marginal cost.
+        let drain = |g: &mut Gimbal<ReplayCan<'_>>| {
+            while let Some(e) = g.next_event() {
+                black_box(e);
+            }
+        };
+        let whole = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            source.make_available(4);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let empty = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let per_frame = (whole - empty) / 4.0;
+
+        // One frame per poll (a poll as each frame arrives), idle part included.
+        let one_per_poll = m.per_op(4 * N, |i| {
+            if i & 3 == 0 {
+                t = t.wrapping_add(1);
+            }
+            source.make_available(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+
+        // Idle poll with the link up (a postback within the link timeout).
+        let now = Instant::from_millis(t);
+        let idle_up = m.per_op(N, |_| {
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if !gimbal.is_link_up() {
+            println!("driver bench: link should be up");
+            crate::qemu::exit(false);
+        }
+
+        // Vehicle data set and fresh, nothing due: the schedules' checks.
+        if let (Ok(gps), Ok(att)) = (Gps::new(47.4, 8.5), Attitude::new(0.0, 0.0, 10.0)) {
+            gimbal.set_gps(gps, now);
+            gimbal.set_attitude(att, now);
+        }
+        black_box(gimbal.poll(now).is_ok()); // pushes the first values
+        let idle_vehicle = m.per_op(N, |_| {
+            black_box(gimbal.poll(now).is_ok());
+        });
+
+        // Queue one command and send it in the next poll (encode, queue, transmit).
+        let Ok(pitch) = Pitch::new(-45.0) else {
+            crate::qemu::exit(false)
+        };
+        let sent_before = source.sent();
+        let send_poll = m.per_op(N, |_| {
+            black_box(gimbal.send(black_box(GimbalCommand::Pitch(pitch))).is_ok());
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if source.sent() - sent_before != 3 * N {
+            println!(
+                "driver bench: {} commands sent, expected {}",
+                source.sent() - sent_before,
+                3 * N
+            );
+            crate::qemu::exit(false);
+        }
+
+        let stats = gimbal.stats().link;
+        let expected = 3 * N + 3 * N; // whole messages + one frame per poll, 3n of each
+        if stats.postbacks != expected || stats.crc_errors != 0 || stats.events_dropped != 0 {
+            println!("driver bench: unexpected stats {:?}", stats);
+            crate::qemu::exit(false);
+        }
+
+        // Frames on a foreign ID, 8 per poll.
+        let foreign = Source::new(core::array::from_fn(|_| {
+            ext_frame(ids::CONTROL, [0x0F, 0x03, 0, 0, 0, 0, 0, 0])
+        }));
+        let mut g2: Gimbal<_> = Gimbal::new(ReplayCan(&foreign), Config::default());
+        let idle2 = m.per_op(N, |_| {
+            black_box(g2.poll(now).is_ok());
+        });
+        let eight = m.per_op(N, |_| {
+            foreign.make_available(8);
+            black_box(g2.poll(now).is_ok());
+        });
+        if g2.stats().link.ignored_frames != 8 * 3 * N {
+            println!("driver bench: foreign frames not all ignored");
+            crate::qemu::exit(false);
+        }
+
+        table.budget(
+            "driver: per received postback frame, amortized (Gimbal::poll, marginal)",
+            per_frame,
+            "",
+            BUDGET_RX_FRAME,
+        );
+        table.add(
+            "driver: poll receiving one whole postback (4 frames), event taken",
+            whole,
+            "",
+        );
+        table.add(
+            "driver: poll with one postback frame (one poll per frame)",
+            one_per_poll,
+            "",
+        );
+        table.budget(
+            "driver: idle poll (fresh driver, nothing to do)",
+            idle_fresh,
+            "",
+            BUDGET_IDLE_POLL,
+        );
+        table.add("driver: idle poll, link up", idle_up, "");
+        table.add(
+            "driver: idle poll, vehicle data fresh, nothing due",
+            idle_vehicle,
+            "",
+        );
+        table.add(
+            "driver: send one command + poll that transmits it",
+            send_poll - idle_vehicle,
+            "",
+        );
+        table.add(
+            "driver: per frame on a foreign ID (8 per poll, marginal)",
+            (eight - idle2) / 8.0,
+            "",
+        );
+        table.add(
+            "size_of Gimbal<C, 8, 16> (RAM, bytes; C zero-sized here: +4)",
+            core::mem::size_of::<Gimbal<ReplayCan<'static>>>() as f32 - 4.0,
+            "B",
+        );
+        black_box(Event::LinkUp);
+    }
+
+    /// The link's postback reassembly alone (no CAN driver).
+    fn bench_assembler(m: &mut Meter, table: &mut Table) {
+        let msgs = messages();
+        let mut asm = PostbackAssembler::new();
+        let mut now = 0u32;
+        let per_message = m.per_op(MESSAGES, |i| {
+            let frames = &msgs[(i & 3) as usize];
+            now = now.wrapping_add(1);
+            for f in frames {
+                black_box(asm.feed(ids::POSTBACK, black_box(f), Instant::from_millis(now)));
+            }
+        });
+        let s = asm.stats();
+        if s.messages != 3 * MESSAGES || s.crc_errors != 0 || s.discarded_frames != 0 {
+            println!("assembler bench: unexpected stats {:?}", s);
+            crate::qemu::exit(false);
+        }
+        table.add(
+            "assembler: one complete postback message (4 frames)",
+            per_message,
+            "",
+        );
+        table.add(
+            "assembler: per postback frame, amortized",
+            per_message / 4.0,
+            "",
+        );
+
+        // Frame-by-frame breakdown: each feed timed alone.
+        let mut per_frame = [0f32; 4];
+        for i in 0..MESSAGES {
+            let frames = &msgs[(i & 3) as usize];
+            now = now.wrapping_add(1);
+            for (k, f) in frames.iter().enumerate() {
+                per_frame[k] +=
+                    m.once(|| asm.feed(ids::POSTBACK, black_box(f), Instant::from_millis(now)));
+            }
+        }
+        for (k, what) in [
+            "assembler: frame 0 (header)",
+            "assembler: frame 1",
+            "assembler: frame 2",
+            "assembler: frame 3 (CRC + parse)",
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            table.add(what, per_frame[k] / MESSAGES as f32, "");
+        }
+
+        let foreign = [0u8; 8];
+        let cost = m.per_op(4096, |_| {
+            black_box(asm.feed(black_box(ids::CONTROL), &foreign, Instant::from_millis(now)));
+        });
+        table.add("assembler: frame on a foreign ID", cost, "");
+
+        let bytes = msgs[1];
+        let mut flat = [0u8; 32];
+        for (chunk, f) in flat.chunks_exact_mut(8).zip(bytes.iter()) {
+            chunk.copy_from_slice(f);
+        }
+        let cost = m.per_op(1024, |_| {
+            black_box(Postback::parse(black_box(&flat[..])).ok());
+        });
+        table.add("Postback::parse (CRC over 25 bytes + fields)", cost, "");
+    }
+
+    fn bench_encode(m: &mut Meter, table: &mut Table) {
+        let Ok(pitch) = Pitch::new(-45.0) else {
+            crate::qemu::exit(false)
+        };
+        let cmd = Command::from(GimbalCommand::Pitch(pitch));
+        let cost = m.per_op(4096, |_| {
+            black_box(black_box(&cmd).encode());
+        });
+        table.add("encode one command (pitch -45 deg)", cost, "");
+    }
+
+    fn bench_crc(m: &mut Meter, table: &mut Table) {
+        let mut buf = [0u8; 512];
+        let mut x = 0x1234_5678u32;
+        for b in buf.iter_mut() {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            *b = x as u8;
+        }
+        let want = crcs::bench_crc_nibble16(&buf);
+        type Crc16 = fn(&[u8]) -> u16;
+        let impls: [(&str, &str, Crc16); 3] = [
+            (
+                "CRC per byte: idu_gimbal (256-entry table, 512 B)",
+                "CRC over 25 bytes: idu_gimbal",
+                crcs::bench_crc_crate_table256,
+            ),
+            (
+                "CRC per byte: document's nibble table (32 B)",
+                "CRC over 25 bytes: nibble table",
+                crcs::bench_crc_nibble16,
+            ),
+            (
+                "CRC per byte: `crc` crate 3.x CRC_16_MODBUS (512 B)",
+                "CRC over 25 bytes: `crc` crate",
+                crcs::bench_crc_crc_crate,
+            ),
+        ];
+        for (per_byte, per_msg, f) in impls {
+            if f(&buf) != want {
+                println!("CRC implementations disagree: {}", per_byte);
+                crate::qemu::exit(false);
+            }
+            // Marginal cost per byte: 512 bytes against 256 bytes.
+            let long = m.per_op(64, |_| {
+                black_box(f(black_box(&buf[..])));
+            });
+            let short = m.per_op(64, |_| {
+                black_box(f(black_box(&buf[..256])));
+            });
+            table.add(per_byte, (long - short) / 256.0, "");
+            let msg = m.per_op(256, |_| {
+                black_box(f(black_box(&buf[..25])));
+            });
+            table.add(per_msg, msg, "");
+        }
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}

@@ -1,0 +1,89 @@
+//! The firmware on an emulated STM32F405 (QEMU `netduinoplus2`) driving a simulated gimbal.
+//!
+//! The board has no CAN peripheral in QEMU, so the driver (`Gimbal`) and the simulated
+//! gimbal (`sim::Simulator`) exchange frames over the crate's in-memory CAN bus
+//! (`mock::Bus`) inside the firmware. It plays the scripted session of
+//! `examples/common/session.rs` (shared with `host_sim`): re-center, pitch -45°, heading 90°,
+//! a rate hold released to test the dead-man, zoom 10x, photo, recording on and off, a text
+//! message, with vehicle data pushed throughout. Telemetry goes to the host's stdout through
+//! semihosting.
+//!
+//! **Clock.** Time is simulated: each loop iteration advances the driver's and the
+//! simulator's millisecond tick by exactly 1. Without `-icount`, QEMU's virtual clock (and so
+//! SysTick) follows the host's wall clock, which stalls and jumps with host load: a session
+//! timed by it would be neither reproducible nor faithful to a real board's 1 kHz tick. The
+//! simulated step makes every run identical, on any machine, and as fast as the emulator
+//! goes. The real firmware (`examples/stm32f405.rs`) takes its tick from SysTick.
+//!
+//! Exit status (through semihosting `SYS_EXIT`): 0 only if every step's expected effect was
+//! seen; 1 otherwise, on a panic, or on a HardFault.
+//!
+//! ```sh
+//! scripts/demo.sh   # installs the target and qemu-system-arm when missing, then:
+//! cargo run --release --target thumbv7em-none-eabihf --example qemu_demo
+//! ```
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[path = "common/qemu.rs"]
+#[macro_use]
+mod qemu;
+
+#[cfg(target_os = "none")]
+#[path = "common/session.rs"]
+mod session;
+
+#[cfg(target_os = "none")]
+mod fw {
+    use core::fmt::{self, Write};
+
+    use crate::session::{DemoBus, Session};
+
+    /// Line-buffered semihosting output: one host call per line rather than per fragment.
+    struct Semihosting {
+        line: heapless::String<256>,
+    }
+
+    impl Semihosting {
+        fn flush(&mut self) {
+            crate::qemu::print(format_args!("{}", self.line));
+            self.line.clear();
+        }
+    }
+
+    impl Write for Semihosting {
+        fn write_str(&mut self, s: &str) -> fmt::Result {
+            for c in s.chars() {
+                if self.line.push(c).is_err() {
+                    self.flush();
+                    let _ = self.line.push(c);
+                }
+                if c == '\n' {
+                    self.flush();
+                }
+            }
+            Ok(())
+        }
+    }
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        println!("qemu_demo: STM32F405 (QEMU netduinoplus2), driver and simulated gimbal on an in-memory CAN bus");
+        let bus = DemoBus::new(42);
+        let out = Semihosting {
+            line: heapless::String::new(),
+        };
+        let Some(session) = Session::new(&bus, out, 0) else {
+            println!("qemu_demo: could not set up the bus");
+            crate::qemu::exit(false)
+        };
+        let failures = session.play();
+        if failures != 0 {
+            println!("qemu_demo: {} step(s) failed", failures);
+        }
+        crate::qemu::exit(failures == 0)
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}

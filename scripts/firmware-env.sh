@@ -1,0 +1,57 @@
+# Sourced by the firmware scripts (demo.sh, bench.sh, size-report.sh, firmware-checks.sh).
+# Installs what they need when it is missing: the thumbv7em-none-eabihf Rust target,
+# qemu-system-arm and the ARM binutils (Debian packages, through apt-get; sudo only when not
+# root). Nothing is downloaded when everything is already there.
+
+TARGET=thumbv7em-none-eabihf
+# Every QEMU run is bounded (seconds); the cargo runner (.cargo/qemu-run.sh) applies it.
+export QEMU_TIMEOUT="${QEMU_TIMEOUT:-120}"
+
+_as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
+}
+
+_apt_updated=
+_apt_install() {
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "error: $* missing and apt-get unavailable: install it with your package manager" >&2
+        return 1
+    fi
+    if [ -z "$_apt_updated" ]; then
+        _as_root apt-get update -qq
+        _apt_updated=1
+    fi
+    _as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
+}
+
+ensure_target() {
+    if ! rustc --print target-list >/dev/null 2>&1; then
+        echo "error: no Rust toolchain (rustc) found" >&2
+        return 1
+    fi
+    if command -v rustup >/dev/null 2>&1; then
+        if ! rustup target list --installed 2>/dev/null | grep -qx "$TARGET"; then
+            echo "installing the $TARGET Rust target" >&2
+            rustup target add "$TARGET"
+        fi
+    fi
+}
+
+ensure_qemu() {
+    if ! command -v qemu-system-arm >/dev/null 2>&1; then
+        echo "installing qemu-system-arm" >&2
+        _apt_install qemu-system-arm
+    fi
+}
+
+ensure_binutils() {
+    if ! command -v arm-none-eabi-size >/dev/null 2>&1 || ! command -v arm-none-eabi-nm >/dev/null 2>&1; then
+        echo "installing binutils-arm-none-eabi (arm-none-eabi-size, arm-none-eabi-nm)" >&2
+        _apt_install binutils-arm-none-eabi
+    fi
+}
+
+# The path of a release example ELF for the target.
+example_elf() {
+    echo "target/$TARGET/release/examples/$1"
+}
