@@ -1,0 +1,143 @@
+//! `gimbalctl sim`: a simulated gimbal on TCP, speaking the serial server's byte stream.
+//!
+//! One thread, non-blocking sockets, a 5 ms tick: accept clients up to a bound (more are
+//! turned away), read each client's bytes through its own `StreamParser` (garbage is
+//! skipped, bad CRCs dropped), hand every control frame to the simulated gimbal, and send
+//! every client the 27-byte postback whenever the gimbal has one due (every 500 ms). A
+//! client that does not read its postbacks is dropped rather than allowed to stall the
+//! others.
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::time::{Duration, Instant as StdInstant};
+
+use idu_gimbal::wire::control::Command;
+use idu_gimbal::wire::ids;
+use idu_gimbal::wire::serial::{StreamItem, StreamParser};
+use idu_gimbal::Instant;
+
+use crate::command;
+use crate::error::Failure;
+use crate::sim_backend::{self, SimGimbal};
+
+/// How often the loop runs.
+const TICK: Duration = Duration::from_millis(5);
+
+struct Client {
+    stream: TcpStream,
+    peer: SocketAddr,
+    parser: StreamParser,
+}
+
+/// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
+pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Result<(), Failure> {
+    let addrs = crate::net::resolve(listen)?;
+    let listener = TcpListener::bind(&addrs[..])
+        .map_err(|e| Failure::Runtime(format!("cannot listen on {listen}: {e}")))?;
+    listener
+        .set_nonblocking(true)
+        .map_err(|e| Failure::io("listener", e))?;
+    let local = listener
+        .local_addr()
+        .map_err(|e| Failure::io("listener", e))?;
+    {
+        // The first line says where we are (useful with port 0); flushed at once for
+        // scripts that wait for it.
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "gimbalctl sim: listening on {local}")
+            .and_then(|()| out.flush())
+            .map_err(Failure::stdout)?;
+    }
+    let start = StdInstant::now();
+    let now = || Instant::from_millis(start.elapsed().as_millis() as u32);
+    let mut gimbal = sim_backend::new(now());
+    let mut clients: Vec<Client> = Vec::new();
+    let mut buf = [0u8; 4096];
+    loop {
+        if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
+            eprintln!(
+                "gimbalctl sim: exiting after {} ms",
+                exit_after_ms.unwrap_or(0)
+            );
+            return Ok(());
+        }
+        // New clients.
+        loop {
+            match listener.accept() {
+                Ok((stream, peer)) => {
+                    if clients.len() >= max_clients {
+                        eprintln!(
+                            "gimbalctl sim: refusing {peer}: {max_clients} clients already connected"
+                        );
+                        drop(stream);
+                        continue;
+                    }
+                    if stream.set_nonblocking(true).is_err() {
+                        continue;
+                    }
+                    let _ = stream.set_nodelay(true);
+                    eprintln!("gimbalctl sim: {peer} connected");
+                    clients.push(Client {
+                        stream,
+                        peer,
+                        parser: StreamParser::new(),
+                    });
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => {
+                    // Running out of descriptors and the like: report, keep serving.
+                    eprintln!("gimbalctl sim: accept failed: {e}");
+                    break;
+                }
+            }
+        }
+        // What the clients sent.
+        clients.retain_mut(|c| loop {
+            match c.stream.read(&mut buf) {
+                Ok(0) => {
+                    eprintln!("gimbalctl sim: {} disconnected", c.peer);
+                    return false;
+                }
+                Ok(n) => {
+                    for item in c.parser.feed(&buf[..n]) {
+                        let StreamItem::Control(data) = item else {
+                            continue;
+                        };
+                        match Command::decode(&data) {
+                            Ok(cmd) => {
+                                eprintln!(
+                                    "gimbalctl sim: {}: {}",
+                                    c.peer,
+                                    command::command_line(&cmd)
+                                )
+                            }
+                            Err(e) => eprintln!("gimbalctl sim: {}: {e}", c.peer),
+                        }
+                        if let Err(e) = gimbal.receive(ids::CONTROL, &data, now()) {
+                            eprintln!("gimbalctl sim: {}: rejected: {e}", c.peer);
+                        }
+                    }
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => {
+                    eprintln!("gimbalctl sim: {}: {e}", c.peer);
+                    return false;
+                }
+            }
+        });
+        // Postbacks to everyone.
+        if let Some(pb) = gimbal.poll(now()) {
+            let bytes = pb.to_stream_bytes();
+            clients.retain_mut(|c| match c.stream.write(&bytes) {
+                Ok(n) if n == bytes.len() => true,
+                Ok(_) | Err(_) => {
+                    eprintln!("gimbalctl sim: dropping {}: not reading", c.peer);
+                    false
+                }
+            });
+        }
+        std::thread::sleep(TICK);
+    }
+}
