@@ -195,3 +195,21 @@ impl Drop for Guard {
         let _ = self.0.wait();
     }
 }
+
+/// `v` with every number as an f64, so that `45` and `45.0` compare equal (the tool writes
+/// whole values without a fraction).
+pub fn norm(v: &serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Number(n) => serde_json::json!(n.as_f64().unwrap()),
+        Value::Array(a) => Value::Array(a.iter().map(norm).collect()),
+        Value::Object(o) => Value::Object(o.iter().map(|(k, v)| (k.clone(), norm(v))).collect()),
+        other => other.clone(),
+    }
+}
+
+/// Asserts two JSON values are equal up to number representation.
+#[track_caller]
+pub fn assert_json_eq(got: &serde_json::Value, expected: &serde_json::Value) {
+    assert_eq!(norm(got), norm(expected));
+}
