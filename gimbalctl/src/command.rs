@@ -263,8 +263,40 @@ impl Message {
     }
 }
 
+/// A number for an error message: plain, or in exponent form when it is very large or
+/// very small (`1e300` rather than 301 digits).
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A rejected value: names the argument and its valid range.
+fn range_message(e: &RangeError) -> String {
+    if e.value.is_finite() {
+        format!(
+            "{} = {} is out of range [{}, {}]",
+            e.field,
+            num(e.value),
+            num(e.min),
+            num(e.max)
+        )
+    } else {
+        format!(
+            "{} must be a finite number in [{}, {}], got {}",
+            e.field,
+            num(e.min),
+            num(e.max),
+            e.value
+        )
+    }
+}
+
 fn range(cmd: &str, e: RangeError) -> Failure {
-    Failure::Usage(format!("{cmd}: {e}"))
+    Failure::Usage(format!("{cmd}: {}", range_message(&e)))
 }
 
 /// A float argument as the library's single-precision constructors take it. A finite value
@@ -331,7 +363,7 @@ const LOOK_AT_PITCH: (f64, f64) = (-100.0, 60.0);
 
 fn position(who: &str, lat: f64, lon: f64, alt: f64) -> Result<Position, Failure> {
     Position::new(lat, lon, alt).map_err(|e| match e {
-        GeoError::Range(r) => Failure::Usage(format!("look-at: {who} {r}")),
+        GeoError::Range(r) => Failure::Usage(format!("look-at: {who} {}", range_message(&r))),
         other => Failure::Usage(format!("look-at: {other}")),
     })
 }

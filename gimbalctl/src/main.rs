@@ -59,7 +59,13 @@ enum Top {
         #[arg(long, value_name = "HOST:PORT")]
         tcp: String,
         /// Repeat the frame every MS milliseconds (a rate hold), then send zero rate
-        #[arg(long, value_name = "MS", requires = "for_ms", global = true)]
+        #[arg(
+            long,
+            value_name = "MS",
+            requires = "for_ms",
+            global = true,
+            value_parser = clap::value_parser!(u64).range(1..)
+        )]
         repeat_ms: Option<u64>,
         /// How long to repeat, milliseconds
         #[arg(long, value_name = "MS", requires = "repeat_ms", global = true)]

@@ -100,13 +100,6 @@ fn zero_rate(cmd: &Command) -> Option<Command> {
 /// `gimbalctl send --tcp HOST:PORT [--repeat-ms MS --for-ms MS] COMMAND ARGS...`.
 pub fn send(target: &str, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(), Failure> {
     let cmds = control_commands(spec)?;
-    if let Some((every, _)) = repeat {
-        if every == 0 {
-            return Err(Failure::Usage(
-                "--repeat-ms = 0 is out of range [1, 18446744073709551615]".into(),
-            ));
-        }
-    }
     let frames: Vec<u8> = cmds
         .iter()
         .flat_map(|c| serial::control_frame(&c.encode()))
@@ -120,7 +113,8 @@ pub fn send(target: &str, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(),
     write(&frames)?;
     if let Some((every_ms, for_ms)) = repeat {
         let start = Instant::now();
-        let every = Duration::from_millis(every_ms);
+        // clap rejects 0; guard anyway so the loop always advances.
+        let every = Duration::from_millis(every_ms.max(1));
         let total = Duration::from_millis(for_ms);
         let mut next = start + every;
         while next <= start + total {

@@ -2,7 +2,7 @@
 
 use std::net::Ipv4Addr;
 
-use idu_gimbal::video::{Camera, Credentials, Family, Stream};
+use idu_gimbal::video::{Camera, Credentials, Family, Stream, VideoError};
 
 use crate::error::Failure;
 
@@ -13,9 +13,10 @@ pub fn address(
     ip: Option<Ipv4Addr>,
     credentials: Option<(&str, &str)>,
 ) -> Result<String, Failure> {
-    let usage = |e: idu_gimbal::video::VideoError| Failure::Usage(format!("rtsp: {e}"));
-    let family = Family::from_name(family).map_err(usage)?;
-    let stream = Stream::from_name(stream).map_err(usage)?;
+    let usage = |e: VideoError| Failure::Usage(format!("rtsp: {e}"));
+    let named = |name: &str, e: VideoError| Failure::Usage(format!("rtsp: {name:?}: {e}"));
+    let family = Family::from_name(family).map_err(|e| named(family, e))?;
+    let stream = Stream::from_name(stream).map_err(|e| named(stream, e))?;
     let mut camera = Camera::new(family);
     if let Some(ip) = ip {
         camera = camera.with_ip(ip);
