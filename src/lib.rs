@@ -1,4 +1,57 @@
-//! `idu-gimbal`: drive an IDU camera gimbal over CAN from a flight controller.
+//! Drive an IDU camera gimbal over CAN from a flight controller.
+//!
+//! `no_std`, allocation-free and panic-free, over any [`embedded_can`] 0.4 driver.
+//!
+//! # Layers
+//!
+//! - [`wire`]: pure codecs, bytes to typed values and back: [`wire::control`] (every
+//!   command of both peripherals), [`wire::vehicle`], [`wire::postback`], [`wire::text`],
+//!   [`wire::serial`] (the 24-byte serial/TCP frame and a stream parser), [`wire::crc`],
+//!   [`wire::ids`].
+//! - [`link`]: the sans-IO state machine: transmit queue, vehicle push, rate hold with
+//!   dead-man, postback and text reassembly, link health, counters. Frames in, frames out,
+//!   time passed in: usable from async or non-`embedded-can` stacks.
+//! - [`Gimbal`]: the driver, moving frames between an `embedded_can::nb::Can` driver and the
+//!   link ([`Blocking`] adapts `embedded_can::blocking::Can` drivers).
+//! - Beside it: `sim` (a simulated gimbal), `mock` (feature `mock`: an in-memory CAN bus
+//!   with fault injection), [`geo`] (WGS84 look-at), [`video`] (RTSP addresses) and
+//!   [`interface`] (network, UART and CAN defaults, filter helpers).
+//!
+//! # Time
+//!
+//! The crate never reads a clock. Every call that needs the time takes an [`Instant`], a
+//! wrapping `u32` millisecond tick from the caller; schedules are kept by deadline and are
+//! correct across the wrap.
+//!
+//! # A firmware main loop
+//!
+//! ```
+//! # #[cfg(feature = "mock")] {
+//! use idu_gimbal::mock::Bus;
+//! use idu_gimbal::wire::control::{GimbalCommand, Heading};
+//! use idu_gimbal::wire::vehicle::Gps;
+//! use idu_gimbal::{Config, Event, Gimbal, Instant};
+//!
+//! // On a real board `can` is the HAL's CAN peripheral (e.g. bxcan on an STM32F4).
+//! let bus: Bus<2, 32> = Bus::new(7);
+//! let can = bus.endpoint(0).unwrap();
+//! let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+//!
+//! gimbal.send(GimbalCommand::Heading(Heading::new(90.0).unwrap())).unwrap();
+//! for ms in 0..300u32 {
+//!     let now = Instant::from_millis(ms);
+//!     gimbal.set_gps(Gps::new(47.397_742, 8.545_594).unwrap(), now);
+//!     gimbal.poll(now).unwrap();
+//!     while let Some(event) = gimbal.next_event() {
+//!         if let Event::Postback(p) = event {
+//!             let _ = p.heading_deg();
+//!         }
+//!     }
+//! }
+//! // The heading command, then GPS at 0, 200 ms.
+//! assert_eq!(gimbal.stats().link.frames_sent, 3);
+//! # }
+//! ```
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -15,13 +68,22 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod driver;
 pub mod geo;
 pub mod interface;
 pub mod link;
 #[cfg(feature = "mock")]
 pub mod mock;
+pub mod sim;
 pub mod time;
 pub mod video;
 pub mod wire;
 
+pub use driver::{Blocking, Gimbal};
+
+// The README's examples are compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+pub use link::{Config, Event};
 pub use time::Instant;

@@ -756,6 +756,16 @@ impl<const ENDPOINTS: usize, const QUEUE: usize> Endpoint<'_, ENDPOINTS, QUEUE> 
         self.index
     }
 
+    /// Frames waiting in this endpoint's RX FIFO (what an interrupt line would signal).
+    pub fn rx_pending(&self) -> usize {
+        self.bus
+            .state
+            .try_borrow()
+            .ok()
+            .and_then(|s| s.nodes.get(self.index).map(|n| n.rx.len()))
+            .unwrap_or(0)
+    }
+
     /// Makes the next `transmit` or `receive` (nb or blocking, whichever comes first)
     /// fail with exactly `kind`, once; a frame being transmitted is not queued, a frame
     /// waiting to be received stays queued. A second injection before that call replaces

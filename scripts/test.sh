@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The whole test suite: what the README's second command runs and what CI runs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n=== %s\n' "$*"; }
+
+step "toolchain: thumbv7em-none-eabihf target, rustfmt, clippy"
+rustup target add thumbv7em-none-eabihf >/dev/null
+rustup component add rustfmt clippy >/dev/null 2>&1 || true
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "clippy, host, all targets and features"
+cargo clippy --workspace --all-targets --all-features -- -D warnings
+
+step "clippy, thumbv7em-none-eabihf, lib and examples"
+cargo clippy --target thumbv7em-none-eabihf --lib --examples -- -D warnings
+
+step "library builds for thumbv7em-none-eabihf: no features, defmt, mock"
+cargo build --target thumbv7em-none-eabihf --lib
+cargo build --target thumbv7em-none-eabihf --lib --features defmt
+cargo build --target thumbv7em-none-eabihf --lib --features mock
+
+step "docs, warnings denied"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
+
+# Firmware steps (QEMU demo, benchmarks, STM32F405 release build) run when present.
+if [ -x scripts/firmware-checks.sh ]; then
+  step "firmware"
+  scripts/firmware-checks.sh
+fi
+
+step "cargo test --workspace --all-features"
+cargo test --workspace --all-features
+
+step "host_sim: the driver against the simulated gimbal, scripted"
+cargo run --quiet --example host_sim --features mock,std

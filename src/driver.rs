@@ -1,0 +1,357 @@
+//! The driver: a [`Link`] over any `embedded-can` 0.4 driver.
+//!
+//! [`Gimbal`] is thin: it moves frames between the CAN driver and the link, converts them
+//! to and from the driver's frame type, and counts what the driver reports.
+
+use core::fmt;
+
+use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _, Id};
+
+use crate::link::{Config, Event, Link, LinkStats, QueueFull, TextQueueError};
+use crate::time::Instant;
+use crate::wire::control::{Command, Rate};
+use crate::wire::postback::{GimbalType, Postback};
+use crate::wire::vehicle::{Altitude, Attitude, Gps};
+use crate::wire::Frame;
+
+/// Default bound on the frames received in one [`Gimbal::poll`], so a flooded bus cannot
+/// starve the rest of the main loop.
+pub const DEFAULT_MAX_RX_PER_POLL: usize = 32;
+
+/// CAN driver errors by kind.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DriverErrors {
+    /// `ErrorKind::Overrun`.
+    pub overrun: u32,
+    /// `ErrorKind::Bit`.
+    pub bit: u32,
+    /// `ErrorKind::Stuff`.
+    pub stuff: u32,
+    /// `ErrorKind::Crc`.
+    pub crc: u32,
+    /// `ErrorKind::Form`.
+    pub form: u32,
+    /// `ErrorKind::Acknowledge`.
+    pub acknowledge: u32,
+    /// `ErrorKind::Other` and kinds added to `embedded-can` later.
+    pub other: u32,
+}
+
+impl DriverErrors {
+    fn count(&mut self, kind: ErrorKind) {
+        let c = match kind {
+            ErrorKind::Overrun => &mut self.overrun,
+            ErrorKind::Bit => &mut self.bit,
+            ErrorKind::Stuff => &mut self.stuff,
+            ErrorKind::Crc => &mut self.crc,
+            ErrorKind::Form => &mut self.form,
+            ErrorKind::Acknowledge => &mut self.acknowledge,
+            _ => &mut self.other,
+        };
+        *c = c.wrapping_add(1);
+    }
+
+    /// All errors counted.
+    pub fn total(&self) -> u32 {
+        [
+            self.overrun,
+            self.bit,
+            self.stuff,
+            self.crc,
+            self.form,
+            self.acknowledge,
+            self.other,
+        ]
+        .iter()
+        .fold(0u32, |a, &b| a.wrapping_add(b))
+    }
+}
+
+/// Everything counted: the link's counters and the CAN driver's errors.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Stats {
+    /// The link's counters.
+    pub link: LinkStats,
+    /// CAN driver errors by kind.
+    pub driver_errors: DriverErrors,
+}
+
+/// A CAN driver error seen during [`Gimbal::poll`]. The poll still did all its work.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct DriverError(pub ErrorKind);
+
+impl fmt::Display for DriverError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "CAN driver error: {}", self.0)
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for DriverError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let kind = match self.0 {
+            ErrorKind::Overrun => "overrun",
+            ErrorKind::Bit => "bit",
+            ErrorKind::Stuff => "stuff",
+            ErrorKind::Crc => "crc",
+            ErrorKind::Form => "form",
+            ErrorKind::Acknowledge => "acknowledge",
+            _ => "other",
+        };
+        defmt::write!(f, "CAN driver error: {=str}", kind)
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for DriverError {}
+
+/// A gimbal on a CAN bus, driven through `C`.
+///
+/// `Q` is the number of queued control commands, `T` the number of queued text frames.
+///
+/// ```
+/// # #[cfg(feature = "mock")] {
+/// use idu_gimbal::mock::Bus;
+/// use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+/// use idu_gimbal::{Config, Gimbal, Instant};
+///
+/// let bus: Bus<2, 16> = Bus::new(1);
+/// let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+/// gimbal.send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap())).unwrap();
+/// gimbal.poll(Instant::from_millis(0)).unwrap();
+/// assert_eq!(gimbal.stats().link.frames_sent, 1);
+/// # }
+/// ```
+pub struct Gimbal<C, const Q: usize = 8, const T: usize = 16> {
+    can: C,
+    link: Link<Q, T>,
+    errors: DriverErrors,
+    max_rx_per_poll: usize,
+}
+
+impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
+    /// A driver over `can` with the given timing.
+    pub fn new(can: C, config: Config) -> Self {
+        Gimbal {
+            can,
+            link: Link::new(config),
+            errors: DriverErrors::default(),
+            max_rx_per_poll: DEFAULT_MAX_RX_PER_POLL,
+        }
+    }
+
+    /// Sets how many frames one [`Gimbal::poll`] receives at most.
+    pub fn set_max_rx_per_poll(&mut self, max: usize) {
+        self.max_rx_per_poll = max.max(1);
+    }
+
+    /// Receives pending frames (at most the per-poll bound), runs the schedules, and
+    /// transmits queued frames until the CAN driver is busy.
+    ///
+    /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
+    /// first error seen is returned at the end.
+    pub fn poll(&mut self, now: Instant) -> Result<(), DriverError> {
+        let mut first_error = None;
+        for _ in 0..self.max_rx_per_poll {
+            match self.can.receive() {
+                Ok(frame) => self.receive(&frame, now),
+                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::Other(e)) => {
+                    let kind = embedded_can::Error::kind(&e);
+                    self.errors.count(kind);
+                    first_error.get_or_insert(DriverError(kind));
+                }
+            }
+        }
+        self.link.poll(now);
+        if let Some(e) = self.transmit() {
+            first_error.get_or_insert(e);
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+
+    fn receive(&mut self, frame: &C::Frame, now: Instant) {
+        match frame.id() {
+            Id::Extended(id) if frame.is_data_frame() => {
+                self.link.receive(id.as_raw(), frame.data(), now)
+            }
+            _ => self.link.receive_ignored(),
+        }
+    }
+
+    fn transmit(&mut self) -> Option<DriverError> {
+        while let Some(frame) = self.link.next_transmit() {
+            let Some(can_frame) =
+                ExtendedId::new(frame.id).and_then(|id| C::Frame::new(id, &frame.data))
+            else {
+                // Only protocol frames are queued, and every one is a valid extended frame.
+                continue;
+            };
+            match self.can.transmit(&can_frame) {
+                Ok(displaced) => {
+                    let displaced = displaced.and_then(|d| match d.id() {
+                        Id::Extended(id) => <[u8; 8]>::try_from(d.data())
+                            .ok()
+                            .map(|data| Frame::new(id.as_raw(), data)),
+                        Id::Standard(_) => None,
+                    });
+                    self.link.transmit_done(displaced);
+                }
+                Err(nb::Error::WouldBlock) => {
+                    self.link.transmit_refused(frame);
+                    return None;
+                }
+                Err(nb::Error::Other(e)) => {
+                    let kind = embedded_can::Error::kind(&e);
+                    self.errors.count(kind);
+                    self.link.transmit_refused(frame);
+                    return Some(DriverError(kind));
+                }
+            }
+        }
+        None
+    }
+
+    /// Queues a command (see [`Link::send`]).
+    pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
+        self.link.send(command)
+    }
+
+    /// Starts, changes or refreshes a rate hold (see [`Link::set_rate`]).
+    pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
+        self.link.set_rate(rate, now)
+    }
+
+    /// Ends a rate hold with one zero-rate command (see [`Link::stop_rate`]).
+    pub fn stop_rate(&mut self) {
+        self.link.stop_rate()
+    }
+
+    /// Keeps the gimbal pointed at a ground target while the vehicle moves (see
+    /// [`Link::point_at`]).
+    pub fn point_at(&mut self, target: crate::geo::Position) {
+        self.link.point_at(target)
+    }
+
+    /// Stops pointing at a target (see [`Link::stop_pointing`]).
+    pub fn stop_pointing(&mut self) {
+        self.link.stop_pointing()
+    }
+
+    /// Queues a text message, all or nothing (see [`Link::send_text`]).
+    pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
+        self.link.send_text(text)
+    }
+
+    /// Sets the latest vehicle attitude, measured at `stamp`.
+    pub fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
+        self.link.set_attitude(attitude, stamp)
+    }
+
+    /// Sets the latest vehicle position, measured at `stamp`.
+    pub fn set_gps(&mut self, gps: Gps, stamp: Instant) {
+        self.link.set_gps(gps, stamp)
+    }
+
+    /// Sets the latest vehicle altitude, measured at `stamp`.
+    pub fn set_altitude(&mut self, altitude: Altitude, stamp: Instant) {
+        self.link.set_altitude(altitude, stamp)
+    }
+
+    /// The next event, oldest first.
+    pub fn next_event(&mut self) -> Option<Event> {
+        self.link.next_event()
+    }
+
+    /// Whether the link is up (a valid postback within the link timeout).
+    pub fn is_link_up(&self) -> bool {
+        self.link.is_up()
+    }
+
+    /// The latest valid postback and its age in milliseconds.
+    pub fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)> {
+        self.link.latest_postback(now)
+    }
+
+    /// The gimbal model as last reported.
+    pub fn gimbal_type(&self) -> Option<GimbalType> {
+        self.link.gimbal_type()
+    }
+
+    /// All counters.
+    pub fn stats(&self) -> Stats {
+        Stats {
+            link: self.link.stats(),
+            driver_errors: self.errors,
+        }
+    }
+
+    /// The link, for what the driver does not wrap.
+    pub fn link(&self) -> &Link<Q, T> {
+        &self.link
+    }
+
+    /// The link, mutably.
+    pub fn link_mut(&mut self) -> &mut Link<Q, T> {
+        &mut self.link
+    }
+
+    /// Gives back the CAN driver.
+    pub fn release(self) -> C {
+        self.can
+    }
+}
+
+/// Makes an `embedded_can::blocking::Can` driver (e.g. `mcp2515`) usable as an
+/// `embedded_can::nb::Can` one.
+///
+/// A blocking `receive` waits for a frame, which would stall [`Gimbal::poll`], so the
+/// adapter asks `rx_ready` first (typically: the controller's interrupt pin is asserted)
+/// and answers `WouldBlock` when it says no. A blocking `transmit` returns once the frame
+/// is queued in the controller, so the adapter never hands a frame back.
+pub struct Blocking<B, R> {
+    can: B,
+    rx_ready: R,
+}
+
+impl<B, R> Blocking<B, R>
+where
+    B: embedded_can::blocking::Can,
+    R: FnMut(&mut B) -> bool,
+{
+    /// Wraps a blocking driver; `rx_ready` says whether a frame is waiting.
+    pub fn new(can: B, rx_ready: R) -> Self {
+        Blocking { can, rx_ready }
+    }
+
+    /// Gives back the driver.
+    pub fn release(self) -> B {
+        self.can
+    }
+}
+
+impl<B, R> Can for Blocking<B, R>
+where
+    B: embedded_can::blocking::Can,
+    R: FnMut(&mut B) -> bool,
+{
+    type Frame = B::Frame;
+    type Error = B::Error;
+
+    fn transmit(&mut self, frame: &Self::Frame) -> nb::Result<Option<Self::Frame>, Self::Error> {
+        self.can
+            .transmit(frame)
+            .map(|()| None)
+            .map_err(nb::Error::Other)
+    }
+
+    fn receive(&mut self) -> nb::Result<Self::Frame, Self::Error> {
+        if (self.rx_ready)(&mut self.can) {
+            self.can.receive().map_err(nb::Error::Other)
+        } else {
+            Err(nb::Error::WouldBlock)
+        }
+    }
+}

@@ -1,0 +1,453 @@
+//! Schedules of the link, driven tick by tick with a stand-in CAN driver that accepts
+//! every frame.
+
+use super::*;
+use crate::wire::control::{Command, DualLightCommand, GimbalCommand, Pitch, Rate};
+use crate::wire::vehicle::{Altitude, Attitude, Gps};
+
+/// Polls every `step` ms from `from` to `to` (exclusive), draining the queue into a log of
+/// (time, frame).
+fn run<const Q: usize, const T: usize>(
+    link: &mut Link<Q, T>,
+    from: u32,
+    to: u32,
+    step: u32,
+) -> Vec<(u32, Frame)> {
+    let mut out = Vec::new();
+    let mut t = from;
+    while t.wrapping_sub(from) < to.wrapping_sub(from) {
+        link.poll(Instant::from_millis(t));
+        while let Some(f) = link.next_transmit() {
+            out.push((t, f));
+            link.transmit_done(None);
+        }
+        t = t.wrapping_add(step);
+    }
+    out
+}
+
+fn count(log: &[(u32, Frame)], id: u32) -> usize {
+    log.iter().filter(|(_, f)| f.id == id).count()
+}
+
+fn feed_vehicle<const Q: usize, const T: usize>(link: &mut Link<Q, T>, at: u32) {
+    let now = Instant::from_millis(at);
+    link.set_attitude(Attitude::new(1.0, 2.0, 3.0).unwrap(), now);
+    link.set_gps(Gps::new(47.0, 8.0).unwrap(), now);
+    link.set_altitude(Altitude::new(500.0).unwrap(), now);
+}
+
+#[test]
+fn vehicle_frames_at_their_periods_without_drift() {
+    let mut link: Link = Link::new(Config::default());
+    let mut log = Vec::new();
+    // Fresh data every 20 ms; poll every 7 ms (not a divisor of the periods) for 10 s.
+    let mut t = 0u32;
+    while t < 10_000 {
+        if t.is_multiple_of(20) {
+            feed_vehicle(&mut link, t);
+        }
+        log.extend(run(&mut link, t, t + 1, 1));
+        t += 1;
+    }
+    assert_eq!(count(&log, ids::ATTITUDE), 100);
+    assert_eq!(count(&log, ids::GPS), 50);
+    assert_eq!(count(&log, ids::ALTITUDE), 50);
+    // Deadlines, not poll times: attitude k is sent at 100·k ms exactly.
+    let att: Vec<u32> = log
+        .iter()
+        .filter(|(_, f)| f.id == ids::ATTITUDE)
+        .map(|(t, _)| *t)
+        .collect();
+    assert!(
+        att.iter().enumerate().all(|(k, &t)| t == 100 * k as u32),
+        "{att:?}"
+    );
+}
+
+#[test]
+fn stale_data_is_not_pushed_and_fresh_data_resumes_at_once() {
+    let mut link: Link = Link::new(Config::default());
+    feed_vehicle(&mut link, 0);
+    let log = run(&mut link, 0, 3000, 1);
+    // Pushed while age <= 1000 ms: attitude at 0..=1000 by 100 ms = 11 frames.
+    assert_eq!(count(&log, ids::ATTITUDE), 11);
+    assert_eq!(count(&log, ids::GPS), 6);
+    feed_vehicle(&mut link, 3000);
+    let log = run(&mut link, 3000, 3001, 1);
+    assert_eq!(
+        log.len(),
+        3,
+        "all three pushed as soon as data is fresh again"
+    );
+}
+
+#[test]
+fn a_long_gap_between_polls_yields_one_push_not_a_burst() {
+    let mut link: Link = Link::new(Config::default());
+    feed_vehicle(&mut link, 0);
+    assert_eq!(run(&mut link, 0, 1, 1).len(), 3);
+    feed_vehicle(&mut link, 950);
+    // No poll from 1 to 950 ms: nine attitude periods missed.
+    let log = run(&mut link, 950, 951, 1);
+    assert_eq!((count(&log, ids::ATTITUDE), count(&log, ids::GPS)), (1, 1));
+    // And the schedule continues a period later, not at once.
+    assert_eq!(run(&mut link, 951, 1050, 1).len(), 0);
+    assert_eq!(count(&run(&mut link, 1050, 1051, 1), ids::ATTITUDE), 1);
+}
+
+#[test]
+fn latest_vehicle_value_wins_when_not_yet_sent() {
+    let mut link: Link = Link::new(Config::default());
+    link.set_gps(Gps::new(1.0, 1.0).unwrap(), Instant::from_millis(0));
+    link.poll(Instant::from_millis(0));
+    link.set_gps(Gps::new(2.0, 2.0).unwrap(), Instant::from_millis(200));
+    link.poll(Instant::from_millis(200)); // the first push was never taken by a driver
+    let f = link.next_transmit().unwrap();
+    assert_eq!(
+        VehicleFrame::decode(f.id, &f.data).unwrap(),
+        VehicleFrame::Gps(Gps::new(2.0, 2.0).unwrap())
+    );
+    assert_eq!(link.next_transmit(), None);
+    assert_eq!(link.stats().superseded, 1);
+}
+
+fn rate_frames(log: &[(u32, Frame)]) -> Vec<(u32, Rate)> {
+    log.iter()
+        .filter_map(|(t, f)| match Command::decode(&f.data) {
+            Ok(Command::Gimbal(GimbalCommand::Rate(r))) => Some((*t, r)),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn rate_hold_repeats_every_50_ms_and_dead_man_stops_it() {
+    let mut link: Link = Link::new(Config::default());
+    let r = Rate::new(10.0, -5.0).unwrap();
+    let mut log = Vec::new();
+    for t in 0..1000u32 {
+        if t < 500 && t % 100 == 0 {
+            link.set_rate(r, Instant::from_millis(t)).unwrap(); // refreshed every 100 ms until 400
+        }
+        log.extend(run(&mut link, t, t + 1, 1));
+    }
+    let rates = rate_frames(&log);
+    let times: Vec<u32> = rates.iter().map(|(t, _)| *t).collect();
+    // Sent at 0, 50, ..., 650 (last refresh 400 + dead-man 250 = 650), then one zero at 651.
+    let mut expected: Vec<u32> = (0..=650).step_by(50).collect();
+    expected.push(651);
+    assert_eq!(times, expected);
+    assert!(rates[..rates.len() - 1].iter().all(|(_, x)| *x == r));
+    assert_eq!(rates.last().unwrap().1, Rate::ZERO);
+    assert!(!link.is_rate_holding());
+    assert_eq!(link.next_event(), Some(Event::RateHoldExpired));
+}
+
+#[test]
+fn stop_rate_sends_one_zero_and_pointing_commands_cancel() {
+    let mut link: Link = Link::new(Config::default());
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(0))
+        .unwrap();
+    link.stop_rate();
+    let log = run(&mut link, 0, 500, 1);
+    assert_eq!(
+        rate_frames(&log)
+            .iter()
+            .map(|(_, r)| *r)
+            .collect::<Vec<_>>(),
+        [Rate::new(1.0, 0.0).unwrap(), Rate::ZERO]
+    );
+    // A pointing command cancels the hold: no more repeats, no zero frame.
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(500))
+        .unwrap();
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
+    let log = run(&mut link, 500, 1500, 1);
+    assert_eq!(rate_frames(&log).len(), 1);
+    assert!(!link.is_rate_holding());
+    // A non-pointing command (palette) keeps it.
+    link.set_rate(Rate::new(2.0, 0.0).unwrap(), Instant::from_millis(1500))
+        .unwrap();
+    link.send(DualLightCommand::Palette(
+        crate::wire::control::Palette::Lava,
+    ))
+    .unwrap();
+    assert!(link.is_rate_holding());
+}
+
+#[test]
+fn full_queue_hands_back_and_zero_rate_is_never_lost() {
+    let mut link: Link<2, 2> = Link::new(Config::default());
+    let cmd = Command::from(GimbalCommand::Recenter);
+    link.send(cmd).unwrap();
+    link.send(cmd).unwrap();
+    assert_eq!(link.send(cmd), Err(QueueFull(cmd)));
+    let r = Rate::new(3.0, 0.0).unwrap();
+    assert_eq!(link.set_rate(r, Instant::from_millis(0)), Err(QueueFull(r)));
+    assert!(!link.is_rate_holding());
+    assert_eq!(link.stats().queue_full, 2);
+    // Make room, start a hold, fill the queue, stop: the zero goes out once there is room.
+    link.next_transmit();
+    link.transmit_done(None);
+    link.set_rate(r, Instant::from_millis(0)).unwrap();
+    link.stop_rate();
+    let log = run(&mut link, 0, 10, 1);
+    assert_eq!(
+        rate_frames(&log)
+            .iter()
+            .map(|(_, r)| *r)
+            .collect::<Vec<_>>(),
+        [r, Rate::ZERO]
+    );
+    assert_eq!(
+        link.send_text(b"0123456789abcdefXYZ"),
+        Err(TextQueueError::NoRoom { needed: 3, free: 2 })
+    );
+    assert!(matches!(
+        link.send_text(b""),
+        Err(TextQueueError::Invalid(_))
+    ));
+    assert!(!link.has_transmit(), "nothing of a refused text was queued");
+}
+
+fn postback_frames(link: &mut Link, at: u32, pitch: i16) {
+    let p = Postback {
+        pitch,
+        ..Postback::default()
+    };
+    for d in p.to_can_frames() {
+        link.receive(ids::POSTBACK, &d, Instant::from_millis(at));
+    }
+}
+
+#[test]
+fn link_up_down_and_latest_postback() {
+    let mut link: Link = Link::new(Config::default());
+    assert!(!link.is_up());
+    postback_frames(&mut link, 1000, -100);
+    assert_eq!(link.next_event(), Some(Event::LinkUp));
+    assert!(matches!(link.next_event(), Some(Event::Postback(p)) if p.pitch == -100));
+    assert_eq!(
+        link.latest_postback(Instant::from_millis(1300))
+            .map(|(p, age)| (p.pitch, age)),
+        Some((-100, 300))
+    );
+    link.poll(Instant::from_millis(2500));
+    assert!(link.is_up(), "exactly 1.5 s is still up");
+    link.poll(Instant::from_millis(2501));
+    assert!(!link.is_up());
+    assert_eq!(link.next_event(), Some(Event::LinkDown));
+    postback_frames(&mut link, 3000, -200);
+    assert_eq!(link.next_event(), Some(Event::LinkUp));
+    assert_eq!(link.gimbal_type(), Some(GimbalType::X30));
+    link.receive(ids::CONTROL, &[0; 8], Instant::from_millis(3000));
+    link.receive_ignored();
+    assert_eq!(link.stats().ignored_frames, 2);
+    assert_eq!(link.stats().postbacks, 2);
+}
+
+#[test]
+fn events_overflow_is_counted() {
+    let mut link: Link = Link::new(Config::default());
+    for i in 0..10 {
+        postback_frames(&mut link, 1000 + i * 10, 0);
+    }
+    let mut n = 0;
+    while link.next_event().is_some() {
+        n += 1;
+    }
+    assert_eq!(n, 8);
+    assert_eq!(link.stats().events_dropped, 3); // 11 events: LinkUp + 10 postbacks
+}
+
+#[test]
+fn displaced_frames_are_requeued_and_refused_frames_go_back() {
+    let mut link: Link = Link::new(Config::default());
+    link.send_text(b"ABCDEFGHIJ").unwrap();
+    let t1 = link.next_transmit().unwrap();
+    link.transmit_done(None);
+    link.send(GimbalCommand::LookDown).unwrap();
+    let c = link.next_transmit().unwrap();
+    // The driver took the command and handed back the text frame it displaced.
+    link.transmit_done(Some(t1));
+    assert_eq!((link.stats().requeued, link.stats().frames_sent), (1, 1));
+    assert_eq!(
+        link.next_transmit(),
+        Some(t1),
+        "the displaced frame goes out again first"
+    );
+    link.transmit_refused(t1);
+    assert_eq!(link.next_transmit(), Some(t1));
+    assert_eq!(c.id, ids::CONTROL);
+}
+
+#[test]
+fn schedules_hold_across_the_tick_wrap() {
+    let mut link: Link = Link::new(Config::default());
+    let start = u32::MAX - 4999;
+    let mut log = Vec::new();
+    let mut t = start;
+    for _ in 0..10_000u32 {
+        if t % 20 == 0 {
+            feed_vehicle(&mut link, t);
+        }
+        if t.wrapping_sub(start) % 100 == 0 {
+            link.set_rate(Rate::new(5.0, 0.0).unwrap(), Instant::from_millis(t))
+                .unwrap();
+        }
+        log.extend(run(&mut link, t, t.wrapping_add(1), 1));
+        t = t.wrapping_add(1);
+    }
+    assert_eq!(count(&log, ids::ATTITUDE), 100);
+    assert_eq!(count(&log, ids::GPS), 50);
+    // 10 s of hold: one frame every 50 ms, never a zero (refreshed throughout).
+    let rates = rate_frames(&log);
+    assert_eq!(rates.len(), 200);
+    assert!(rates.iter().all(|(_, r)| !r.is_zero()));
+}
+
+mod point_at {
+    use super::*;
+    use crate::geo::{look_at, Position};
+    use crate::wire::control::{Heading, Pitch};
+
+    fn vehicle(link: &mut Link, at: u32, lat: f64, lon: f64, alt: f64, heading: f32) {
+        let now = Instant::from_millis(at);
+        link.set_gps(Gps::new(lat, lon).unwrap(), now);
+        link.set_altitude(Altitude::new(alt).unwrap(), now);
+        link.set_attitude(Attitude::new(0.0, 0.0, heading).unwrap(), now);
+    }
+
+    fn aims(log: &[(u32, Frame)]) -> Vec<(u32, Command)> {
+        log.iter()
+            .filter(|(_, f)| f.id == ids::CONTROL)
+            .map(|(t, f)| (*t, Command::decode(&f.data).unwrap()))
+            .filter(|(_, c)| {
+                matches!(
+                    c,
+                    Command::Gimbal(GimbalCommand::Heading(_) | GimbalCommand::Pitch(_))
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sends_heading_and_pitch_from_the_exact_look_at() {
+        let mut link: Link = Link::new(Config::default());
+        let target = Position::new(47.001, 8.001, 400.0).unwrap();
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 10.0);
+        link.point_at(target);
+        let log = run(&mut link, 0, 1, 1);
+        let expected = look_at(&Position::new(47.0, 8.0, 500.0).unwrap(), &target).unwrap();
+        assert_eq!(
+            aims(&log).into_iter().map(|(_, c)| c).collect::<Vec<_>>(),
+            [
+                Command::from(GimbalCommand::Heading(
+                    Heading::new(expected.bearing_deg as f32).unwrap()
+                )),
+                Command::from(GimbalCommand::Pitch(
+                    Pitch::new(expected.elevation_deg as f32).unwrap()
+                )),
+            ],
+            "north-referenced while attitude is pushed"
+        );
+    }
+
+    #[test]
+    fn dead_band_and_10_hz() {
+        let mut link: Link = Link::new(Config::default());
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        // A static vehicle: one aim, then nothing for 2 s.
+        let mut log = Vec::new();
+        for t in (0..2000).step_by(10) {
+            vehicle(&mut link, t, 47.0, 8.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 10, 1));
+        }
+        assert_eq!(aims(&log).len(), 2);
+        // A vehicle moving east at 20 m/s: the bearing changes by more than 0.1° per 100 ms,
+        // so the aim is re-sent at 10 Hz, never faster.
+        let mut log = Vec::new();
+        for t in (2000..4000u32).step_by(10) {
+            let east_m = f64::from(t - 2000) * 0.02;
+            vehicle(&mut link, t, 47.0, 8.0 + east_m / 75_900.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 10, 1));
+        }
+        let headings: Vec<u32> = aims(&log)
+            .iter()
+            .filter(|(_, c)| matches!(c, Command::Gimbal(GimbalCommand::Heading(_))))
+            .map(|(t, _)| *t)
+            .collect();
+        assert!((18..=20).contains(&headings.len()), "{headings:?}");
+        assert!(headings.windows(2).all(|w| w[1] - w[0] >= 100));
+    }
+
+    #[test]
+    fn nose_referenced_when_attitude_is_not_pushed() {
+        let mut link: Link = Link::new(Config {
+            attitude_period_ms: 0,
+            ..Config::default()
+        });
+        let target = Position::new(47.0, 8.001, 500.0).unwrap(); // due east, same height
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 30.0);
+        link.point_at(target);
+        let log = run(&mut link, 0, 1, 1);
+        assert_eq!(
+            count(&log, ids::ATTITUDE),
+            0,
+            "the attitude push is disabled"
+        );
+        let Command::Gimbal(GimbalCommand::Heading(h)) = aims(&log)[0].1 else {
+            panic!()
+        };
+        // Bearing ~90°, vehicle heading 30°: 60° right of the nose.
+        assert!((h.degrees() - 60.0).abs() < 0.1, "{}", h.degrees());
+    }
+
+    #[test]
+    fn unreachable_target_raises_an_event_once_and_holds_the_aim() {
+        let mut link: Link = Link::new(Config::default());
+        vehicle(&mut link, 0, 47.0, 8.0, 500.0, 0.0);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        assert_eq!(aims(&run(&mut link, 0, 1, 1)).len(), 2);
+        // The vehicle climbs far below a target... no: the target is now far above it.
+        link.point_at(Position::new(47.0001, 8.0, 2000.0).unwrap());
+        let mut log = Vec::new();
+        for t in (100..1100).step_by(100) {
+            vehicle(&mut link, t, 47.0, 8.0, 500.0, 0.0);
+            log.extend(run(&mut link, t, t + 100, 1));
+        }
+        assert!(aims(&log).is_empty(), "nothing is clamped and sent");
+        let events: Vec<Event> = core::iter::from_fn(|| link.next_event()).collect();
+        assert_eq!(events.len(), 1, "{events:?}");
+        let Event::TargetUnreachable { elevation_cdeg } = events[0] else {
+            panic!()
+        };
+        assert!(elevation_cdeg > 8000, "{elevation_cdeg}");
+    }
+
+    #[test]
+    fn cancelled_by_pointing_commands_and_rate_holds_and_waits_for_position() {
+        let mut link: Link = Link::new(Config::default());
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        assert!(
+            aims(&run(&mut link, 0, 500, 1)).is_empty(),
+            "no GPS yet: nothing sent"
+        );
+        vehicle(&mut link, 500, 47.0, 8.0, 500.0, 0.0);
+        assert_eq!(aims(&run(&mut link, 500, 501, 1)).len(), 2);
+        link.send(GimbalCommand::LookDown).unwrap();
+        assert_eq!(link.pointing_target(), None);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        link.set_rate(Rate::new(1.0, 0.0).unwrap(), Instant::from_millis(600))
+            .unwrap();
+        assert_eq!(link.pointing_target(), None);
+        link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
+        link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
+            .unwrap();
+        assert!(
+            link.pointing_target().is_some(),
+            "a camera command does not cancel it"
+        );
+    }
+}
