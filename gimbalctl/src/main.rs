@@ -17,7 +17,6 @@ mod json;
 mod net;
 mod rtsp;
 mod sim;
-mod sim_backend;
 
 use command::Spec;
 use error::Failure;

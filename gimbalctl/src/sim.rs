@@ -1,6 +1,7 @@
 //! `gimbalctl sim`: a simulated gimbal on TCP, speaking the serial server's byte stream.
 //!
-//! One thread, non-blocking sockets, a 5 ms tick: accept clients up to a bound (more are
+//! The gimbal is the library's [`Simulator`] (with `emit_can_frames: false`: its postbacks
+//! go out in their 27-byte stream form). One thread, non-blocking sockets, a 5 ms tick: accept clients up to a bound (more are
 //! turned away), read each client's bytes through its own `StreamParser` (garbage is
 //! skipped, bad CRCs dropped), hand every control frame to the simulated gimbal, and send
 //! every client the 27-byte postback whenever the gimbal has one due (every 500 ms). A
@@ -11,6 +12,7 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::time::{Duration, Instant as StdInstant};
 
+use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::control::Command;
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::serial::{StreamItem, StreamParser};
@@ -18,15 +20,18 @@ use idu_gimbal::Instant;
 
 use crate::command;
 use crate::error::Failure;
-use crate::sim_backend::{self, SimGimbal};
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(5);
+/// Reads per client per tick (4 KiB each).
+const MAX_READS: usize = 16;
 
 struct Client {
     stream: TcpStream,
     peer: SocketAddr,
     parser: StreamParser,
+    /// The last command logged for this client.
+    last_logged: Option<[u8; 8]>,
 }
 
 /// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
@@ -50,7 +55,13 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
     }
     let start = StdInstant::now();
     let now = || Instant::from_millis(start.elapsed().as_millis() as u32);
-    let mut gimbal = sim_backend::new(now());
+    let mut gimbal = Simulator::new(
+        SimConfig {
+            emit_can_frames: false,
+            ..SimConfig::default()
+        },
+        now(),
+    );
     let mut clients: Vec<Client> = Vec::new();
     let mut buf = [0u8; 4096];
     loop {
@@ -81,6 +92,7 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
                         stream,
                         peer,
                         parser: StreamParser::new(),
+                        last_logged: None,
                     });
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock => break,
@@ -93,39 +105,43 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
             }
         }
         // What the clients sent.
-        clients.retain_mut(|c| loop {
-            match c.stream.read(&mut buf) {
-                Ok(0) => {
-                    eprintln!("gimbalctl sim: {} disconnected", c.peer);
-                    return false;
-                }
-                Ok(n) => {
-                    for item in c.parser.feed(&buf[..n]) {
-                        let StreamItem::Control(data) = item else {
-                            continue;
-                        };
-                        match Command::decode(&data) {
-                            Ok(cmd) => {
-                                eprintln!(
-                                    "gimbalctl sim: {}: {}",
-                                    c.peer,
-                                    command::command_line(&cmd)
-                                )
+        // At most MAX_READS reads per client per tick, so that one client flooding the
+        // server cannot starve the others or the postbacks.
+        clients.retain_mut(|c| {
+            for _ in 0..MAX_READS {
+                match c.stream.read(&mut buf) {
+                    Ok(0) => {
+                        eprintln!("gimbalctl sim: {} disconnected", c.peer);
+                        return false;
+                    }
+                    Ok(n) => {
+                        for item in c.parser.feed(&buf[..n]) {
+                            let StreamItem::Control(data) = item else {
+                                continue;
+                            };
+                            match gimbal.receive(ids::CONTROL, &data, now()) {
+                                // Log each command once, not every repeat of a rate hold.
+                                Ok(()) if c.last_logged == Some(data) => {}
+                                Ok(()) => {
+                                    c.last_logged = Some(data);
+                                    if let Ok(cmd) = Command::decode(&data) {
+                                        let line = command::command_line(&cmd);
+                                        eprintln!("gimbalctl sim: {}: {line}", c.peer);
+                                    }
+                                }
+                                Err(e) => eprintln!("gimbalctl sim: {}: rejected: {e}", c.peer),
                             }
-                            Err(e) => eprintln!("gimbalctl sim: {}: {e}", c.peer),
-                        }
-                        if let Err(e) = gimbal.receive(ids::CONTROL, &data, now()) {
-                            eprintln!("gimbalctl sim: {}: rejected: {e}", c.peer);
                         }
                     }
-                }
-                Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => {
-                    eprintln!("gimbalctl sim: {}: {e}", c.peer);
-                    return false;
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
+                    Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) => {
+                        eprintln!("gimbalctl sim: {}: {e}", c.peer);
+                        return false;
+                    }
                 }
             }
+            true
         });
         // Postbacks to everyone.
         if let Some(pb) = gimbal.poll(now()) {
