@@ -44,7 +44,7 @@ pub fn push_fixed(out: &mut Vec<u8>, value: i64, decimals: u32) {
         return;
     }
     let mut digits = decimals;
-    while frac % 10 == 0 {
+    while frac.is_multiple_of(10) {
         frac /= 10;
         digits -= 1;
     }

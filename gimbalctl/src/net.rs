@@ -61,7 +61,7 @@ pub fn connect(target: &str) -> Result<TcpStream, Failure> {
             Ok(s) => {
                 let _ = s.set_nodelay(true);
                 s.set_write_timeout(Some(WRITE_TIMEOUT))
-                    .map_err(|e| Failure::io(format!("{target}"), e))?;
+                    .map_err(|e| Failure::io(target, e))?;
                 return Ok(s);
             }
             Err(e) => last = Some(e),
