@@ -21,25 +21,25 @@ use crate::json;
 #[derive(Subcommand, Debug, Clone)]
 #[command(rename_all = "kebab-case")]
 pub enum Spec {
-    /// Pointing zoom: bring the image point X Y (offsets from the centre, each -10000..=10000) to the centre and zoom in [0F 01]
+    /// Pointing zoom: bring the image point X Y (offsets from the centre, each -10000..=10000) to the centre and zoom in (0F 01)
     PointZoom {
         #[arg(allow_negative_numbers = true)]
         x: i64,
         #[arg(allow_negative_numbers = true)]
         y: i64,
     },
-    /// Follow the vehicle's nose [0F 02]
+    /// Follow the vehicle's nose (0F 02)
     Follow,
-    /// Back to centre [0F 03]
+    /// Back to centre (0F 03)
     Center,
-    /// Rate control: YAW and PITCH in deg/s, each -100..=100 (repeat about every 50 ms to keep moving) [0F 04]
+    /// Rate control: YAW and PITCH in deg/s, each -100..=100 (repeat about every 50 ms to keep moving) (0F 04)
     Rate {
         #[arg(allow_negative_numbers = true)]
         yaw: f64,
         #[arg(allow_negative_numbers = true)]
         pitch: f64,
     },
-    /// Start tracking the box centred on X Y (0..=8191) of W x H image units (0..=4080, sent as /16) [0F 05]
+    /// Start tracking the box centred on X Y (0..=8191) of W x H image units (0..=4080, sent as /16) (0F 05)
     Track {
         #[arg(allow_negative_numbers = true)]
         x: i64,
@@ -50,58 +50,58 @@ pub enum Spec {
         #[arg(allow_negative_numbers = true)]
         h: f64,
     },
-    /// Stop tracking [0F 06]
+    /// Stop tracking (0F 06)
     TrackStop,
-    /// One-click down 90 degrees [0F 07]
+    /// One-click down 90 degrees (0F 07)
     LookDown,
-    /// Point at heading DEG, 0..=360 (north-referenced while attitude is pushed, else nose-relative) [0F 08 01]
+    /// Point at heading DEG, 0..=360 (north-referenced while attitude is pushed, else nose-relative) (0F 08 01)
     Heading {
         #[arg(allow_negative_numbers = true)]
         deg: f64,
     },
-    /// Point at pitch DEG, -100..=60, positive up [0F 08 02]
+    /// Point at pitch DEG, -100..=60, positive up (0F 08 02)
     Pitch {
         #[arg(allow_negative_numbers = true)]
         deg: f64,
     },
-    /// Set the optical zoom ratio, 1..=35 [0F 08 03]
+    /// Set the optical zoom ratio, 1..=35 (0F 08 03)
     ZoomTo {
         #[arg(allow_negative_numbers = true)]
         ratio: f64,
     },
-    /// Photo: single, burst N, timelapse S, timer S or stop (N, S 1..=255) [0F 10]
+    /// Photo: single, burst N, timelapse S, timer S or stop (N, S 1..=255) (0F 10)
     #[command(subcommand)]
     Photo(PhotoSpec),
-    /// Video recording: start or stop [0F 11]
+    /// Video recording: start or stop (0F 11)
     Record { action: RecordAction },
-    /// Optical zoom: in, out, stop, reset (1x), double, half [0F 12]
+    /// Optical zoom: in, out, stop, reset (1x), double, half (0F 12)
     Zoom { action: ZoomAction },
-    /// Focus: plus, minus, stop, auto [0F 13]
+    /// Focus: plus, minus, stop, auto (0F 13)
     Focus { action: FocusAction },
-    /// Focus on the image point X Y, each 0..=8191 [0F 14]
+    /// Focus on the image point X Y, each 0..=8191 (0F 14)
     FocusAt {
         #[arg(allow_negative_numbers = true)]
         x: i64,
         #[arg(allow_negative_numbers = true)]
         y: i64,
     },
-    /// Fast calibration [0F F0]
+    /// Fast calibration (0F F0)
     Calibrate,
-    /// Dual-light camera pointing zoom, X Y each -10000..=10000 [1F 01]
+    /// Dual-light camera pointing zoom, X Y each -10000..=10000 (1F 01)
     IrPointZoom {
         #[arg(allow_negative_numbers = true)]
         x: i64,
         #[arg(allow_negative_numbers = true)]
         y: i64,
     },
-    /// Dual-light camera rate control, YAW PITCH in deg/s, each -100..=100 [1F 04]
+    /// Dual-light camera rate control, YAW PITCH in deg/s, each -100..=100 (1F 04)
     IrRate {
         #[arg(allow_negative_numbers = true)]
         yaw: f64,
         #[arg(allow_negative_numbers = true)]
         pitch: f64,
     },
-    /// Dual-light camera tracking: centre X Y (0..=8191), box W H (0..=4080) [1F 05]
+    /// Dual-light camera tracking: centre X Y (0..=8191), box W H (0..=4080) (1F 05)
     IrTrack {
         #[arg(allow_negative_numbers = true)]
         x: i64,
@@ -112,28 +112,28 @@ pub enum Spec {
         #[arg(allow_negative_numbers = true)]
         h: f64,
     },
-    /// Dual-light camera: stop tracking [1F 07]
+    /// Dual-light camera: stop tracking (1F 07)
     IrTrackStop,
-    /// Dual-light camera electronic zoom: in, out, stop [1F 12]
+    /// Dual-light camera electronic zoom: in, out, stop (1F 12)
     IrZoom { action: IrZoomAction },
-    /// Thermal palette: 0..=14 or black-hot, white-hot, iron-red, rainbow, lava, rainbow-enhanced, molten-metal, bluish-red, amber, amber-inverted, ice-blue, high-contrast, grayscale-inverted, hot-red, cold-blue [1F 02]
+    /// Thermal palette: 0..=14 or black-hot, white-hot, iron-red, rainbow, lava, rainbow-enhanced, molten-metal, bluish-red, amber, amber-inverted, ice-blue, high-contrast, grayscale-inverted, hot-red, cold-blue (1F 02)
     Palette {
         #[arg(allow_hyphen_values = true, value_parser = parse_palette)]
         palette: Palette,
     },
-    /// Vehicle GPS position: LAT -90..=90, LON -180..=180 degrees [0000FF15]
+    /// Vehicle GPS position: LAT -90..=90, LON -180..=180 degrees (0000FF15)
     Gps {
         #[arg(allow_negative_numbers = true)]
         lat: f64,
         #[arg(allow_negative_numbers = true)]
         lon: f64,
     },
-    /// Vehicle altitude in METRES [0000FF16]
+    /// Vehicle altitude in METRES (0000FF16)
     Altitude {
         #[arg(allow_negative_numbers = true)]
         metres: f64,
     },
-    /// Vehicle attitude: PITCH -90..=90, ROLL -180..=180, HEADING (any, sent in [-180, 180)) degrees [0000FF13]
+    /// Vehicle attitude: PITCH -90..=90, ROLL -180..=180, HEADING (any, sent in [-180, 180)) degrees (0000FF13)
     Attitude {
         #[arg(allow_negative_numbers = true)]
         pitch: f64,
@@ -142,7 +142,7 @@ pub enum Spec {
         #[arg(allow_negative_numbers = true)]
         heading: f64,
     },
-    /// ASCII text to the gimbal, 8 bytes a frame [02008201 ... 02008202]
+    /// ASCII text to the gimbal, 8 bytes a frame (02008201 ... 02008202)
     Text {
         #[arg(allow_hyphen_values = true)]
         text: String,
