@@ -137,8 +137,33 @@ pub fn send(target: &str, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(),
     stream
         .flush()
         .map_err(|e| Failure::Runtime(format!("cannot send to {target}: {e}")))?;
-    let _ = stream.shutdown(std::net::Shutdown::Write);
+    close_gently(stream);
     Ok(())
+}
+
+/// How long `send` waits for the server to close its side after ours.
+const CLOSE_GRACE: Duration = Duration::from_millis(250);
+
+/// Ends the connection without risking our frames: the serial server streams postbacks to
+/// every client, and closing a socket with unread data sends a reset, which can make the
+/// server drop what it has not read yet. So: send FIN after the data, read (and discard)
+/// until the server closes or a short grace period ends, then close.
+fn close_gently(mut stream: TcpStream) {
+    if stream.shutdown(std::net::Shutdown::Write).is_err() {
+        return;
+    }
+    let deadline = Instant::now() + CLOSE_GRACE;
+    let mut sink = [0u8; 1024];
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() || stream.set_read_timeout(Some(left)).is_err() {
+            return;
+        }
+        match stream.read(&mut sink) {
+            Ok(0) | Err(_) => return,
+            Ok(_) => {}
+        }
+    }
 }
 
 /// A postback as one readable line.
