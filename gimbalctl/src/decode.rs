@@ -1,0 +1,804 @@
+//! `gimbalctl decode`: CAN logs (three text forms) or a serial/TCP byte capture to JSON
+//! lines.
+//!
+//! Built for long logs: input is read through one fixed buffer and processed a line at a
+//! time in place (a line is copied only when it straddles two reads), hex is parsed by hand
+//! over bytes, and JSON is appended to a reused output buffer that goes to a locked stdout
+//! in large writes. Memory stays constant whatever the input size: a line longer than
+//! [`MAX_LINE`] is counted as malformed without being buffered.
+//!
+//! Every byte is interpreted by the library: control frames by `Command::decode`, vehicle
+//! frames by `VehicleFrame::decode`, postbacks by the `PostbackAssembler` (CAN) or the
+//! `StreamParser` (stream), texts by the `TextAssembler`.
+
+use std::io::{BufRead, Read, Write};
+
+use idu_gimbal::link::postback::PostbackAssembler;
+use idu_gimbal::link::text::TextAssembler;
+use idu_gimbal::wire::control::Command;
+use idu_gimbal::wire::ids;
+use idu_gimbal::wire::postback::Postback;
+use idu_gimbal::wire::serial::{StreamItem, StreamParser};
+use idu_gimbal::wire::vehicle::VehicleFrame;
+use idu_gimbal::Instant;
+
+use crate::command;
+use crate::error::Failure;
+use crate::json::Obj;
+
+/// The longest line kept; longer lines are malformed (no candump line comes close).
+pub const MAX_LINE: usize = 4096;
+/// The longest text message reassembled.
+const TEXT_CAPACITY: usize = 4096;
+/// Output is handed to stdout when this much has accumulated.
+const FLUSH_AT: usize = 1 << 16;
+/// Input is read in blocks of this size.
+const READ_BLOCK: usize = 1 << 16;
+
+/// The `--stats` counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Input lines (0 for `--stream`).
+    pub lines: u64,
+    /// CAN frames read (any ID), or frames recognised on the stream (good or bad CRC).
+    pub frames: u64,
+    /// JSON messages written (not counting the stats line).
+    pub messages: u64,
+    /// Postbacks whose CRC failed (and serial frames, with `--stream`).
+    pub crc_errors: u64,
+    /// Messages started but never completed: postbacks with lost frames, texts with no
+    /// end frame, a partial frame at the end of a stream.
+    pub incomplete: u64,
+    /// Lines that are no CAN frame in any of the three forms, and frames on the protocol's
+    /// IDs whose content does not decode (wrong length, value out of range, bad text byte).
+    pub malformed_lines: u64,
+    /// Frames of other devices: other IDs, standard IDs, remote, CAN FD and error frames.
+    pub foreign_frames: u64,
+}
+
+impl Stats {
+    fn write(&self, out: &mut Vec<u8>) {
+        let mut o = Obj::bare(out, "stats");
+        o.int("lines", self.lines as i64)
+            .int("frames", self.frames as i64)
+            .int("messages", self.messages as i64)
+            .int("crc_errors", self.crc_errors as i64)
+            .int("incomplete", self.incomplete as i64)
+            .int("malformed_lines", self.malformed_lines as i64)
+            .int("foreign_frames", self.foreign_frames as i64);
+        o.end();
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Line parsing
+
+/// Hex digit values; 0xFF for anything else.
+const HEX: [u8; 256] = {
+    let mut t = [0xFFu8; 256];
+    let mut i = 0;
+    while i < 10 {
+        t[b'0' as usize + i] = i as u8;
+        i += 1;
+    }
+    let mut i = 0;
+    while i < 6 {
+        t[b'a' as usize + i] = 10 + i as u8;
+        t[b'A' as usize + i] = 10 + i as u8;
+        i += 1;
+    }
+    t
+};
+
+fn hex_u32(s: &[u8]) -> Option<u32> {
+    if s.is_empty() || s.len() > 8 {
+        return None;
+    }
+    let mut v = 0u32;
+    for &b in s {
+        let d = HEX[b as usize];
+        if d == 0xFF {
+            return None;
+        }
+        v = (v << 4) | u32::from(d);
+    }
+    Some(v)
+}
+
+fn hex_byte(hi: u8, lo: u8) -> Option<u8> {
+    let (h, l) = (HEX[hi as usize], HEX[lo as usize]);
+    if h == 0xFF || l == 0xFF {
+        None
+    } else {
+        Some((h << 4) | l)
+    }
+}
+
+fn is_space(b: u8) -> bool {
+    b == b' ' || b == b'\t' || b == b'\r'
+}
+
+fn trim(mut s: &[u8]) -> &[u8] {
+    while let [first, rest @ ..] = s {
+        if !is_space(*first) {
+            break;
+        }
+        s = rest;
+    }
+    while let [rest @ .., last] = s {
+        if !is_space(*last) {
+            break;
+        }
+        s = rest;
+    }
+    s
+}
+
+/// Whitespace-separated tokens.
+struct Tokens<'a>(&'a [u8]);
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let s = self.0;
+        let start = s.iter().position(|&b| !is_space(b))?;
+        let s = &s[start..];
+        let end = s.iter().position(|&b| is_space(b)).unwrap_or(s.len());
+        self.0 = &s[end..];
+        Some(&s[..end])
+    }
+}
+
+/// `digits[.digits]`: a timestamp that is a number.
+fn is_number(s: &[u8]) -> bool {
+    let int = s.iter().position(|&b| b == b'.').unwrap_or(s.len());
+    let (i, f) = s.split_at(int);
+    !i.is_empty()
+        && i.iter().all(u8::is_ascii_digit)
+        && (f.is_empty() || (f.len() > 1 && f[1..].iter().all(u8::is_ascii_digit)))
+}
+
+/// A log timestamp in seconds, as a wrapping millisecond tick for the assembler.
+fn timestamp_millis(ts: &[u8]) -> Instant {
+    let mut secs = 0u64;
+    let mut it = ts.iter();
+    for &b in it.by_ref() {
+        if b == b'.' {
+            break;
+        }
+        secs = secs.wrapping_mul(10).wrapping_add(u64::from(b - b'0'));
+    }
+    let mut ms = 0u64;
+    for _ in 0..3 {
+        let d = it.next().map_or(0, |&b| u64::from(b - b'0'));
+        ms = ms * 10 + d;
+    }
+    Instant::from_millis(secs.wrapping_mul(1000).wrapping_add(ms) as u32)
+}
+
+/// One log line.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Line<'a> {
+    /// Empty or whitespace only: ignored.
+    Blank,
+    /// Not a CAN frame in any of the three forms.
+    Malformed,
+    /// A frame the protocol cannot own: standard ID, remote, CAN FD or error frame.
+    Foreign,
+    /// A classic data frame with an extended ID.
+    Frame {
+        /// The timestamp's text, when the line has a numeric one.
+        ts: Option<&'a [u8]>,
+        /// The 29-bit ID.
+        id: u32,
+        /// The data bytes (`len` of them are valid).
+        data: [u8; 8],
+        /// The DLC, 0..=8.
+        len: usize,
+    },
+}
+
+/// `ID#DATA` (cansend and candump `-L` form).
+fn parse_frame_token<'a>(tok: &[u8], ts: Option<&'a [u8]>) -> Line<'a> {
+    let Some(hash) = tok.iter().position(|&b| b == b'#') else {
+        return Line::Malformed;
+    };
+    let (id_text, data_text) = (&tok[..hash], &tok[hash + 1..]);
+    let Some(id) = hex_u32(id_text) else {
+        return Line::Malformed;
+    };
+    match id_text.len() {
+        3 => return Line::Foreign,
+        8 => {}
+        _ => return Line::Malformed,
+    }
+    if id > ids::EXTENDED_MAX {
+        // Error frames carry flags above the 29 ID bits.
+        return Line::Foreign;
+    }
+    match data_text.first() {
+        Some(b'#') | Some(b'R') | Some(b'r') => return Line::Foreign,
+        _ => {}
+    }
+    let mut data = [0u8; 8];
+    let mut len = 0;
+    let mut rest = data_text;
+    loop {
+        match rest {
+            [] => break,
+            [b'.', tail @ ..] => rest = tail,
+            [hi, lo, tail @ ..] => {
+                let Some(b) = hex_byte(*hi, *lo) else {
+                    return Line::Malformed;
+                };
+                let Some(slot) = data.get_mut(len) else {
+                    return Line::Malformed;
+                };
+                *slot = b;
+                len += 1;
+                rest = tail;
+            }
+            [_] => return Line::Malformed,
+        }
+    }
+    Line::Frame { ts, id, data, len }
+}
+
+/// Parses a line in candump `-L` form, cansend form or candump's default screen form (with
+/// or without a leading `(timestamp)`).
+pub fn parse_line(line: &[u8]) -> Line<'_> {
+    let mut rest = trim(line);
+    if rest.is_empty() {
+        return Line::Blank;
+    }
+    let mut ts = None;
+    if rest[0] == b'(' {
+        let Some(close) = rest.iter().position(|&b| b == b')') else {
+            return Line::Malformed;
+        };
+        let inner = &rest[1..close];
+        if is_number(inner) {
+            ts = Some(inner);
+        }
+        rest = &rest[close + 1..];
+    }
+    let mut tokens = Tokens(rest);
+    let Some(first) = tokens.next() else {
+        return Line::Malformed;
+    };
+    if first.contains(&b'#') {
+        return parse_frame_token(first, ts);
+    }
+    // `first` is the interface.
+    let Some(second) = tokens.next() else {
+        return Line::Malformed;
+    };
+    if second.contains(&b'#') {
+        return parse_frame_token(second, ts);
+    }
+    // Screen form: `can0  030F0001   [8]  EB 90 ...`, possibly with `-x` flags
+    // (`TX - -`) between the interface and the ID.
+    let mut id_text = second;
+    let mut dlc_text = None;
+    for _ in 0..5 {
+        let Some(tok) = tokens.next() else {
+            return Line::Malformed;
+        };
+        if tok.len() >= 3 && tok[0] == b'[' && tok[tok.len() - 1] == b']' {
+            dlc_text = Some(&tok[1..tok.len() - 1]);
+            break;
+        }
+        id_text = tok;
+    }
+    let Some(dlc_text) = dlc_text else {
+        return Line::Malformed;
+    };
+    let Some(id) = hex_u32(id_text) else {
+        return Line::Malformed;
+    };
+    let dlc = match dlc_text {
+        [d] if d.is_ascii_digit() => usize::from(d - b'0'),
+        [a, b] if a.is_ascii_digit() && b.is_ascii_digit() => {
+            usize::from(a - b'0') * 10 + usize::from(b - b'0')
+        }
+        _ => return Line::Malformed,
+    };
+    match id_text.len() {
+        1..=3 => return Line::Foreign,
+        8 => {}
+        _ => return Line::Malformed,
+    }
+    if id > ids::EXTENDED_MAX || dlc > 8 {
+        return Line::Foreign;
+    }
+    let mut data = [0u8; 8];
+    for slot in data.iter_mut().take(dlc) {
+        match tokens.next() {
+            Some([hi, lo]) => match hex_byte(*hi, *lo) {
+                Some(b) => *slot = b,
+                None => return Line::Malformed,
+            },
+            Some(b"remote") => return Line::Foreign,
+            _ => return Line::Malformed,
+        }
+    }
+    if dlc == 0 && tokens.next() == Some(b"remote") {
+        return Line::Foreign;
+    }
+    Line::Frame {
+        ts,
+        id,
+        data,
+        len: dlc,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Messages to JSON
+
+/// Writes a postback object.
+pub fn write_postback(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, pb: &Postback) {
+    let mut o = Obj::start(out, "postback", t, id);
+    o.int("gimbal_type", pb.gimbal_type.code().into())
+        .str_or_null("gimbal_model", pb.gimbal_type.model_name())
+        .bool("tracking", pb.tracking)
+        .int("mode", pb.mode.code().into())
+        .str_or_null("mode_name", pb.mode.name())
+        .fixed("pitch_deg", pb.pitch.into(), 2)
+        .fixed("heading_deg", pb.heading.into(), 2)
+        .fixed("motor_heading_deg", pb.motor_heading.into(), 2);
+    o.end();
+}
+
+/// Writes a command object.
+pub fn write_command(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, cmd: &Command) {
+    let mut o = Obj::start(out, "command", t, id);
+    command::write_command_fields(&mut o, cmd);
+    o.end();
+}
+
+fn write_vehicle(out: &mut Vec<u8>, t: Option<&[u8]>, id: u32, v: &VehicleFrame) {
+    match v {
+        VehicleFrame::Gps(g) => {
+            let mut o = Obj::start(out, "gps", t, Some(id));
+            o.fixed("lat_deg", g.lat_e7().into(), 7)
+                .fixed("lon_deg", g.lon_e7().into(), 7);
+            o.end();
+        }
+        VehicleFrame::Altitude(a) => {
+            let mut o = Obj::start(out, "altitude", t, Some(id));
+            o.fixed("alt_m", a.cm().into(), 2);
+            o.end();
+        }
+        VehicleFrame::Attitude(a) => {
+            let mut o = Obj::start(out, "attitude", t, Some(id));
+            o.fixed("pitch_deg", a.pitch_centideg().into(), 2)
+                .fixed("roll_deg", a.roll_centideg().into(), 2)
+                .fixed("heading_deg", a.heading_centideg().into(), 2);
+            o.end();
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The CAN log decoder
+
+/// Decodes CAN log lines, in order, into JSON lines in `out`.
+pub struct LogDecoder {
+    postbacks: PostbackAssembler,
+    text: TextAssembler<TEXT_CAPACITY>,
+    stats: Stats,
+    /// The latest log time seen (timestamps drive the assembler's gap bound; lines without
+    /// one keep the previous time).
+    now: Instant,
+    /// Assembler counters at the last message, for counting incomplete messages.
+    mark_discarded: u32,
+    mark_crc: u32,
+    mark_malformed: u32,
+}
+
+impl Default for LogDecoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LogDecoder {
+    /// A decoder at the start of a log.
+    pub fn new() -> Self {
+        LogDecoder {
+            postbacks: PostbackAssembler::new(),
+            text: TextAssembler::new(),
+            stats: Stats::default(),
+            now: Instant::from_millis(0),
+            mark_discarded: 0,
+            mark_crc: 0,
+            mark_malformed: 0,
+        }
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Counts postback frames that were thrown away since the last message and are not
+    /// explained by CRC errors or malformed frames: each run of up to four of them is a
+    /// message that lost frames.
+    fn account_postback_losses(&mut self) {
+        let s = self.postbacks.stats();
+        let discarded = s.discarded_frames.wrapping_sub(self.mark_discarded);
+        let crc = s.crc_errors.wrapping_sub(self.mark_crc);
+        let malformed = s.malformed.wrapping_sub(self.mark_malformed);
+        let unexplained = discarded
+            .saturating_sub(crc.saturating_mul(4))
+            .saturating_sub(malformed);
+        self.stats.incomplete += u64::from(unexplained.div_ceil(4));
+        self.stats.crc_errors += u64::from(crc);
+        self.mark_discarded = s.discarded_frames;
+        self.mark_crc = s.crc_errors;
+        self.mark_malformed = s.malformed;
+    }
+
+    /// Takes one line (without its newline).
+    pub fn line(&mut self, line: &[u8], out: &mut Vec<u8>) {
+        self.stats.lines += 1;
+        let (ts, id, data, len) = match parse_line(line) {
+            Line::Blank => return,
+            Line::Malformed => {
+                self.stats.malformed_lines += 1;
+                return;
+            }
+            Line::Foreign => {
+                self.stats.frames += 1;
+                self.stats.foreign_frames += 1;
+                return;
+            }
+            Line::Frame { ts, id, data, len } => (ts, id, data, len),
+        };
+        self.stats.frames += 1;
+        if let Some(ts) = ts {
+            self.now = timestamp_millis(ts);
+        }
+        let data = &data[..len];
+        match id {
+            ids::POSTBACK => {
+                if len != 8 {
+                    self.stats.malformed_lines += 1;
+                }
+                if let Some(pb) = self.postbacks.feed(id, data, self.now) {
+                    self.account_postback_losses();
+                    write_postback(out, ts, Some(id), &pb);
+                    self.stats.messages += 1;
+                }
+            }
+            ids::CONTROL => match Command::decode(data) {
+                Ok(cmd) => {
+                    write_command(out, ts, Some(id), &cmd);
+                    self.stats.messages += 1;
+                }
+                Err(_) => self.stats.malformed_lines += 1,
+            },
+            ids::GPS | ids::ALTITUDE | ids::ATTITUDE => match VehicleFrame::decode(id, data) {
+                Ok(v) => {
+                    write_vehicle(out, ts, id, &v);
+                    self.stats.messages += 1;
+                }
+                Err(_) => self.stats.malformed_lines += 1,
+            },
+            ids::TEXT | ids::TEXT_END => match self.text.feed(id, data) {
+                Ok(Some(text)) => {
+                    let mut o = Obj::start(out, "text", ts, Some(id));
+                    o.str("text", text);
+                    o.end();
+                    self.stats.messages += 1;
+                }
+                Ok(None) => {}
+                Err(_) => self.stats.malformed_lines += 1,
+            },
+            _ => self.stats.foreign_frames += 1,
+        }
+    }
+
+    /// Ends the log: partial messages still held are counted as incomplete.
+    pub fn finish(&mut self) {
+        let late = self
+            .now
+            .add_millis(self.postbacks.max_gap_ms().saturating_add(1));
+        self.postbacks.expire(late);
+        self.account_postback_losses();
+        if self.text.pending() > 0 {
+            self.stats.incomplete += 1;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The stream decoder
+
+/// Decodes a serial/TCP byte capture into JSON lines in `out`.
+#[derive(Default)]
+pub struct StreamDecoder {
+    parser: StreamParser,
+    undecodable: u64,
+    messages: u64,
+}
+
+impl StreamDecoder {
+    /// Takes the next bytes of the stream.
+    pub fn bytes(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
+        for item in self.parser.feed(bytes) {
+            match item {
+                StreamItem::Control(data) => match Command::decode(&data) {
+                    Ok(cmd) => {
+                        write_command(out, None, None, &cmd);
+                        self.messages += 1;
+                    }
+                    Err(_) => self.undecodable += 1,
+                },
+                StreamItem::Postback(pb) => {
+                    write_postback(out, None, None, &pb);
+                    self.messages += 1;
+                }
+            }
+        }
+    }
+
+    /// Ends the stream; a partial frame is counted as incomplete.
+    pub fn finish(&mut self) {
+        self.parser.finish();
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> Stats {
+        let s = self.parser.stats();
+        Stats {
+            lines: 0,
+            frames: u64::from(s.control_frames) + u64::from(s.postbacks) + u64::from(s.crc_errors),
+            messages: self.messages,
+            crc_errors: s.crc_errors.into(),
+            incomplete: s.truncated.into(),
+            malformed_lines: self.undecodable,
+            foreign_frames: 0,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Running it
+
+/// Calls `f` with each line of `input` (without the newline), in constant memory: lines
+/// that fit in one read are passed in place; a line longer than [`MAX_LINE`] is passed as
+/// `None`.
+pub fn for_each_line<R: BufRead>(
+    mut input: R,
+    mut f: impl FnMut(Option<&[u8]>) -> Result<(), Failure>,
+) -> Result<(), Failure> {
+    let mut carry: Vec<u8> = Vec::with_capacity(MAX_LINE);
+    let mut overlong = false;
+    loop {
+        let block = match input.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(Failure::io("cannot read input", e)),
+        };
+        if block.is_empty() {
+            if overlong {
+                f(None)?;
+            } else if !carry.is_empty() {
+                f(Some(&carry))?;
+            }
+            return Ok(());
+        }
+        let mut consumed = 0;
+        let mut rest = block;
+        while let Some(nl) = rest.iter().position(|&b| b == b'\n') {
+            let line = &rest[..nl];
+            if overlong {
+                f(None)?;
+            } else if carry.is_empty() {
+                if line.len() > MAX_LINE {
+                    f(None)?;
+                } else {
+                    f(Some(line))?;
+                }
+            } else if carry.len() + line.len() > MAX_LINE {
+                f(None)?;
+            } else {
+                carry.extend_from_slice(line);
+                f(Some(&carry))?;
+            }
+            carry.clear();
+            overlong = false;
+            consumed += nl + 1;
+            rest = &rest[nl + 1..];
+        }
+        // A partial line at the end of the block.
+        if !overlong {
+            if carry.len() + rest.len() > MAX_LINE {
+                overlong = true;
+                carry.clear();
+            } else {
+                carry.extend_from_slice(rest);
+            }
+        }
+        consumed += rest.len();
+        input.consume(consumed);
+    }
+}
+
+fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
+    match file {
+        None | Some("-") => Ok(Box::new(std::io::stdin().lock())),
+        Some(path) => std::fs::File::open(path)
+            .map(|f| Box::new(f) as Box<dyn Read>)
+            .map_err(|e| Failure::io(format!("cannot open {path}"), e)),
+    }
+}
+
+fn flush_if_full(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
+    if out.len() >= FLUSH_AT {
+        w.write_all(out).map_err(Failure::stdout)?;
+        out.clear();
+    }
+    Ok(())
+}
+
+/// `gimbalctl decode [--stream] [--stats] [FILE|-]`.
+pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Failure> {
+    let input = open(file)?;
+    let stdout = std::io::stdout();
+    let mut w = stdout.lock();
+    let mut out: Vec<u8> = Vec::with_capacity(FLUSH_AT + 4096);
+    let stats = if stream {
+        let mut input = input;
+        let mut dec = StreamDecoder::default();
+        let mut block = vec![0u8; READ_BLOCK];
+        loop {
+            let n = match input.read(&mut block) {
+                Ok(0) => break,
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(Failure::io("cannot read input", e)),
+            };
+            dec.bytes(&block[..n], &mut out);
+            flush_if_full(&mut out, &mut w)?;
+        }
+        dec.finish();
+        dec.stats()
+    } else {
+        let reader = std::io::BufReader::with_capacity(READ_BLOCK, input);
+        let mut dec = LogDecoder::new();
+        for_each_line(reader, |line| {
+            match line {
+                Some(line) => dec.line(line, &mut out),
+                None => {
+                    dec.stats.lines += 1;
+                    dec.stats.malformed_lines += 1;
+                }
+            }
+            flush_if_full(&mut out, &mut w)
+        })?;
+        dec.finish();
+        dec.stats()
+    };
+    if with_stats {
+        stats.write(&mut out);
+    }
+    w.write_all(&out).map_err(Failure::stdout)?;
+    w.flush().map_err(Failure::stdout)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(ts: Option<&str>, id: u32, bytes: &[u8]) -> Line<'static> {
+        let mut data = [0u8; 8];
+        data[..bytes.len()].copy_from_slice(bytes);
+        Line::Frame {
+            ts: ts
+                .map(|s| -> &'static [u8] { Box::leak(s.as_bytes().to_vec().into_boxed_slice()) }),
+            id,
+            data,
+            len: bytes.len(),
+        }
+    }
+
+    #[test]
+    fn three_forms() {
+        let bytes = [0xEB, 0x90, 0x0C, 0, 0, 0, 0, 0];
+        assert_eq!(
+            parse_line(b"(1700000000.123456) can0 030F0001#EB900C0000000000"),
+            frame(Some("1700000000.123456"), 0x030F0001, &bytes)
+        );
+        assert_eq!(
+            parse_line(b"030F0001#EB900C0000000000\r"),
+            frame(None, 0x030F0001, &bytes)
+        );
+        assert_eq!(
+            parse_line(b"  can0  030F0001   [8]  EB 90 0C 00 00 00 00 00"),
+            frame(None, 0x030F0001, &bytes)
+        );
+        assert_eq!(
+            parse_line(
+                b" (1700000000.5)  can0  030F0001   [8]  EB 90 0C 00 00 00 00 00  '........'"
+            ),
+            frame(Some("1700000000.5"), 0x030F0001, &bytes)
+        );
+        assert_eq!(
+            parse_line(b"  can0  TX - -  030F0001   [8]  EB 90 0C 00 00 00 00 00"),
+            frame(None, 0x030F0001, &bytes)
+        );
+        assert_eq!(
+            parse_line(b"00000F01#0F07"),
+            frame(None, 0xF01, &[0x0F, 0x07])
+        );
+        assert_eq!(
+            parse_line(b"00000F01#0F.07"),
+            frame(None, 0xF01, &[0x0F, 0x07])
+        );
+        assert_eq!(parse_line(b"00000F01#"), frame(None, 0xF01, &[]));
+    }
+
+    #[test]
+    fn foreign_and_malformed() {
+        assert_eq!(parse_line(b""), Line::Blank);
+        assert_eq!(parse_line(b"   \r"), Line::Blank);
+        assert_eq!(parse_line(b"123#DEADBEEF"), Line::Foreign);
+        assert_eq!(parse_line(b"00000F01#R"), Line::Foreign);
+        assert_eq!(parse_line(b"00000F01##1112233"), Line::Foreign);
+        assert_eq!(parse_line(b"20000004#0000000000000000"), Line::Foreign);
+        assert_eq!(parse_line(b"  can0  123   [2]  01 02"), Line::Foreign);
+        assert_eq!(
+            parse_line(b"  can0  00000F01   [0]  remote request"),
+            Line::Foreign
+        );
+        assert_eq!(parse_line(b"  can0  00000F01  [12]  01 02"), Line::Foreign);
+        assert_eq!(parse_line(b"hello world"), Line::Malformed);
+        assert_eq!(parse_line(b"00000F01#0F0"), Line::Malformed);
+        assert_eq!(parse_line(b"00000F01#0F07XX"), Line::Malformed);
+        assert_eq!(parse_line(b"00000F01#000000000000000000"), Line::Malformed);
+        assert_eq!(parse_line(b"0F01#00"), Line::Malformed);
+        assert_eq!(parse_line(b"(12.5 can0 00000F01#00"), Line::Malformed);
+        assert_eq!(
+            parse_line(b"  can0  00000F01   [8]  0F 07 00"),
+            Line::Malformed
+        );
+        assert_eq!(parse_line(b"  can0  00000F01   [x]  0F"), Line::Malformed);
+    }
+
+    #[test]
+    fn timestamps() {
+        assert_eq!(
+            timestamp_millis(b"1700000000.123456").as_millis(),
+            (1_700_000_000_123u64 as u32)
+        );
+        assert_eq!(timestamp_millis(b"5").as_millis(), 5000);
+        assert_eq!(timestamp_millis(b"5.1").as_millis(), 5100);
+        assert!(is_number(b"000.000123"));
+        assert!(!is_number(b"5."));
+        assert!(!is_number(b".5"));
+        assert!(!is_number(b"2023-11-14 22:13:20.1"));
+    }
+
+    #[test]
+    fn long_lines_do_not_grow_memory() {
+        let mut input = Vec::new();
+        input.extend_from_slice(b"00000F01#0F07000000000000\n");
+        input.extend(std::iter::repeat_n(b'x', MAX_LINE * 3));
+        input.extend_from_slice(b"\n00000F01#0F07000000000000");
+        let reader = std::io::BufReader::with_capacity(64, &input[..]);
+        let mut seen = Vec::new();
+        for_each_line(reader, |l| {
+            seen.push(l.map(|l| l.to_vec()));
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(seen.len(), 3);
+        assert_eq!(seen[0].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));
+        assert_eq!(seen[1], None);
+        assert_eq!(seen[2].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));
+    }
+}

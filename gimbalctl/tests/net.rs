@@ -1,0 +1,326 @@
+//! `send`, `monitor` and `sim` on loopback, with ephemeral ports and timeouts on every
+//! socket and child process.
+
+mod common;
+
+use common::*;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::thread;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// Starts `gimbalctl sim` on an ephemeral port; returns the guard and its address.
+fn start_sim(extra: &[&str]) -> (Guard, String) {
+    let mut args = vec!["sim", "--listen", "127.0.0.1:0"];
+    args.extend_from_slice(extra);
+    let mut child = Command::new(BIN)
+        .args(&args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn sim");
+    let stdout = child.stdout.take().unwrap();
+    let guard = Guard(child);
+    let (tx, rx) = mpsc::channel();
+    thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            let _ = tx.send(line);
+        }
+    });
+    let first = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("sim said where it listens");
+    let addr = first.rsplit(' ').next().expect("an address").to_owned();
+    assert!(first.contains("listening on 127.0.0.1:"), "{first}");
+    (guard, addr)
+}
+
+fn connect(addr: &str) -> TcpStream {
+    let s = TcpStream::connect_timeout(&addr.parse().unwrap(), Duration::from_secs(3)).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    s.set_write_timeout(Some(Duration::from_secs(5))).unwrap();
+    s
+}
+
+fn unix_now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+}
+
+#[test]
+fn end_to_end_send_pitch_and_monitor_it() {
+    let (_sim, addr) = start_sim(&["--exit-after-ms", "8000"]);
+    let sent_at = unix_now();
+    let out = ok(&["send", "--tcp", &addr, "pitch", "-30"]);
+    assert!(out.stdout.is_empty());
+    let out = run_timeout(
+        &["monitor", "--tcp", &addr, "--json", "--count", "6"],
+        b"",
+        Duration::from_secs(7),
+    );
+    assert_eq!(out.code, 0, "{out:?}");
+    let msgs = out.json();
+    assert_eq!(msgs.len(), 6);
+    let reached = msgs
+        .iter()
+        .find(|m| (m["pitch_deg"].as_f64().unwrap() + 30.0).abs() <= 0.05)
+        .unwrap_or_else(|| panic!("pitch never reached -30: {msgs:?}"));
+    let t = reached["t"].as_f64().unwrap();
+    assert!(t - sent_at <= 3.0, "reached -30 after {} s", t - sent_at);
+    for m in &msgs {
+        assert_eq!(m["type"], "postback");
+        assert_eq!(m["id"], serde_json::Value::Null);
+    }
+    // Readable form.
+    let out = run_timeout(
+        &["monitor", "--tcp", &addr, "--count", "1"],
+        b"",
+        Duration::from_secs(5),
+    );
+    assert_eq!(out.code, 0, "{out:?}");
+    assert!(out.stdout.contains("pitch -30.00 deg"), "{}", out.stdout);
+}
+
+/// Reads 27-byte postbacks from a raw client until `n` arrived; checks each with the
+/// reference CRC.
+fn read_postbacks(s: &mut TcpStream, n: usize) -> Vec<Vec<u8>> {
+    let mut got = Vec::new();
+    let mut buf = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while got.len() < n {
+        assert!(Instant::now() < deadline, "only {} postbacks", got.len());
+        let mut chunk = [0u8; 256];
+        let k = s.read(&mut chunk).expect("postbacks keep coming");
+        assert!(k > 0, "sim closed the connection");
+        buf.extend_from_slice(&chunk[..k]);
+        while buf.len() >= 27 {
+            let msg: Vec<u8> = buf.drain(..27).collect();
+            assert_eq!(&msg[..3], &[0xEB, 0x90, 0x0C], "{msg:02X?}");
+            let crc = crc16_modbus(&msg[..25]).to_le_bytes();
+            assert_eq!(&msg[25..], &crc, "{msg:02X?}");
+            got.push(msg);
+        }
+    }
+    got
+}
+
+#[test]
+fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
+    let (_sim, addr) = start_sim(&["--exit-after-ms", "8000", "--max-clients", "2"]);
+    let mut a = connect(&addr);
+    let mut b = connect(&addr);
+    // Give the sim a tick to take both before the third one comes.
+    thread::sleep(Duration::from_millis(100));
+    let mut c = connect(&addr);
+    let mut one = [0u8; 1];
+    assert_eq!(
+        c.read(&mut one).unwrap_or(0),
+        0,
+        "a third client is turned away"
+    );
+
+    // Garbage, a frame with a bad CRC, then a good pitch frame split in two writes.
+    let mut bad = tcp_frame(&unhex("0F0802D4FE000000"));
+    bad[23] ^= 0xFF;
+    a.write_all(b"\x00\xFFnot a frame\xEB\x90\x0A\x01").unwrap();
+    a.write_all(&bad).unwrap();
+    let good = tcp_frame(&unhex("0F0802D4FE000000"));
+    a.write_all(&good[..7]).unwrap();
+    thread::sleep(Duration::from_millis(20));
+    a.write_all(&good[7..]).unwrap();
+
+    // Both clients get postbacks, 500 ms apart, and see the pitch move to -30.
+    let start = Instant::now();
+    let first = read_postbacks(&mut b, 2);
+    let elapsed = start.elapsed();
+    assert!(elapsed >= Duration::from_millis(300), "{elapsed:?}");
+    read_postbacks(&mut a, 1);
+    let pitch = |m: &[u8]| i16::from_le_bytes([m[19], m[20]]);
+    let mut seen = first.iter().map(|m| pitch(m)).collect::<Vec<_>>();
+    while !seen.contains(&-3000) {
+        assert!(start.elapsed() < Duration::from_secs(4), "pitch: {seen:?}");
+        seen.extend(read_postbacks(&mut b, 1).iter().map(|m| pitch(m)));
+    }
+    // A client leaving frees a slot.
+    drop(a);
+    thread::sleep(Duration::from_millis(100));
+    let mut d = connect(&addr);
+    read_postbacks(&mut d, 1);
+}
+
+#[test]
+fn sim_exits_after_the_given_time() {
+    let start = Instant::now();
+    let mut child = Command::new(BIN)
+        .args(["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "300"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let code = wait_with_timeout(&mut child, Duration::from_secs(10));
+    assert_eq!(code, Some(0));
+    assert!(start.elapsed() >= Duration::from_millis(300));
+}
+
+/// Accepts one connection and returns everything the client sent until it closed.
+fn capture(listener: TcpListener) -> thread::JoinHandle<Vec<u8>> {
+    thread::spawn(move || {
+        listener.set_nonblocking(false).unwrap();
+        let (mut s, _) = listener.accept().unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        let mut all = Vec::new();
+        let _ = s.read_to_end(&mut all);
+        all
+    })
+}
+
+fn frames_of(bytes: &[u8]) -> Vec<String> {
+    assert_eq!(bytes.len() % 24, 0, "{bytes:02X?}");
+    bytes.chunks(24).map(hex).collect()
+}
+
+#[test]
+fn send_writes_the_24_byte_frames() {
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["pitch", "-30"], &["0F0802D4FE000000"]),
+        (&["look-down"], &["0F07000000000000"]),
+        (
+            &["look-at", "0", "0", "1000", "0", "0.009", "0"],
+            &["0F08018403000000", "0F08023FFE000000"],
+        ),
+    ];
+    for (cmd, data) in cases {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let got = capture(listener);
+        let mut args = vec!["send", "--tcp", &addr];
+        args.extend_from_slice(cmd);
+        ok(&args);
+        let expected: Vec<String> = data.iter().map(|d| hex(&tcp_frame(&unhex(d)))).collect();
+        assert_eq!(frames_of(&got.join().unwrap()), expected, "{cmd:?}");
+    }
+}
+
+#[test]
+fn send_holds_a_rate_then_sends_zero_rate() {
+    for (cmd, data, zero) in [
+        (["rate", "10", "0"], "0F04E80300000000", "0F04000000000000"),
+        (
+            ["ir-rate", "0", "-5"],
+            "1F0400000CFE0000",
+            "1F04000000000000",
+        ),
+    ] {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let got = capture(listener);
+        let start = Instant::now();
+        let mut args = vec![
+            "send",
+            "--tcp",
+            &addr,
+            "--repeat-ms",
+            "50",
+            "--for-ms",
+            "300",
+        ];
+        args.extend_from_slice(&cmd);
+        ok(&args);
+        let took = start.elapsed();
+        assert!(took >= Duration::from_millis(300), "{took:?}");
+        let frames = frames_of(&got.join().unwrap());
+        let rate = hex(&tcp_frame(&unhex(data)));
+        let (last, held) = frames.split_last().unwrap();
+        assert_eq!(*last, hex(&tcp_frame(&unhex(zero))), "{cmd:?}");
+        assert!((5..=8).contains(&held.len()), "{} frames", held.len());
+        assert!(held.iter().all(|f| *f == rate), "{held:?}");
+    }
+    // The options may also follow the command.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let got = capture(listener);
+    ok(&[
+        "send",
+        "--tcp",
+        &addr,
+        "rate",
+        "10",
+        "0",
+        "--repeat-ms",
+        "50",
+        "--for-ms",
+        "100",
+    ]);
+    let frames = frames_of(&got.join().unwrap());
+    assert!(frames.len() >= 3, "{frames:?}");
+}
+
+#[test]
+fn monitor_warns_when_postbacks_stop_and_fails_when_the_server_goes() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let server = thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        // Silence for 1.8 s, then one postback split across two writes, after garbage.
+        thread::sleep(Duration::from_millis(1800));
+        let msg = postback(6, 1, 3, -3000, 18000, -150);
+        s.write_all(b"\x01\x02\x03").unwrap();
+        s.write_all(&msg[..5]).unwrap();
+        thread::sleep(Duration::from_millis(20));
+        s.write_all(&msg[5..]).unwrap();
+        // Then one more and close, before the client's count of 3.
+        s.write_all(&msg).unwrap();
+        thread::sleep(Duration::from_millis(100));
+    });
+    let out = run_timeout(
+        &["monitor", "--tcp", &addr, "--count", "3"],
+        b"",
+        Duration::from_secs(10),
+    );
+    server.join().unwrap();
+    assert_eq!(out.code, 1, "{out:?}");
+    assert!(out.stderr.contains("no postback"), "{}", out.stderr);
+    assert!(out.stderr.contains("closed"), "{}", out.stderr);
+    let lines = out.lines();
+    assert_eq!(lines.len(), 2, "{}", out.stdout);
+    assert_eq!(
+        lines[0],
+        "pitch -30.00 deg  heading 180.00 deg  motor -1.50 deg  mode lock  tracking yes  gimbal 6 (A2000)"
+    );
+
+    // --json --count 1 ends with the first one.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let server = thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        s.write_all(&postback(9, 0, 8, 1, 2, 3)).unwrap();
+        thread::sleep(Duration::from_millis(500));
+    });
+    let out = run_timeout(
+        &["monitor", "--tcp", &addr, "--json", "--count", "1"],
+        b"",
+        Duration::from_secs(10),
+    );
+    server.join().unwrap();
+    assert_eq!(out.code, 0, "{out:?}");
+    let m = &out.json()[0];
+    assert_json_eq(
+        &serde_json::json!([
+            m["gimbal_type"],
+            m["gimbal_model"],
+            m["mode"],
+            m["mode_name"],
+            m["pitch_deg"],
+            m["heading_deg"],
+            m["motor_heading_deg"]
+        ]),
+        &serde_json::json!([9, null, 8, null, 0.01, 0.02, 0.03]),
+    );
+    assert!(m["t"].as_f64().unwrap() > 1.6e9);
+}
