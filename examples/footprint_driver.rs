@@ -63,7 +63,9 @@ fn main() -> ! {
         output(u32::from(gimbal.poll(now).is_ok()));
         while let Some(event) = gimbal.next_event() {
             output(match event {
-                Event::Postback(p) => p.pitch as u32 ^ u32::from(p.heading),
+                Event::Postback => gimbal
+                    .latest_postback(now)
+                    .map_or(0, |(p, _)| p.pitch as u32 ^ u32::from(p.heading)),
                 Event::LinkUp => 1,
                 Event::LinkDown => 2,
                 Event::RateHoldExpired => 3,

@@ -156,20 +156,24 @@ mod fw {
 
             while let Some(event) = gimbal.next_event() {
                 match event {
-                    Event::Postback(p) => defmt::info!(
-                        "postback: pitch {=f32} deg, heading {=f32} deg, motor {=f32} deg, {}, {}, tracking {=bool}",
-                        p.pitch_deg(),
-                        p.heading_deg(),
-                        p.motor_heading_deg(),
-                        p.mode,
-                        p.gimbal_type,
-                        p.tracking
-                    ),
+                    Event::Postback => {
+                        if let Some((p, _age_ms)) = gimbal.latest_postback(now) {
+                            defmt::info!(
+                                "postback: pitch {=f32} deg, heading {=f32} deg, motor {=f32} deg, {}, {}, tracking {=bool}",
+                                p.pitch_deg(),
+                                p.heading_deg(),
+                                p.motor_heading_deg(),
+                                p.mode,
+                                p.gimbal_type,
+                                p.tracking
+                            )
+                        }
+                    }
                     Event::LinkUp => defmt::info!("gimbal link up"),
                     Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
                     Event::RateHoldExpired => defmt::info!("rate hold expired: gimbal stopped"),
                     Event::TargetUnreachable { elevation_cdeg } => defmt::warn!(
-                        "look-at target out of the gimbal's pitch range (needs {=i32} cdeg)",
+                        "look-at target out of the gimbal's pitch range (needs {=i16} cdeg)",
                         elevation_cdeg
                     ),
                 }

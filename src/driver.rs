@@ -14,10 +14,6 @@ use crate::wire::postback::{GimbalType, Postback};
 use crate::wire::vehicle::{Altitude, Attitude, Gps};
 use crate::wire::Frame;
 
-/// Default bound on the frames received in one [`Gimbal::poll`], so a flooded bus cannot
-/// starve the rest of the main loop.
-pub const DEFAULT_MAX_RX_PER_POLL: usize = 32;
-
 /// CAN driver errors by kind.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -124,11 +120,10 @@ impl std::error::Error for DriverError {}
 /// assert_eq!(gimbal.stats().link.frames_sent, 1);
 /// # }
 /// ```
-pub struct Gimbal<C, const Q: usize = 8, const T: usize = 16> {
+pub struct Gimbal<C, const Q: usize = 8, const T: usize = 8> {
     can: C,
     link: Link<Q, T>,
     errors: DriverErrors,
-    max_rx_per_poll: usize,
 }
 
 impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
@@ -138,23 +133,17 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
             can,
             link: Link::new(config),
             errors: DriverErrors::default(),
-            max_rx_per_poll: DEFAULT_MAX_RX_PER_POLL,
         }
     }
 
-    /// Sets how many frames one [`Gimbal::poll`] receives at most.
-    pub fn set_max_rx_per_poll(&mut self, max: usize) {
-        self.max_rx_per_poll = max.max(1);
-    }
-
-    /// Receives pending frames (at most the per-poll bound), runs the schedules, and
+    /// Receives pending frames (at most [`Config::max_rx_per_poll`]), runs the schedules, and
     /// transmits queued frames until the CAN driver is busy.
     ///
     /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
     /// first error seen is returned at the end.
     pub fn poll(&mut self, now: Instant) -> Result<(), DriverError> {
         let mut first_error = None;
-        for _ in 0..self.max_rx_per_poll {
+        for _ in 0..self.link.config().max_rx_per_poll {
             match self.can.receive() {
                 Ok(frame) => self.receive(&frame, now),
                 Err(nb::Error::WouldBlock) => break,

@@ -503,10 +503,9 @@ impl LogDecoder {
 
     /// Ends the log: partial messages still held are counted as incomplete.
     pub fn finish(&mut self) {
-        let late = self
-            .now
-            .add_millis(self.postbacks.max_gap_ms().saturating_add(1));
-        self.postbacks.expire(late);
+        if let Some(late) = self.postbacks.expiry() {
+            self.postbacks.expire(late);
+        }
         self.account_postback_losses();
         if self.text.pending() > 0 {
             self.stats.incomplete += 1;

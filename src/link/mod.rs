@@ -46,34 +46,37 @@ use crate::wire::{ids, text as wire_text, Frame};
 use postback::PostbackAssembler;
 use queue::{Requeued, TxQueue};
 
-/// Timing of the link. Every field is in milliseconds unless it says otherwise. A vehicle
-/// push period of 0 disables that push.
+/// Timing of the link. Every field is in milliseconds (at most 65 535) unless it says
+/// otherwise. A vehicle push period of 0 disables that push.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
     /// Period of the attitude push (default 100).
-    pub attitude_period_ms: u32,
+    pub attitude_period_ms: u16,
     /// Period of the GPS push (default 200).
-    pub gps_period_ms: u32,
+    pub gps_period_ms: u16,
     /// Period of the altitude push (default 200).
-    pub altitude_period_ms: u32,
+    pub altitude_period_ms: u16,
     /// Vehicle data older than this is not pushed (default 1000).
-    pub vehicle_stale_ms: u32,
+    pub vehicle_stale_ms: u16,
     /// Period at which a rate hold repeats its rate command (default 50, as the document
     /// recommends).
-    pub rate_repeat_ms: u32,
+    pub rate_repeat_ms: u16,
     /// A rate hold not refreshed within this stops with one zero-rate command (default 250).
-    pub rate_deadman_ms: u32,
+    pub rate_deadman_ms: u16,
     /// The link is up while a valid postback arrived within this (default 1500: three
     /// postback periods).
-    pub link_timeout_ms: u32,
+    pub link_timeout_ms: u16,
     /// Bound on the gap between frames of one postback (default 100).
-    pub postback_max_gap_ms: u32,
+    pub postback_max_gap_ms: u16,
     /// Period at which [`Link::point_at`] recomputes the aim (default 100: 10 Hz).
-    pub point_at_period_ms: u32,
+    pub point_at_period_ms: u16,
     /// [`Link::point_at`] re-commands the gimbal only when the aim moved by more than this,
     /// in millidegrees (default 100: 0.1°).
-    pub point_at_deadband_mdeg: u32,
+    pub point_at_deadband_mdeg: u16,
+    /// Frames [`Gimbal::poll`](crate::Gimbal::poll) receives at most in one call, so that a
+    /// flooded bus cannot starve the rest of the main loop (default 32).
+    pub max_rx_per_poll: u16,
 }
 
 impl Default for Config {
@@ -89,6 +92,7 @@ impl Default for Config {
             postback_max_gap_ms: postback::DEFAULT_MAX_GAP_MS,
             point_at_period_ms: 100,
             point_at_deadband_mdeg: 100,
+            max_rx_per_poll: 32,
         }
     }
 }
@@ -257,7 +261,7 @@ const MAX_QUIET_MS: u32 = 60_000;
 ///
 /// `Q` is the number of control-frame slots, `T` the number of text-frame slots.
 #[derive(Clone, Debug)]
-pub struct Link<const Q: usize = 8, const T: usize = 16> {
+pub struct Link<const Q: usize = 8, const T: usize = 8> {
     config: Config,
     tx: TxQueue<Q, T>,
     assembler: PostbackAssembler,
@@ -405,7 +409,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 self.rate = RateState::Holding {
                     rate,
                     refreshed: now,
-                    next: now.add_millis(self.config.rate_repeat_ms),
+                    next: now.add_millis(u32::from(self.config.rate_repeat_ms)),
                 };
                 self.point = None;
                 Ok(())
@@ -495,7 +499,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     fn fresh_vehicle(&self, index: usize, now: Instant) -> Option<VehicleFrame> {
         let source = self.vehicle.get(index)?;
         let data = source.data?;
-        if Self::age(source.stamp, now) > self.config.vehicle_stale_ms {
+        if Self::age(source.stamp, now) > u32::from(self.config.vehicle_stale_ms) {
             return None;
         }
         let id = *queue::VEHICLE_IDS.get(index)?;
@@ -546,12 +550,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.poll_vehicle(now, &mut earliest);
         self.poll_point(now, &mut earliest);
         if let Some((_, at)) = self.latest {
-            if self.up && now.millis_since(at) > self.config.link_timeout_ms {
+            if self.up && now.millis_since(at) > u32::from(self.config.link_timeout_ms) {
                 self.up = false;
                 self.event(Event::LinkDown);
             }
             if self.up {
-                earliest.offer(at.add_millis(self.config.link_timeout_ms.saturating_add(1)));
+                earliest
+                    .offer(at.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
             }
         }
         self.quiet_until = now.add_millis(earliest.ahead);
@@ -577,7 +582,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 refreshed,
                 next,
             } => {
-                let deadman = self.config.rate_deadman_ms;
+                let deadman = u32::from(self.config.rate_deadman_ms);
                 if now.millis_since(refreshed) > deadman {
                     self.end_rate_hold();
                     self.event(Event::RateHoldExpired);
@@ -590,7 +595,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                         .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
                         .is_ok()
                     {
-                        next = advance(next, self.config.rate_repeat_ms, now);
+                        next = advance(next, u32::from(self.config.rate_repeat_ms), now);
                         self.rate = RateState::Holding {
                             rate,
                             refreshed,
@@ -610,11 +615,11 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     fn poll_vehicle(&mut self, now: Instant, earliest: &mut Earliest) {
         let periods = [
-            self.config.attitude_period_ms,
-            self.config.gps_period_ms,
-            self.config.altitude_period_ms,
+            u32::from(self.config.attitude_period_ms),
+            u32::from(self.config.gps_period_ms),
+            u32::from(self.config.altitude_period_ms),
         ];
-        let stale = self.config.vehicle_stale_ms;
+        let stale = u32::from(self.config.vehicle_stale_ms);
         for (slot, (source, period)) in self.vehicle.iter_mut().zip(periods).enumerate() {
             if source.data.is_none() || period == 0 {
                 continue;
@@ -659,18 +664,18 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.point = None;
     }
 
-    /// The target being pointed at, if any.
+    /// The target being pointed at, if any (kept to 1e-7° and 1 cm).
     pub fn pointing_target(&self) -> Option<Position> {
-        self.point.map(|p| p.target)
+        self.point.and_then(|p| (p.position)(&p.target))
     }
 
     fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
         let Some(mut p) = self.point else { return };
         if p.due || now.is_at_or_after(p.next) {
             p.next = if p.due {
-                now.add_millis(self.config.point_at_period_ms)
+                now.add_millis(u32::from(self.config.point_at_period_ms))
             } else {
-                advance(p.next, self.config.point_at_period_ms, now)
+                advance(p.next, u32::from(self.config.point_at_period_ms), now)
             };
             p.due = false;
             if let (Some(VehicleFrame::Gps(gps)), Some(VehicleFrame::Altitude(alt))) = (
@@ -716,7 +721,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             point::Aim::At(heading, pitch) => {
                 p.unreachable = false;
                 let wire = (heading.deci(), pitch.deci());
-                if !point::moved(p.sent, wire, self.config.point_at_deadband_mdeg) {
+                if !point::moved(p.sent, wire, u32::from(self.config.point_at_deadband_mdeg)) {
                     return;
                 }
                 if self.tx.control_free() < 2 {

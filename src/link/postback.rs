@@ -36,7 +36,7 @@ use crate::time::Instant;
 use crate::wire::postback::{self, Postback};
 
 /// Default bound on the gap between two frames of one message, in milliseconds.
-pub const DEFAULT_MAX_GAP_MS: u32 = 100;
+pub const DEFAULT_MAX_GAP_MS: u16 = 100;
 
 /// What the assembler has seen.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
@@ -71,7 +71,7 @@ pub struct PostbackAssembler {
     frames: [[u8; 8]; postback::FRAMES],
     count: u8,
     last: Instant,
-    max_gap_ms: u32,
+    max_gap_ms: u16,
     stats: AssemblerStats,
 }
 
@@ -89,7 +89,7 @@ impl PostbackAssembler {
 
     /// An assembler that discards a partial message when two of its frames are more than
     /// `max_gap_ms` apart.
-    pub const fn with_max_gap(max_gap_ms: u32) -> Self {
+    pub const fn with_max_gap(max_gap_ms: u16) -> Self {
         PostbackAssembler {
             frames: [[0; 8]; postback::FRAMES],
             count: 0,
@@ -118,7 +118,7 @@ impl PostbackAssembler {
     }
 
     /// The gap bound in milliseconds.
-    pub fn max_gap_ms(&self) -> u32 {
+    pub fn max_gap_ms(&self) -> u16 {
         self.max_gap_ms
     }
 
@@ -135,7 +135,7 @@ impl PostbackAssembler {
             self.discard(1);
             return None;
         };
-        if self.count != 0 && now.millis_since(self.last) > self.max_gap_ms {
+        if self.count != 0 && now.millis_since(self.last) > u32::from(self.max_gap_ms) {
             self.discard(0);
         }
         if self.count == 0 && !is_header(data) {
@@ -166,7 +166,14 @@ impl PostbackAssembler {
             Some(i) => {
                 self.stats.restarts = self.stats.restarts.wrapping_add(1);
                 let drop = i + 1;
-                self.frames.copy_within(drop.., 0);
+                // Four frames at most: a loop of word copies, no memmove.
+                for i in drop..postback::FRAMES {
+                    if let Some(&src) = self.frames.get(i) {
+                        if let Some(dst) = self.frames.get_mut(i - drop) {
+                            *dst = src;
+                        }
+                    }
+                }
                 self.count -= drop as u8;
                 self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(drop as u32);
             }
@@ -197,14 +204,14 @@ impl PostbackAssembler {
 
     /// When a partial message held now would expire, if one is held.
     pub fn expiry(&self) -> Option<Instant> {
-        (self.count != 0).then(|| self.last.add_millis(self.max_gap_ms.saturating_add(1)))
+        (self.count != 0).then(|| self.last.add_millis(u32::from(self.max_gap_ms) + 1))
     }
 
     /// Discards a partial message whose last frame is more than the gap bound before `now`.
     /// Call it periodically so that a message cut short is counted when it is, not when the
     /// next frame happens to arrive.
     pub fn expire(&mut self, now: Instant) {
-        if self.count != 0 && now.millis_since(self.last) > self.max_gap_ms {
+        if self.count != 0 && now.millis_since(self.last) > u32::from(self.max_gap_ms) {
             self.discard(0);
         }
     }

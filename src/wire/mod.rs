@@ -74,6 +74,26 @@ impl RangeError {
         }
     }
 
+    /// Checks that a value in wire units is within `[min, max]`: integer comparisons only,
+    /// so that decoding needs no floating-point arithmetic. The error reports wire units.
+    pub(crate) fn check_int(
+        field: &'static str,
+        value: i32,
+        min: i32,
+        max: i32,
+    ) -> Result<i32, Self> {
+        if value >= min && value <= max {
+            Ok(value)
+        } else {
+            Err(RangeError {
+                field,
+                value: value.into(),
+                min: min.into(),
+                max: max.into(),
+            })
+        }
+    }
+
     /// Checks that `value` is finite and within `[min, max]` (double precision, for
     /// values such as GPS coordinates that need it).
     pub(crate) fn check_f64(

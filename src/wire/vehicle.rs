@@ -60,10 +60,11 @@ impl Gps {
         })
     }
 
-    /// A position from wire units (1e-7 degree), validated as [`Gps::new`] does.
+    /// A position from wire units (1e-7 degree), validated as [`Gps::new`] does; a
+    /// rejected value is reported in wire units (`latitude_e7`, `longitude_e7`).
     pub fn from_e7(lat_e7: i32, lon_e7: i32) -> Result<Self, RangeError> {
-        RangeError::check_f64("latitude", f64::from(lat_e7) / 1e7, -90.0, 90.0)?;
-        RangeError::check_f64("longitude", f64::from(lon_e7) / 1e7, -180.0, 180.0)?;
+        RangeError::check_int("latitude_e7", lat_e7, -900_000_000, 900_000_000)?;
+        RangeError::check_int("longitude_e7", lon_e7, -1_800_000_000, 1_800_000_000)?;
         Ok(Gps { lat_e7, lon_e7 })
     }
 
@@ -172,16 +173,12 @@ impl Attitude {
     }
 
     /// An attitude from wire units (0.01°), validated as [`Attitude::new`] does except that
-    /// the heading must already be in [-18000, 17999].
+    /// the heading must already be in [-18000, 17999]; a rejected value is reported in wire
+    /// units (`vehicle_pitch_cdeg`, ...).
     pub fn from_centideg(pitch: i16, roll: i16, heading: i16) -> Result<Self, RangeError> {
-        RangeError::check_f32("vehicle_pitch", f32::from(pitch) / 100.0, -90.0, 90.0)?;
-        RangeError::check_f32("vehicle_roll", f32::from(roll) / 100.0, -180.0, 180.0)?;
-        RangeError::check_f32(
-            "vehicle_heading",
-            f32::from(heading) / 100.0,
-            -180.0,
-            179.99,
-        )?;
+        RangeError::check_int("vehicle_pitch_cdeg", pitch.into(), -9000, 9000)?;
+        RangeError::check_int("vehicle_roll_cdeg", roll.into(), -18000, 18000)?;
+        RangeError::check_int("vehicle_heading_cdeg", heading.into(), -18000, 17999)?;
         Ok(Attitude {
             pitch,
             roll,
@@ -471,18 +468,12 @@ mod tests {
         // Latitude 90.0000001: 900000001 = 0x35A4_E901.
         assert!(matches!(
             VehicleFrame::decode(ids::GPS, &[0x01, 0xE9, 0xA4, 0x35, 0, 0, 0, 0]),
-            Err(VehicleError::Value(RangeError {
-                field: "latitude",
-                ..
-            }))
+            Err(VehicleError::Value(RangeError { field: "latitude_e7", value, .. })) if value == 900_000_001.0
         ));
         // Pitch 90.01 = 9001 = 0x2329.
         assert!(matches!(
             VehicleFrame::decode(ids::ATTITUDE, &[0x29, 0x23, 0, 0, 0, 0, 0, 0]),
-            Err(VehicleError::Value(RangeError {
-                field: "vehicle_pitch",
-                ..
-            }))
+            Err(VehicleError::Value(RangeError { field: "vehicle_pitch_cdeg", value, .. })) if value == 9001.0
         ));
     }
 
