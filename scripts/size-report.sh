@@ -51,10 +51,14 @@ arm-none-eabi-nm -C --size-sort -S -t d "$(example_elf footprint_driver)" | tail
     awk '{ printf "  %6d  %s %s\n", $2 + 0, $3, substr($0, index($0, $4)) }'
 echo
 
+# Verdicts are decided here, not inside $(...): a subshell could not set `status`.
 status=0
-verdict() { if [ "$1" -le "$2" ]; then echo ok; else echo "OVER BUDGET"; status=1; fi; }
+flash_verdict=ok
+ram_verdict=ok
+if [ "$flash" -gt "$FLASH_BUDGET" ]; then flash_verdict="OVER BUDGET"; status=1; fi
+if [ "$ram" -gt "$RAM_BUDGET" ]; then ram_verdict="OVER BUDGET"; status=1; fi
 echo "| driver (footprint_driver - footprint_base) | bytes | budget | verdict |"
 echo "|---|---:|---:|---|"
-echo "| flash | $flash | <= $FLASH_BUDGET | $(verdict "$flash" "$FLASH_BUDGET") |"
-echo "| static RAM | $ram | <= $RAM_BUDGET | $(verdict "$ram" "$RAM_BUDGET") |"
+echo "| flash | $flash | <= $FLASH_BUDGET | $flash_verdict |"
+echo "| static RAM | $ram | <= $RAM_BUDGET | $ram_verdict |"
 exit "$status"

@@ -194,23 +194,64 @@ impl fmt::Display for TextQueueError {
 #[cfg(feature = "std")]
 impl std::error::Error for TextQueueError {}
 
+/// The latest attitude, GPS and altitude (by slot), laid out as arrays so that three
+/// sources cost no padding.
 #[derive(Clone, Copy, Debug)]
-struct VehicleSource {
-    /// The latest value's 8 data bytes, if any was set.
-    data: Option<[u8; 8]>,
-    stamp: Instant,
-    next: Instant,
-    /// Push at the next poll, whatever `next` says (new data after none or stale data).
-    due: bool,
+struct VehicleSources {
+    data: [[u8; 8]; 3],
+    stamp: [Instant; 3],
+    next: [Instant; 3],
+    /// Bit `i`: slot `i` holds a value.
+    has: u8,
+    /// Bit `i`: push slot `i` at the next poll, whatever `next` says (new data after none
+    /// or stale data).
+    due: u8,
 }
 
-impl VehicleSource {
-    const EMPTY: Self = VehicleSource {
-        data: None,
-        stamp: Instant::from_millis(0),
-        next: Instant::from_millis(0),
-        due: true,
+impl VehicleSources {
+    const EMPTY: Self = VehicleSources {
+        data: [[0; 8]; 3],
+        stamp: [Instant::from_millis(0); 3],
+        next: [Instant::from_millis(0); 3],
+        has: 0,
+        due: 0b111,
     };
+
+    fn bit(slot: usize) -> u8 {
+        1 << (slot & 7)
+    }
+
+    fn has(&self, slot: usize) -> bool {
+        self.has & Self::bit(slot) != 0
+    }
+
+    fn due(&self, slot: usize) -> bool {
+        self.due & Self::bit(slot) != 0
+    }
+
+    fn set_due(&mut self, slot: usize, due: bool) {
+        if due {
+            self.due |= Self::bit(slot);
+        } else {
+            self.due &= !Self::bit(slot);
+        }
+    }
+
+    /// The value in `slot`, if one was set.
+    fn get(&self, slot: usize) -> Option<([u8; 8], Instant)> {
+        if !self.has(slot) {
+            return None;
+        }
+        Some((*self.data.get(slot)?, *self.stamp.get(slot)?))
+    }
+
+    fn set(&mut self, slot: usize, data: [u8; 8], stamp: Instant) {
+        if let (Some(d), Some(s)) = (self.data.get_mut(slot), self.stamp.get_mut(slot)) {
+            *d = data;
+            *s = stamp;
+            self.has |= Self::bit(slot);
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -265,8 +306,7 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     config: Config,
     tx: TxQueue<Q, T>,
     assembler: PostbackAssembler,
-    /// Attitude, GPS, altitude.
-    vehicle: [VehicleSource; 3],
+    vehicle: VehicleSources,
     rate: RateState,
     point: Option<point::PointAt>,
     latest: Option<(Postback, Instant)>,
@@ -289,7 +329,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             config,
             tx: TxQueue::new(),
             assembler: PostbackAssembler::with_max_gap(config.postback_max_gap_ms),
-            vehicle: [VehicleSource::EMPTY; 3],
+            vehicle: VehicleSources::EMPTY,
             rate: RateState::Idle,
             point: None,
             latest: None,
@@ -460,15 +500,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     // ---- vehicle data ----
 
-    fn set_vehicle(&mut self, index: usize, frame: VehicleFrame, stamp: Instant) {
+    fn set_vehicle(&mut self, slot: usize, frame: VehicleFrame, stamp: Instant) {
         self.dirty = true;
-        if let Some(source) = self.vehicle.get_mut(index) {
-            if source.data.is_none() {
-                source.due = true;
-            }
-            source.data = Some(frame.encode());
-            source.stamp = stamp;
+        if !self.vehicle.has(slot) {
+            self.vehicle.set_due(slot, true);
         }
+        self.vehicle.set(slot, frame.encode(), stamp);
     }
 
     /// Sets the latest vehicle attitude, measured at `stamp`.
@@ -495,14 +532,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// The latest value of vehicle source `index` if it is fresh at `now`.
-    fn fresh_vehicle(&self, index: usize, now: Instant) -> Option<VehicleFrame> {
-        let source = self.vehicle.get(index)?;
-        let data = source.data?;
-        if Self::age(source.stamp, now) > u32::from(self.config.vehicle_stale_ms) {
+    /// The latest value of vehicle slot `slot` if it is fresh at `now`.
+    fn fresh_vehicle(&self, slot: usize, now: Instant) -> Option<VehicleFrame> {
+        let (data, stamp) = self.vehicle.get(slot)?;
+        if Self::age(stamp, now) > u32::from(self.config.vehicle_stale_ms) {
             return None;
         }
-        let id = *queue::VEHICLE_IDS.get(index)?;
+        let id = *queue::VEHICLE_IDS.get(slot)?;
         VehicleFrame::decode(id, &data).ok()
     }
 
@@ -514,7 +550,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The latest vehicle attitude set, fresh or not.
     pub fn attitude(&self) -> Option<Attitude> {
-        let data = self.vehicle.get(ATTITUDE)?.data?;
+        let (data, _) = self.vehicle.get(ATTITUDE)?;
         match VehicleFrame::decode(ids::ATTITUDE, &data) {
             Ok(VehicleFrame::Attitude(a)) => Some(a),
             _ => None,
@@ -620,30 +656,41 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             u32::from(self.config.altitude_period_ms),
         ];
         let stale = u32::from(self.config.vehicle_stale_ms);
-        for (slot, (source, period)) in self.vehicle.iter_mut().zip(periods).enumerate() {
-            if source.data.is_none() || period == 0 {
+        for (slot, period) in periods.into_iter().enumerate() {
+            let Some((_, stamp)) = self.vehicle.get(slot) else {
+                continue;
+            };
+            let Some(&next) = self.vehicle.next.get(slot) else {
+                continue;
+            };
+            if period == 0 {
                 continue;
             }
-            if Self::age(source.stamp, now) > stale {
+            if Self::age(stamp, now) > stale {
                 // Push again as soon as fresh data arrives (which marks the link dirty).
-                source.due = true;
+                self.vehicle.set_due(slot, true);
                 continue;
             }
-            if source.due || now.is_at_or_after(source.next) {
-                source.next = if source.due {
+            let due = self.vehicle.due(slot);
+            let mut next = next;
+            if due || now.is_at_or_after(next) {
+                next = if due {
                     now.add_millis(period)
                 } else {
-                    advance(source.next, period, now)
+                    advance(next, period, now)
                 };
-                source.due = false;
+                if let Some(n) = self.vehicle.next.get_mut(slot) {
+                    *n = next;
+                }
+                self.vehicle.set_due(slot, false);
                 if self.tx.mark_vehicle(slot) {
                     self.stats.superseded = self.stats.superseded.wrapping_add(1);
                 }
                 self.stats.vehicle_pushes = self.stats.vehicle_pushes.wrapping_add(1);
             }
-            earliest.offer(source.next);
+            earliest.offer(next);
             // Going stale changes what fresh data will do: wake up for it too.
-            earliest.offer(source.stamp.add_millis(stale.saturating_add(1)));
+            earliest.offer(stamp.add_millis(stale.saturating_add(1)));
         }
     }
 
@@ -752,7 +799,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             queue::Next::Control(data) => Frame::new(ids::CONTROL, data),
             queue::Next::Vehicle(slot) => {
                 let id = *queue::VEHICLE_IDS.get(slot)?;
-                Frame::new(id, self.vehicle.get(slot)?.data?)
+                Frame::new(id, self.vehicle.get(slot)?.0)
             }
             queue::Next::Text(t) => {
                 Frame::new(if t.last { ids::TEXT_END } else { ids::TEXT }, t.data)
