@@ -557,7 +557,7 @@ mod fw {
             "",
         );
         table.add(
-            "size_of Gimbal<C, 8, 16> (RAM, bytes; C zero-sized here: +4)",
+            "size_of Gimbal<C> with the default queues (RAM, bytes; without the 4-byte C here)",
             core::mem::size_of::<Gimbal<ReplayCan<'static>>>() as f32 - 4.0,
             "B",
         );
