@@ -532,14 +532,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// The latest value of vehicle slot `slot` if it is fresh at `now`.
-    fn fresh_vehicle(&self, slot: usize, now: Instant) -> Option<VehicleFrame> {
+    /// The latest data of vehicle slot `slot` if it is fresh at `now`.
+    fn fresh_vehicle(&self, slot: usize, now: Instant) -> Option<[u8; 8]> {
         let (data, stamp) = self.vehicle.get(slot)?;
-        if Self::age(stamp, now) > u32::from(self.config.vehicle_stale_ms) {
-            return None;
-        }
-        let id = *queue::VEHICLE_IDS.get(slot)?;
-        VehicleFrame::decode(id, &data).ok()
+        (Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms)).then_some(data)
     }
 
     /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
@@ -719,45 +715,36 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
         let Some(mut p) = self.point else { return };
         if p.due || now.is_at_or_after(p.next) {
+            let period = u32::from(self.config.point_at_period_ms);
             p.next = if p.due {
-                now.add_millis(u32::from(self.config.point_at_period_ms))
+                now.add_millis(period)
             } else {
-                advance(p.next, u32::from(self.config.point_at_period_ms), now)
+                advance(p.next, period, now)
             };
             p.due = false;
-            if let (Some(VehicleFrame::Gps(gps)), Some(VehicleFrame::Altitude(alt))) = (
+            // North-referenced while attitude is pushed; otherwise nose-referenced, which
+            // needs the vehicle heading (none fresh: the aim cannot be known).
+            let reference = if self.attitude_is_pushed(now) {
+                Some(point::Reference::North)
+            } else {
+                self.fresh_vehicle(ATTITUDE, now)
+                    .map(|a| point::Reference::Nose(i16::from_le_bytes([a[4], a[5]])))
+            };
+            if let (Some(gps), Some(alt), Some(reference)) = (
                 self.fresh_vehicle(GPS, now),
                 self.fresh_vehicle(ALTITUDE, now),
+                reference,
             ) {
-                // North-referenced while attitude is pushed; otherwise nose-referenced, which
-                // needs the vehicle heading (none fresh: the aim cannot be known).
-                let reference = if self.attitude_is_pushed(now) {
-                    Some(point::Reference::North)
-                } else {
-                    match self.fresh_vehicle(ATTITUDE, now) {
-                        Some(VehicleFrame::Attitude(att)) => {
-                            Some(point::Reference::Nose(att.heading_centideg()))
-                        }
-                        _ => None,
-                    }
-                };
-                if let Some(reference) = reference {
-                    self.aim(&mut p, gps, alt, reference);
-                }
+                let aim = (p.solve)(&p.target, &gps, &alt, reference);
+                self.aim(&mut p, aim);
             }
         }
         earliest.offer(p.next);
         self.point = Some(p);
     }
 
-    fn aim(
-        &mut self,
-        p: &mut point::PointAt,
-        gps: Gps,
-        alt: Altitude,
-        reference: point::Reference,
-    ) {
-        match (p.solve)(&p.target, gps, alt, reference) {
+    fn aim(&mut self, p: &mut point::PointAt, aim: point::Aim) {
+        match aim {
             point::Aim::Unknown => {}
             point::Aim::Unreachable { elevation_cdeg } => {
                 if !p.unreachable {

@@ -21,7 +21,8 @@
 use crate::geo::{look_at, Position};
 use crate::time::Instant;
 use crate::wire::control::{Heading, Pitch};
-use crate::wire::vehicle::{Altitude, Gps};
+use crate::wire::ids;
+use crate::wire::vehicle::VehicleFrame;
 
 /// What the heading command is relative to.
 #[derive(Clone, Copy, Debug)]
@@ -46,7 +47,13 @@ pub(crate) enum Aim {
 /// Computes the aim. Reached only through [`PointAt::solve`], a function pointer that
 /// [`PointAt::new`] stores: firmware that never points at a location never references
 /// this, and the linker drops it with all its double-precision geodesy.
-pub(crate) fn solve(target: &Target, gps: Gps, alt: Altitude, reference: Reference) -> Aim {
+pub(crate) fn solve(target: &Target, gps: &[u8; 8], alt: &[u8; 8], reference: Reference) -> Aim {
+    let (Ok(VehicleFrame::Gps(gps)), Ok(VehicleFrame::Altitude(alt))) = (
+        VehicleFrame::decode(ids::GPS, gps),
+        VehicleFrame::decode(ids::ALTITUDE, alt),
+    ) else {
+        return Aim::Unknown;
+    };
     let Ok(vehicle) = Position::new(gps.lat_deg(), gps.lon_deg(), alt.metres()) else {
         return Aim::Unknown;
     };
@@ -110,7 +117,8 @@ pub(crate) struct PointAt {
     /// Heading and pitch last sent, in wire units (0.1°).
     pub(crate) sent: Option<(u16, i16)>,
     pub(crate) unreachable: bool,
-    pub(crate) solve: fn(&Target, Gps, Altitude, Reference) -> Aim,
+    /// Decodes the vehicle's latest GPS and altitude frames and computes the aim.
+    pub(crate) solve: fn(&Target, &[u8; 8], &[u8; 8], Reference) -> Aim,
     /// Converts the target back, for [`Link::pointing_target`](super::Link::pointing_target).
     pub(crate) position: fn(&Target) -> Option<Position>,
 }
