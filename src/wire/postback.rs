@@ -458,17 +458,69 @@ impl Default for Postback {
     }
 }
 
+/// The first 16 bytes of every postback the document describes: header, length byte,
+/// nine zeros, CMD+DID, C_ID and Data_id 1.
+const PREFIX: [u8; 16] = [
+    0xEB,
+    0x90,
+    LENGTH_BYTE,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0x21,
+    0xFE,
+    C_ID,
+    0x01,
+];
+
+/// [`PREFIX`] as four little-endian words, so that comparing a message's first 16 bytes
+/// with it is four word compares (a slice `==` would call `memcmp`).
+const PREFIX_WORDS: [u32; 4] = words(&PREFIX);
+
+const fn words(b: &[u8; 16]) -> [u32; 4] {
+    let [a0, a1, a2, a3, b0, b1, b2, b3, c0, c1, c2, c3, d0, d1, d2, d3] = *b;
+    [
+        u32::from_le_bytes([a0, a1, a2, a3]),
+        u32::from_le_bytes([b0, b1, b2, b3]),
+        u32::from_le_bytes([c0, c1, c2, c3]),
+        u32::from_le_bytes([d0, d1, d2, d3]),
+    ]
+}
+
+/// The CRC state after [`PREFIX`], computed at compile time.
+const PREFIX_CRC: u16 = crc::checksum_const(&PREFIX);
+
 /// Decodes a message (either form), checking header and CRC: the fast path of the CAN
 /// assembler. The 27 bytes are destructured once, so every field is a known offset and no
 /// access is bounds-checked.
+///
+/// When the first 16 bytes are the documented constant prefix (four word compares), the
+/// CRC continues from its precomputed state over the 9 bytes left instead of running over
+/// all 25: the same CRC at a third of the cost. Any other prefix takes the full CRC.
 #[inline]
 pub(crate) fn decode_checked(b: &[u8]) -> Option<Postback> {
     let message: &[u8; MESSAGE_LEN] = b.get(..MESSAGE_LEN)?.try_into().ok()?;
-    let [h0, h1, _, _, _, _, _, _, _, _, _, _, _, _, _, d, g, t, m, p0, p1, hd0, hd1, m0, m1, c0, c1] =
+    let [w0, w1, w2, w3] = words(message.first_chunk()?);
+    let [q0, q1, q2, q3] = PREFIX_WORDS;
+    // Bitwise, not `==` on arrays: LLVM would turn that into a call to `memcmp`.
+    let crc = if (w0 ^ q0) | (w1 ^ q1) | (w2 ^ q2) | (w3 ^ q3) == 0 {
+        crc::update(PREFIX_CRC, message.get(PREFIX.len()..field::CHECKED.end)?)
+    } else {
+        if w0 as u16 != u16::from_le_bytes(HEADER) {
+            return None;
+        }
+        crc::checksum(message.get(field::CHECKED)?)
+    };
+    // Fields are read only once the CRC holds: nothing to keep across the CRC loop.
+    let [_, _, _, _, _, _, _, _, _, _, _, _, _, _, _, d, g, t, m, p0, p1, hd0, hd1, m0, m1, c0, c1] =
         *message;
-    if [h0, h1] != HEADER
-        || crc::checksum(message.get(field::CHECKED)?) != u16::from_le_bytes([c0, c1])
-    {
+    if crc != u16::from_le_bytes([c0, c1]) {
         return None;
     }
     Some(Postback {
@@ -725,7 +777,9 @@ pub(crate) mod tests {
 
         /// The assembler's fast path and `parse` agree on any bytes, good or not.
         #[test]
-        fn fast_path_agrees_with_parse(p in arb_postback(), flips in proptest::collection::vec(0usize..256, 0..3), len in 0usize..40) {
+        fn fast_path_agrees_with_parse(p in arb_postback(), documented: bool, flips in proptest::collection::vec(0usize..256, 0..3), len in 0usize..40) {
+            // Half the messages carry the documented prefix (Data_id 1): the precomputed-CRC path.
+            let p = if documented { Postback { data_id: DataId::Attitude, ..p } } else { p };
             let mut b = p.to_can_bytes().to_vec();
             for f in flips {
                 b[f / 8] ^= 1 << (f % 8);
