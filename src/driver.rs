@@ -143,9 +143,16 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     /// first error seen is returned at the end.
     pub fn poll(&mut self, now: Instant) -> Result<(), DriverError> {
         let mut first_error = None;
-        for _ in 0..self.link.config().max_rx_per_poll {
+        // At least one receive (the bound is not zero): no guard before the first.
+        let mut left = self.link.config().max_rx_per_poll.get();
+        loop {
             match self.can.receive() {
-                Ok(frame) => self.receive(&frame, now),
+                Ok(frame) => match frame.id() {
+                    Id::Extended(id) if frame.is_data_frame() => {
+                        self.link.receive(id.as_raw(), frame.data(), now)
+                    }
+                    _ => self.link.receive_ignored(),
+                },
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(e)) => {
                     let kind = embedded_can::Error::kind(&e);
@@ -153,21 +160,18 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     first_error.get_or_insert(DriverError(kind));
                 }
             }
+            left -= 1;
+            if left == 0 {
+                break;
+            }
         }
         self.link.poll(now);
-        if let Some(e) = self.transmit() {
-            first_error.get_or_insert(e);
+        if self.link.has_transmit() {
+            if let Some(e) = self.transmit() {
+                first_error.get_or_insert(e);
+            }
         }
         first_error.map_or(Ok(()), Err)
-    }
-
-    fn receive(&mut self, frame: &C::Frame, now: Instant) {
-        match frame.id() {
-            Id::Extended(id) if frame.is_data_frame() => {
-                self.link.receive(id.as_raw(), frame.data(), now)
-            }
-            _ => self.link.receive_ignored(),
-        }
     }
 
     fn transmit(&mut self) -> Option<DriverError> {
@@ -175,8 +179,10 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
             let Some(can_frame) =
                 ExtendedId::new(frame.id).and_then(|id| C::Frame::new(id, &frame.data))
             else {
-                // Only protocol frames are queued, and every one is a valid extended frame.
-                continue;
+                // Every queued frame is a valid 29-bit extended frame of 8 bytes; a CAN driver
+                // whose frame type refuses one cannot send it. Counted, never silent.
+                self.errors.count(ErrorKind::Other);
+                return Some(DriverError(ErrorKind::Other));
             };
             match self.can.transmit(&can_frame) {
                 Ok(displaced) => {

@@ -75,8 +75,9 @@ pub struct Config {
     /// in millidegrees (default 100: 0.1°).
     pub point_at_deadband_mdeg: u16,
     /// Frames [`Gimbal::poll`](crate::Gimbal::poll) receives at most in one call, so that a
-    /// flooded bus cannot starve the rest of the main loop (default 32).
-    pub max_rx_per_poll: u16,
+    /// flooded bus cannot starve the rest of the main loop (default 32; a poll always
+    /// tries at least one).
+    pub max_rx_per_poll: core::num::NonZeroU16,
 }
 
 impl Default for Config {
@@ -92,7 +93,11 @@ impl Default for Config {
             postback_max_gap_ms: postback::DEFAULT_MAX_GAP_MS,
             point_at_period_ms: 100,
             point_at_deadband_mdeg: 100,
-            max_rx_per_poll: 32,
+            // 32 is not zero.
+            max_rx_per_poll: match core::num::NonZeroU16::new(32) {
+                Some(n) => n,
+                None => core::num::NonZeroU16::MIN,
+            },
         }
     }
 }
@@ -359,8 +364,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     // ---- receiving ----
 
-    /// Takes a received frame with a 29-bit extended ID.
-    #[inline]
+    /// Takes a received frame with a 29-bit extended ID. Out of line: the driver's poll then
+    /// keeps few registers, which is what an idle poll pays for.
+    #[inline(never)]
     pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) {
         self.stats.frames_received = self.stats.frames_received.wrapping_add(1);
         if id != ids::POSTBACK {
@@ -562,12 +568,20 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// comparison.
     #[inline]
     pub fn poll(&mut self, now: Instant) {
-        if !self.dirty && !now.is_at_or_after(self.quiet_until) {
+        if self.is_quiet(now) {
             return;
         }
         self.poll_all(now);
     }
 
+    /// Whether [`Link::poll`] at `now` would have nothing to do: nothing changed since the
+    /// last poll and no deadline has come.
+    #[inline]
+    pub fn is_quiet(&self, now: Instant) -> bool {
+        !self.dirty && !now.is_at_or_after(self.quiet_until)
+    }
+
+    #[inline(never)]
     fn poll_all(&mut self, now: Instant) {
         self.dirty = false;
         let mut earliest = Earliest {

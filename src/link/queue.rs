@@ -67,6 +67,8 @@ pub struct TxQueue<const Q: usize, const T: usize> {
     text: Deque<TextSlot, T>,
     /// Bit `i` set: vehicle slot `i` waits.
     vehicle: u8,
+    /// Frames waiting in all three classes, so that "anything to send?" is one compare.
+    waiting: u16,
 }
 
 impl<const Q: usize, const T: usize> Default for TxQueue<Q, T> {
@@ -82,18 +84,19 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
             control: Deque::new(),
             text: Deque::new(),
             vehicle: 0,
+            waiting: 0,
         }
     }
 
     /// Frames waiting.
     pub fn len(&self) -> usize {
-        self.control.len() + self.vehicle.count_ones() as usize + self.text.len()
+        usize::from(self.waiting)
     }
 
     /// Whether nothing is waiting.
     #[inline]
     pub fn is_empty(&self) -> bool {
-        self.control.is_empty() && self.vehicle == 0 && self.text.is_empty()
+        self.waiting == 0
     }
 
     /// Free control slots.
@@ -108,7 +111,9 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
 
     /// Queues a control frame's data; hands it back when the FIFO is full.
     pub fn push_control(&mut self, data: [u8; 8]) -> Result<(), [u8; 8]> {
-        self.control.push_back(data)
+        self.control.push_back(data)?;
+        self.waiting += 1;
+        Ok(())
     }
 
     /// Marks vehicle slot `slot` as waiting. Returns `true` when it already was (the value
@@ -116,7 +121,10 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     pub fn mark_vehicle(&mut self, slot: usize) -> bool {
         let bit = 1u8 << (slot & 7);
         let was = self.vehicle & bit != 0;
-        self.vehicle |= bit;
+        if !was {
+            self.vehicle |= bit;
+            self.waiting += 1;
+        }
         was
     }
 
@@ -132,7 +140,9 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         }
         for f in frames {
             // Room was checked above.
-            let _ = self.text.push_back(f);
+            if self.text.push_back(f).is_ok() {
+                self.waiting += 1;
+            }
         }
         Ok(())
     }
@@ -140,15 +150,20 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// Takes what leaves next.
     #[inline]
     pub(crate) fn pop(&mut self) -> Option<Next> {
-        if let Some(d) = self.control.pop_front() {
-            return Some(Next::Control(d));
+        if self.waiting == 0 {
+            return None;
         }
-        if self.vehicle != 0 {
+        let next = if let Some(d) = self.control.pop_front() {
+            Next::Control(d)
+        } else if self.vehicle != 0 {
             let slot = self.vehicle.trailing_zeros() as usize;
             self.vehicle &= self.vehicle - 1;
-            return Some(Next::Vehicle(slot));
-        }
-        self.text.pop_front().map(Next::Text)
+            Next::Vehicle(slot)
+        } else {
+            Next::Text(self.text.pop_front()?)
+        };
+        self.waiting -= 1;
+        Some(next)
     }
 
     /// Puts a frame back at the front of its class: for a frame popped and refused by the
@@ -157,17 +172,23 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// A vehicle frame whose slot is already waiting again is superseded, not an error.
     pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8]) -> Requeued {
         match Class::of(id) {
-            Class::Control => self
-                .control
-                .push_front(data)
-                .map_or(Requeued::NoRoom, |()| Requeued::Queued),
-            Class::Text => self
-                .text
-                .push_front(TextSlot {
-                    data,
-                    last: id == ids::TEXT_END,
-                })
-                .map_or(Requeued::NoRoom, |()| Requeued::Queued),
+            Class::Control => match self.control.push_front(data) {
+                Ok(()) => {
+                    self.waiting += 1;
+                    Requeued::Queued
+                }
+                Err(_) => Requeued::NoRoom,
+            },
+            Class::Text => match self.text.push_front(TextSlot {
+                data,
+                last: id == ids::TEXT_END,
+            }) {
+                Ok(()) => {
+                    self.waiting += 1;
+                    Requeued::Queued
+                }
+                Err(_) => Requeued::NoRoom,
+            },
             Class::Vehicle(slot) => {
                 if self.mark_vehicle(slot) {
                     Requeued::Superseded
@@ -231,6 +252,27 @@ mod tests {
             ]
         );
         assert!(q.is_empty());
+    }
+
+    proptest::proptest! {
+        /// The running count always equals what the three classes hold.
+        #[test]
+        fn waiting_count_is_exact(ops in proptest::collection::vec(0u8..7, 0..80)) {
+            let mut q = TxQueue::<3, 4>::new();
+            for op in ops {
+                match op {
+                    0 => { let _ = q.push_control([op; 8]); }
+                    1 | 2 => { q.mark_vehicle(usize::from(op)); }
+                    3 => { let _ = q.push_text([text(1, false), text(2, true)].into_iter()); }
+                    4 => { q.pop(); }
+                    5 => { q.requeue(ids::CONTROL, [0; 8]); }
+                    _ => { q.requeue(ids::TEXT_END, [0; 8]); }
+                }
+                let held = q.control.len() + q.vehicle.count_ones() as usize + q.text.len();
+                proptest::prop_assert_eq!(q.len(), held);
+                proptest::prop_assert_eq!(q.is_empty(), held == 0);
+            }
+        }
     }
 
     #[test]
