@@ -283,7 +283,7 @@ fn advance(deadline: Instant, period: u32, now: Instant) -> Instant {
 }
 
 /// The earliest of the deadlines offered to it, as seen from `now` (wrap-safe).
-struct Earliest {
+pub(crate) struct Earliest {
     now: Instant,
     ahead: u32,
 }
@@ -313,7 +313,7 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     assembler: PostbackAssembler,
     vehicle: VehicleSources,
     rate: RateState,
-    point: Option<point::PointAt>,
+    point: Option<point::PointAt<Q, T>>,
     latest: Option<(Postback, Instant)>,
     up: bool,
     /// Nothing is due before `quiet_until` unless `dirty`: the idle poll's fast path.
@@ -723,10 +723,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The target being pointed at, if any (kept to 1e-7° and 1 cm).
     pub fn pointing_target(&self) -> Option<Position> {
-        self.point.and_then(|p| (p.position)(&p.target))
+        self.point.and_then(|p| p.target.position())
     }
 
     fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
+        if let Some(p) = self.point {
+            (p.step)(self, now, earliest);
+        }
+    }
+
+    /// One point-at step; see [`point::PointAt::step`].
+    fn point_step(&mut self, now: Instant, earliest: &mut Earliest) {
         let Some(mut p) = self.point else { return };
         if p.due || now.is_at_or_after(p.next) {
             let period = u32::from(self.config.point_at_period_ms);
@@ -749,7 +756,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 self.fresh_vehicle(ALTITUDE, now),
                 reference,
             ) {
-                let aim = (p.solve)(&p.target, &gps, &alt, reference);
+                let aim = point::solve(&p.target, &gps, &alt, reference);
                 self.aim(&mut p, aim);
             }
         }
@@ -757,7 +764,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.point = Some(p);
     }
 
-    fn aim(&mut self, p: &mut point::PointAt, aim: point::Aim) {
+    fn aim(&mut self, p: &mut point::PointAt<Q, T>, aim: point::Aim) {
         match aim {
             point::Aim::Unknown => {}
             point::Aim::Unreachable { elevation_cdeg } => {

@@ -44,9 +44,8 @@ pub(crate) enum Aim {
     Unknown,
 }
 
-/// Computes the aim. Reached only through [`PointAt::solve`], a function pointer that
-/// [`PointAt::new`] stores: firmware that never points at a location never references
-/// this, and the linker drops it with all its double-precision geodesy.
+/// Decodes the vehicle's latest GPS and altitude frames and computes the aim (reached only
+/// from the point-at step, see [`PointAt::step`]).
 pub(crate) fn solve(target: &Target, gps: &[u8; 8], alt: &[u8; 8], reference: Reference) -> Aim {
     let (Ok(VehicleFrame::Gps(gps)), Ok(VehicleFrame::Altitude(alt))) = (
         VehicleFrame::decode(ids::GPS, gps),
@@ -110,20 +109,20 @@ impl Target {
 
 /// State of an active point-at.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PointAt {
+pub(crate) struct PointAt<const Q: usize, const T: usize> {
     pub(crate) target: Target,
     pub(crate) next: Instant,
     pub(crate) due: bool,
     /// Heading and pitch last sent, in wire units (0.1°).
     pub(crate) sent: Option<(u16, i16)>,
     pub(crate) unreachable: bool,
-    /// Decodes the vehicle's latest GPS and altitude frames and computes the aim.
-    pub(crate) solve: fn(&Target, &[u8; 8], &[u8; 8], Reference) -> Aim,
-    /// Converts the target back, for [`Link::pointing_target`](super::Link::pointing_target).
-    pub(crate) position: fn(&Target) -> Option<Position>,
+    /// The whole point-at step, reached only through this pointer, which
+    /// [`Link::point_at`](super::Link::point_at) stores: firmware that never points at a
+    /// location links none of it, nor the double-precision geodesy behind it.
+    pub(crate) step: fn(&mut super::Link<Q, T>, Instant, &mut super::Earliest),
 }
 
-impl PointAt {
+impl<const Q: usize, const T: usize> PointAt<Q, T> {
     pub(crate) fn new(target: Position) -> Self {
         PointAt {
             target: Target::new(&target),
@@ -131,8 +130,7 @@ impl PointAt {
             due: true,
             sent: None,
             unreachable: false,
-            solve,
-            position: Target::position,
+            step: super::Link::point_step,
         }
     }
 }
