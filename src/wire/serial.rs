@@ -37,6 +37,7 @@ mod field {
     use core::ops::Range;
     pub const HEADER: Range<usize> = 0..2;
     pub const LENGTH: usize = 2;
+    pub const RESERVED: Range<usize> = 3..12;
     pub const MARKER: Range<usize> = 12..14;
     pub const DATA: Range<usize> = 14..22;
     pub const CHECKED: Range<usize> = 0..22;
@@ -91,6 +92,9 @@ pub struct StreamStats {
     pub postbacks: u32,
     /// Frames whose header and length were right but whose CRC failed.
     pub crc_errors: u32,
+    /// Control frames whose header and length were right but whose fixed bytes (nine
+    /// zeros, `40 88`) were not: not a frame of this protocol, whatever the CRC says.
+    pub invalid_frames: u32,
     /// Bytes discarded while looking for a header.
     pub skipped_bytes: u32,
     /// Partial frames discarded by [`StreamParser::finish`].
@@ -132,6 +136,7 @@ impl StreamParser {
                 control_frames: 0,
                 postbacks: 0,
                 crc_errors: 0,
+                invalid_frames: 0,
                 skipped_bytes: 0,
                 truncated: 0,
             },
@@ -232,6 +237,14 @@ impl StreamParser {
         }
         let frame = self.buf.get(..expected).unwrap_or(&[]);
         let item = if expected == FRAME_LEN {
+            let fixed = frame
+                .get(field::RESERVED)
+                .is_some_and(|r| r.iter().all(|&b| b == 0))
+                && frame.get(field::MARKER) == Some(&MARKER[..]);
+            if !fixed {
+                self.stats.invalid_frames = self.stats.invalid_frames.saturating_add(1);
+                return Step::Resync;
+            }
             let computed = frame.get(field::CHECKED).map_or(0, crc::checksum);
             let received = frame
                 .get(field::CRC)
@@ -320,7 +333,8 @@ mod tests {
         typo.extend([0x40, 0x88, 0x0F, 0x07, 0, 0, 0, 0, 0, 0, 0x68, 0x5E]);
         let (items, stats) = parse_all(&typo);
         assert!(items.is_empty());
-        assert_eq!(stats.crc_errors, 1);
+        // The tenth zero sits where `40` belongs: the fixed bytes are wrong, the CRC never runs.
+        assert_eq!((stats.invalid_frames, stats.crc_errors), (1, 0));
     }
 
     #[test]
@@ -342,6 +356,39 @@ mod tests {
         let mut bytes = vec![0xEB];
         bytes.extend(LOOK_DOWN);
         assert_eq!(parse_all(&bytes).0.len(), 1);
+    }
+
+    /// Found by `cargo fuzz run stream_parser`: 24 bytes starting `EB 90 0A` whose CRC holds
+    /// by chance (1 in 65 536) but whose fixed bytes are not nine zeros and `40 88`.
+    #[test]
+    fn a_chance_crc_match_with_wrong_fixed_bytes_is_not_a_frame() {
+        let mut f = control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
+        f[5] = 0x41; // a reserved byte
+        let crc = crc::checksum(&f[..22]).to_le_bytes();
+        f[22..].copy_from_slice(&crc); // the CRC holds
+        let (items, stats) = parse_all(&f);
+        assert!(items.is_empty());
+        assert_eq!((stats.invalid_frames, stats.crc_errors), (1, 0));
+        let mut g = control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
+        g[13] = 0x89; // the marker
+        let crc = crc::checksum(&g[..22]).to_le_bytes();
+        g[22..].copy_from_slice(&crc);
+        assert!(parse_all(&g).0.is_empty());
+        // The fuzzer's input, whole.
+        let data: &[u8] = &[
+            39, 0, 0, 0, 46, 144, 235, 235, 144, 10, 0, 63, 29, 63, 31, 65, 46, 65, 1, 0, 0, 0,
+            235, 144, 10, 0, 0, 65, 65, 235, 144, 10, 42, 235, 144, 10, 46, 144, 235, 144, 10, 0,
+            0, 0, 0, 46, 144, 235, 235, 144, 10, 0, 65, 65, 235, 144, 10, 46, 235, 144, 65, 65,
+            235, 144, 10, 46, 235, 144, 10, 46, 144, 144, 235, 10, 0, 0, 0, 0, 46, 144, 235, 235,
+            144, 10, 0, 65, 65, 235, 144, 10, 46, 144, 235, 235, 144, 10, 0, 65, 65, 235, 144, 10,
+            46, 235, 144, 65, 65, 235, 144, 10, 46, 235, 144, 10, 46, 144, 144, 235, 10, 0, 0, 0,
+            0, 46, 144, 113, 235, 144, 144, 235, 144, 10, 0, 144, 235, 144, 10, 0, 0, 65,
+        ];
+        for item in parse_all(data).0 {
+            if let StreamItem::Control(d) = item {
+                assert!(data.windows(24).any(|w| w == control_frame(&d)));
+            }
+        }
     }
 
     #[test]
