@@ -106,13 +106,13 @@ pub fn checksum(bytes: &[u8]) -> u16 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The document's `crc_fly16`, transcribed with its nibble table, as an independent
-    /// reference.
-    fn crc_fly16(buf: &[u8]) -> u16 {
+    /// The document's `crc_fly16`, transcribed with its nibble table: the independent
+    /// reference the crate's tests check CRCs against.
+    pub(crate) fn crc_fly16(buf: &[u8]) -> u16 {
         const W: [u16; 16] = [
             0x0000, 0xCC01, 0xD801, 0x1400, 0xF001, 0x3C00, 0x2800, 0xE401, 0xA001, 0x6C00, 0x7800,
             0xB401, 0x5000, 0x9C01, 0x8801, 0x4400,

@@ -627,6 +627,7 @@ impl Postback {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::wire::crc::tests::crc_fly16;
     use proptest::prelude::*;
 
     /// A postback built by hand: X30T (2), tracking, lock (3), pitch -45.00° (0xEE6C),
@@ -637,24 +638,10 @@ pub(crate) mod tests {
             0xEB, 0x90, 0x0C, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x21, 0xFE, 0x0F, 0x01, 0x02, 0x01, 0x03,
             0x6C, 0xEE, 0x28, 0x23, 0x2E, 0xFB, 0, 0, 0, 0, 0, 0, 0,
         ];
-        let crc = reference_crc(&b[..25]);
+        let crc = crc_fly16(&b[..25]);
         b[25] = crc as u8;
         b[26] = (crc >> 8) as u8;
         b
-    }
-
-    /// The document's nibble-table `crc_fly16`, independent of `crc::checksum`.
-    pub(crate) fn reference_crc(buf: &[u8]) -> u16 {
-        const W: [u16; 16] = [
-            0x0000, 0xCC01, 0xD801, 0x1400, 0xF001, 0x3C00, 0x2800, 0xE401, 0xA001, 0x6C00, 0x7800,
-            0xB401, 0x5000, 0x9C01, 0x8801, 0x4400,
-        ];
-        let mut crc: u16 = 0xFFFF;
-        for &b in buf {
-            let tmp = W[((u16::from(b) ^ crc) & 15) as usize] ^ (crc >> 4);
-            crc = W[(((u16::from(b) >> 4) ^ tmp) & 15) as usize] ^ (tmp >> 4);
-        }
-        crc
     }
 
     #[test]
@@ -774,7 +761,7 @@ pub(crate) mod tests {
         fn emit_parse_round_trip(p in arb_postback()) {
             let can = p.to_can_bytes();
             prop_assert_eq!(&can[27..], &[0u8; 5]);
-            prop_assert_eq!(reference_crc(&can[..25]).to_le_bytes(), [can[25], can[26]]);
+            prop_assert_eq!(crc_fly16(&can[..25]).to_le_bytes(), [can[25], can[26]]);
             prop_assert_eq!(Postback::parse(&can), Ok(p));
             prop_assert_eq!(Postback::parse(&p.to_stream_bytes()), Ok(p));
         }
