@@ -316,9 +316,10 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     point: Option<point::PointAt<Q, T>>,
     latest: Option<(Postback, Instant)>,
     up: bool,
-    /// Nothing is due before `quiet_until` unless `dirty`: the idle poll's fast path.
-    dirty: bool,
-    quiet_until: Instant,
+    /// Nothing is due within `quiet_ms` after `last_poll` (0: poll fully next time): the
+    /// idle poll's fast path, one load pair and a compare.
+    last_poll: Instant,
+    quiet_ms: u32,
     events: heapless::Deque<Event, 8>,
     stats: LinkStats,
 }
@@ -339,8 +340,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             point: None,
             latest: None,
             up: false,
-            dirty: true,
-            quiet_until: Instant::from_millis(0),
+            last_poll: Instant::from_millis(0),
+            quiet_ms: 0,
             events: heapless::Deque::new(),
             stats: LinkStats::default(),
         }
@@ -374,7 +375,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             return;
         }
         // The assembler's expiry and the link's health deadline may move.
-        self.dirty = true;
+        self.quiet_ms = 0;
         if let Some(p) = self.assembler.feed(id, data, now) {
             self.latest = Some((p, now));
             if !self.up {
@@ -433,7 +434,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Starting a hold or changing its rate queues the command at once; a full queue hands
     /// the rate back and leaves the hold as it was. Refreshing the same rate queues nothing.
     pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        self.dirty = true;
+        self.quiet_ms = 0;
         match &mut self.rate {
             RateState::Holding {
                 rate: held,
@@ -477,7 +478,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     fn end_rate_hold(&mut self) {
-        self.dirty = true;
+        self.quiet_ms = 0;
         self.rate = match self
             .tx
             .push_control(Command::from(GimbalCommand::Rate(Rate::ZERO)).encode())
@@ -507,7 +508,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- vehicle data ----
 
     fn set_vehicle(&mut self, slot: usize, frame: VehicleFrame, stamp: Instant) {
-        self.dirty = true;
+        self.quiet_ms = 0;
         if !self.vehicle.has(slot) {
             self.vehicle.set_due(slot, true);
         }
@@ -578,12 +579,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// last poll and no deadline has come.
     #[inline]
     pub fn is_quiet(&self, now: Instant) -> bool {
-        !self.dirty && !now.is_at_or_after(self.quiet_until)
+        // A clock that went backwards reads as a huge interval: a full poll, never a skip.
+        now.millis_since(self.last_poll) < self.quiet_ms
     }
 
     #[inline(never)]
     fn poll_all(&mut self, now: Instant) {
-        self.dirty = false;
         let mut earliest = Earliest {
             now,
             ahead: MAX_QUIET_MS,
@@ -593,6 +594,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             earliest.offer(at);
         }
         self.poll_rate(now, &mut earliest);
+        if let RateState::Stopping = self.rate {
+            // A zero-rate frame waits for room (the dead-man may have fired just now).
+            earliest.offer(now);
+        }
         self.poll_vehicle(now, &mut earliest);
         self.poll_point(now, &mut earliest);
         if let Some((_, at)) = self.latest {
@@ -605,7 +610,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     .offer(at.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
             }
         }
-        self.quiet_until = now.add_millis(earliest.ahead);
+        self.last_poll = now;
+        self.quiet_ms = earliest.ahead;
     }
 
     fn poll_rate(&mut self, now: Instant, earliest: &mut Earliest) {
@@ -620,7 +626,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     self.rate = RateState::Idle;
                 } else {
                     // Retry at every poll until there is room.
-                    self.dirty = true;
+                    earliest.offer(now);
                 }
             }
             RateState::Holding {
@@ -650,7 +656,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     } else {
                         // Try again at the next poll.
                         self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-                        self.dirty = true;
+                        earliest.offer(now);
                     }
                 }
                 earliest.offer(next);
@@ -712,7 +718,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         if let RateState::Holding { .. } = self.rate {
             self.rate = RateState::Idle;
         }
-        self.dirty = true;
+        self.quiet_ms = 0;
         self.point = Some(point::PointAt::new(target));
     }
 
@@ -760,7 +766,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 self.aim(&mut p, aim);
             }
         }
-        earliest.offer(p.next);
+        // Due again (no room for the aim): the next poll retries.
+        earliest.offer(if p.due { now } else { p.next });
         self.point = Some(p);
     }
 
@@ -783,7 +790,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     // Both or neither; try again at the next poll.
                     self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
                     p.due = true;
-                    self.dirty = true;
                     return;
                 }
                 let _ = self

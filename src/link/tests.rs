@@ -222,6 +222,31 @@ fn postback_frames(link: &mut Link, at: u32, pitch: i16) {
 }
 
 #[test]
+fn a_dead_man_with_a_full_queue_sends_zero_as_soon_as_there_is_room() {
+    let mut link: Link<2, 2> = Link::new(Config::default());
+    let r = Rate::new(3.0, 0.0).unwrap();
+    link.set_rate(r, Instant::from_millis(0)).unwrap();
+    link.poll(Instant::from_millis(0));
+    assert!(link.next_transmit().is_some()); // the first rate frame
+    link.transmit_done(None);
+    // Two camera commands (not pointing: the hold stays) fill the queue; nothing is sent
+    // for a while (a busy bus).
+    link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In)).unwrap();
+    link.send(GimbalCommand::Video(crate::wire::control::Video::Start)).unwrap();
+    for t in 1..=251 {
+        link.poll(Instant::from_millis(t)); // the dead-man fires at 251 with no room
+    }
+    assert_eq!(link.next_event(), Some(Event::RateHoldExpired));
+    // The bus frees the queue; the very next poll must queue the zero-rate frame.
+    while link.next_transmit().is_some() {
+        link.transmit_done(None);
+    }
+    link.poll(Instant::from_millis(252));
+    let zero = link.next_transmit().expect("the zero-rate frame, at the first poll with room");
+    assert_eq!(Command::decode(&zero.data), Ok(Command::from(GimbalCommand::Rate(Rate::ZERO))));
+}
+
+#[test]
 fn link_up_down_and_latest_postback() {
     let mut link: Link = Link::new(Config::default());
     assert!(!link.is_up());
@@ -492,7 +517,7 @@ mod fast_path {
         ]
     }
 
-    fn apply(link: &mut Link, op: &Op, now: Instant) {
+    fn apply<const Q: usize, const T: usize>(link: &mut Link<Q, T>, op: &Op, now: Instant) {
         match *op {
             Op::Wait(_) => {}
             Op::Rate(r) => {
@@ -524,7 +549,7 @@ mod fast_path {
         }
     }
 
-    fn drain(link: &mut Link) -> (Vec<Frame>, Vec<Event>) {
+    fn drain<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> (Vec<Frame>, Vec<Event>) {
         let frames = core::iter::from_fn(|| {
             let f = link.next_transmit();
             if f.is_some() {
@@ -536,27 +561,47 @@ mod fast_path {
         (frames, core::iter::from_fn(|| link.next_event()).collect())
     }
 
+    fn check<const Q: usize, const T: usize>(
+        ops: &[Op],
+        start: u32,
+        drain_every: u32,
+    ) -> Result<(), TestCaseError> {
+        let mut fast: Link<Q, T> = Link::new(Config::default());
+        let mut full: Link<Q, T> = Link::new(Config::default());
+        let mut t = start;
+        for op in ops {
+            let steps = if let Op::Wait(ms) = *op { ms } else { 1 };
+            apply(&mut fast, op, Instant::from_millis(t));
+            apply(&mut full, op, Instant::from_millis(t));
+            for _ in 0..steps {
+                let now = Instant::from_millis(t);
+                fast.poll(now);
+                full.poll_all(now);
+                // A slow bus: the queue drains only now and then, so it fills and the
+                // retry paths (a zero-rate frame waiting for room, an aim deferred) run.
+                if t.wrapping_sub(start) % drain_every == 0 {
+                    prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
+                }
+                t = t.wrapping_add(1);
+            }
+        }
+        prop_assert_eq!(drain(&mut fast), drain(&mut full));
+        prop_assert_eq!(fast.stats(), full.stats());
+        Ok(())
+    }
+
     proptest! {
+        /// With tiny queues drained every 7 ms, the same holds when the queue is full.
+        #[test]
+        fn fast_path_equals_full_polls_with_full_queues(ops in proptest::collection::vec(op(), 1..60), start: u32) {
+            check::<2, 2>(&ops, start, 7)?;
+        }
+
         /// Polling every millisecond through the idle fast path does exactly what full
         /// polls do.
         #[test]
         fn fast_path_equals_full_polls(ops in proptest::collection::vec(op(), 1..60), start: u32) {
-            let mut fast: Link = Link::new(Config::default());
-            let mut full: Link = Link::new(Config::default());
-            let mut t = start;
-            for op in &ops {
-                let steps = if let Op::Wait(ms) = *op { ms } else { 1 };
-                apply(&mut fast, op, Instant::from_millis(t));
-                apply(&mut full, op, Instant::from_millis(t));
-                for _ in 0..steps {
-                    let now = Instant::from_millis(t);
-                    fast.poll(now);
-                    full.poll_all(now);
-                    prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
-                    t = t.wrapping_add(1);
-                }
-            }
-            prop_assert_eq!(fast.stats(), full.stats());
+            check::<8, 8>(&ops, start, 1)?;
         }
     }
 }
