@@ -231,8 +231,10 @@ fn a_dead_man_with_a_full_queue_sends_zero_as_soon_as_there_is_room() {
     link.transmit_done(None);
     // Two camera commands (not pointing: the hold stays) fill the queue; nothing is sent
     // for a while (a busy bus).
-    link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In)).unwrap();
-    link.send(GimbalCommand::Video(crate::wire::control::Video::Start)).unwrap();
+    link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
+        .unwrap();
+    link.send(GimbalCommand::Video(crate::wire::control::Video::Start))
+        .unwrap();
     for t in 1..=251 {
         link.poll(Instant::from_millis(t)); // the dead-man fires at 251 with no room
     }
@@ -242,8 +244,13 @@ fn a_dead_man_with_a_full_queue_sends_zero_as_soon_as_there_is_room() {
         link.transmit_done(None);
     }
     link.poll(Instant::from_millis(252));
-    let zero = link.next_transmit().expect("the zero-rate frame, at the first poll with room");
-    assert_eq!(Command::decode(&zero.data), Ok(Command::from(GimbalCommand::Rate(Rate::ZERO))));
+    let zero = link
+        .next_transmit()
+        .expect("the zero-rate frame, at the first poll with room");
+    assert_eq!(
+        Command::decode(&zero.data),
+        Ok(Command::from(GimbalCommand::Rate(Rate::ZERO)))
+    );
 }
 
 #[test]
@@ -579,7 +586,7 @@ mod fast_path {
                 full.poll_all(now);
                 // A slow bus: the queue drains only now and then, so it fills and the
                 // retry paths (a zero-rate frame waiting for room, an aim deferred) run.
-                if t.wrapping_sub(start) % drain_every == 0 {
+                if t.wrapping_sub(start).is_multiple_of(drain_every) {
                     prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
                 }
                 t = t.wrapping_add(1);
