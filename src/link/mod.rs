@@ -321,7 +321,20 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     last_poll: Instant,
     quiet_ms: u32,
     events: heapless::Deque<Event, 8>,
-    stats: LinkStats,
+    stats: Counters,
+}
+
+/// The counters the link itself keeps; the rest of [`LinkStats`] is the assembler's.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counters {
+    frames_received: u32,
+    frames_sent: u32,
+    queue_full: u32,
+    requeued: u32,
+    superseded: u32,
+    ignored_frames: u32,
+    events_dropped: u32,
+    vehicle_pushes: u32,
 }
 
 const ATTITUDE: usize = 0;
@@ -343,7 +356,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             last_poll: Instant::from_millis(0),
             quiet_ms: 0,
             events: heapless::Deque::new(),
-            stats: LinkStats::default(),
+            stats: Counters::default(),
         }
     }
 
@@ -855,13 +868,21 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Counters, including the postback assembler's.
     pub fn stats(&self) -> LinkStats {
         let a = self.assembler.stats();
+        let c = self.stats;
         LinkStats {
+            frames_received: c.frames_received,
+            frames_sent: c.frames_sent,
             postbacks: a.messages,
             crc_errors: a.crc_errors,
             restarts: a.restarts,
             dropped_partials: a.dropped_partials,
             malformed: a.malformed,
-            ..self.stats
+            queue_full: c.queue_full,
+            requeued: c.requeued,
+            superseded: c.superseded,
+            ignored_frames: c.ignored_frames,
+            events_dropped: c.events_dropped,
+            vehicle_pushes: c.vehicle_pushes,
         }
     }
 

@@ -74,7 +74,18 @@ pub struct PostbackAssembler {
     count: u8,
     last: Instant,
     max_gap_ms: u16,
-    stats: AssemblerStats,
+    stats: Counters,
+}
+
+/// The counters kept; `frames` in [`AssemblerStats`] is derived from them.
+#[derive(Clone, Copy, Debug)]
+struct Counters {
+    messages: u32,
+    crc_errors: u32,
+    restarts: u32,
+    dropped_partials: u32,
+    malformed: u32,
+    discarded_frames: u32,
 }
 
 impl Default for PostbackAssembler {
@@ -97,8 +108,7 @@ impl PostbackAssembler {
             count: 0,
             last: Instant::from_millis(0),
             max_gap_ms,
-            stats: AssemblerStats {
-                frames: 0,
+            stats: Counters {
                 messages: 0,
                 crc_errors: 0,
                 restarts: 0,
@@ -120,7 +130,12 @@ impl PostbackAssembler {
                 .wrapping_mul(4)
                 .wrapping_add(s.discarded_frames)
                 .wrapping_add(u32::from(self.count)),
-            ..s
+            messages: s.messages,
+            crc_errors: s.crc_errors,
+            restarts: s.restarts,
+            dropped_partials: s.dropped_partials,
+            malformed: s.malformed,
+            discarded_frames: s.discarded_frames,
         }
     }
 
