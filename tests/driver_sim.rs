@@ -386,7 +386,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
         );
     }
     let s = b.gimbal.stats().link;
-    let a = b.gimbal.link().assembler_stats();
+    let a = b.gimbal.link().assembler().stats();
     let bs = bus.stats();
     assert!(
         delivered.len() as f64 > 0.7 * b.sent_postbacks.len() as f64,

@@ -447,13 +447,14 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Starting a hold or changing its rate queues the command at once; a full queue hands
     /// the rate back and leaves the hold as it was. Refreshing the same rate queues nothing.
     pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        self.quiet_ms = 0;
         match &mut self.rate {
             RateState::Holding {
                 rate: held,
                 refreshed,
                 ..
             } if *held == rate => {
+                // Only the dead-man moves, later: no need to wake the next poll. (Called at
+                // every turn of a main loop, this must not defeat the idle fast path.)
                 *refreshed = now;
                 Ok(())
             }
@@ -472,6 +473,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                     next: now.add_millis(u32::from(self.config.rate_repeat_ms)),
                 };
                 self.point = None;
+                self.quiet_ms = 0;
                 Ok(())
             }
         }
@@ -521,9 +523,19 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- vehicle data ----
 
     fn set_vehicle(&mut self, slot: usize, frame: VehicleFrame, stamp: Instant) {
-        self.quiet_ms = 0;
         if !self.vehicle.has(slot) {
             self.vehicle.set_due(slot, true);
+        }
+        // Newer data replacing fresh data moves no deadline earlier, so the next poll need
+        // only wake for a slot waiting to push at once (first value, or after going stale)
+        // or for an older stamp, which brings staleness closer. (Called at every turn of a
+        // main loop, this must not defeat the idle fast path.)
+        let older = self
+            .vehicle
+            .get(slot)
+            .is_some_and(|(_, old)| !stamp.is_at_or_after(old));
+        if self.vehicle.due(slot) || older {
+            self.quiet_ms = 0;
         }
         self.vehicle.set(slot, frame.encode(), stamp);
     }
@@ -884,11 +896,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             events_dropped: c.events_dropped,
             vehicle_pushes: c.vehicle_pushes,
         }
-    }
-
-    /// The postback assembler's own counters.
-    pub fn assembler_stats(&self) -> postback::AssemblerStats {
-        self.assembler.stats()
     }
 
     /// The postback assembler.
