@@ -174,6 +174,8 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// Out of line: an idle poll then saves only the registers the receive loop needs.
+    #[inline(never)]
     fn transmit(&mut self) -> Option<DriverError> {
         while let Some(frame) = self.link.next_transmit() {
             let Some(can_frame) =
@@ -255,7 +257,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         self.link.set_altitude(altitude, stamp)
     }
 
-    /// The next event, oldest first.
+    /// The next event (see [`Event`] for how events wait).
     pub fn next_event(&mut self) -> Option<Event> {
         self.link.next_event()
     }

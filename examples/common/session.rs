@@ -242,8 +242,8 @@ impl<'a, W: Write> Session<'a, W> {
         let sim = self.sim.stats();
         let _ = writeln!(
             self.out,
-            "frames sent {} received {}; postbacks {}; vehicle pushes {}; gimbal saw {} vehicle frames, {} commands",
-            stats.frames_sent, stats.frames_received, stats.postbacks, stats.vehicle_pushes, sim.vehicle_frames, sim.commands
+            "frames sent {} received {}; postbacks {}; superseded vehicle frames {}; gimbal saw {} vehicle frames, {} commands",
+            stats.frames_sent, stats.frames_received, stats.postbacks, stats.superseded, sim.vehicle_frames, sim.commands
         );
         if sim.vehicle_frames == 0 {
             self.failures += 1;

@@ -1,6 +1,8 @@
 //! See `fuzz/properties.rs`: `stream_parser`.
 #![no_main]
 
+// Each target calls one of the shared properties.
+#[allow(dead_code)]
 #[path = "../properties.rs"]
 mod properties;
 

@@ -30,9 +30,11 @@
 //! # Ok::<(), idu_gimbal::wire::RangeError>(())
 //! ```
 
+mod event;
 mod point;
 pub mod postback;
 pub mod queue;
+mod ring;
 pub mod text;
 
 use core::fmt;
@@ -43,6 +45,7 @@ use crate::wire::control::{Command, GimbalCommand, Rate};
 use crate::wire::postback::{GimbalType, Postback};
 use crate::wire::vehicle::{Altitude, Attitude, Gps, VehicleFrame};
 use crate::wire::{ids, text as wire_text, Frame};
+pub use event::Event;
 use postback::PostbackAssembler;
 use queue::{Requeued, TxQueue};
 
@@ -102,32 +105,12 @@ impl Default for Config {
     }
 }
 
-/// Something the application may want to act on.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Event {
-    /// A valid postback arrived: read it with [`Link::latest_postback`]. (Events stay
-    /// small so that a queue of them costs little RAM; the postback itself is kept once.)
-    Postback,
-    /// The first valid postback after start or after the link was down.
-    LinkUp,
-    /// No valid postback within the link timeout.
-    LinkDown,
-    /// A rate hold was not refreshed in time: one zero-rate command was queued.
-    RateHoldExpired,
-    /// [`Link::point_at`]'s target needs a pitch outside the gimbal's [-100°, 60°]; the
-    /// gimbal holds the last reachable aim. Raised once each time the target leaves reach.
-    TargetUnreachable {
-        /// The elevation the target needs, in 0.01°.
-        elevation_cdeg: i16,
-    },
-}
-
 /// Counters for diagnosing a bus. All wrap at `u32::MAX`.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LinkStats {
-    /// Frames received (including ignored ones).
+    /// Frames received (including ignored ones): `ignored_frames` plus the assembler's
+    /// frames.
     pub frames_received: u32,
     /// Frames the CAN driver accepted for transmission.
     pub frames_sent: u32,
@@ -150,10 +133,6 @@ pub struct LinkStats {
     pub superseded: u32,
     /// Received frames that are not for this node (other IDs, standard IDs, remote frames).
     pub ignored_frames: u32,
-    /// Events dropped because the application did not take them in time.
-    pub events_dropped: u32,
-    /// Vehicle frames scheduled for transmission.
-    pub vehicle_pushes: u32,
 }
 
 /// A full queue: the item is handed back.
@@ -199,11 +178,14 @@ impl fmt::Display for TextQueueError {
 #[cfg(feature = "std")]
 impl std::error::Error for TextQueueError {}
 
-/// The latest attitude, GPS and altitude (by slot), laid out as arrays so that three
-/// sources cost no padding.
+/// The latest attitude, GPS and altitude with their stamps and push deadlines, by slot
+/// (0 attitude, 1 GPS, 2 altitude, as in the transmit queue). Values are kept typed (18
+/// bytes, not three 8-byte frames); a frame is encoded when it leaves.
 #[derive(Clone, Copy, Debug)]
 struct VehicleSources {
-    data: [[u8; 8]; 3],
+    attitude: Attitude,
+    gps: Gps,
+    altitude: Altitude,
     stamp: [Instant; 3],
     next: [Instant; 3],
     /// Bit `i`: slot `i` holds a value.
@@ -215,7 +197,9 @@ struct VehicleSources {
 
 impl VehicleSources {
     const EMPTY: Self = VehicleSources {
-        data: [[0; 8]; 3],
+        attitude: Attitude::ZERO,
+        gps: Gps::ZERO,
+        altitude: Altitude::from_cm(0),
         stamp: [Instant::from_millis(0); 3],
         next: [Instant::from_millis(0); 3],
         has: 0,
@@ -242,33 +226,55 @@ impl VehicleSources {
         }
     }
 
-    /// The value in `slot`, if one was set.
-    fn get(&self, slot: usize) -> Option<([u8; 8], Instant)> {
+    /// When the value in `slot` was measured, if one was set.
+    fn stamp(&self, slot: usize) -> Option<Instant> {
         if !self.has(slot) {
             return None;
         }
-        Some((*self.data.get(slot)?, *self.stamp.get(slot)?))
+        self.stamp.get(slot).copied()
     }
 
-    fn set(&mut self, slot: usize, data: [u8; 8], stamp: Instant) {
-        if let (Some(d), Some(s)) = (self.data.get_mut(slot), self.stamp.get_mut(slot)) {
-            *d = data;
+    /// Records that `slot` now holds a value measured at `stamp`.
+    fn stamped(&mut self, slot: usize, stamp: Instant) {
+        if let Some(s) = self.stamp.get_mut(slot) {
             *s = stamp;
             self.has |= Self::bit(slot);
         }
     }
+
+    /// The frame data of the value in `slot`, if one was set.
+    fn frame(&self, slot: usize) -> Option<[u8; 8]> {
+        if !self.has(slot) {
+            return None;
+        }
+        let frame = match slot {
+            ATTITUDE => VehicleFrame::Attitude(self.attitude),
+            GPS => VehicleFrame::Gps(self.gps),
+            ALTITUDE => VehicleFrame::Altitude(self.altitude),
+            _ => return None,
+        };
+        Some(frame.encode())
+    }
 }
 
+/// A rate hold: the rate command repeats until the dead-man.
 #[derive(Clone, Copy, Debug)]
-enum RateState {
-    Idle,
-    Holding {
-        rate: Rate,
-        refreshed: Instant,
-        next: Instant,
-    },
-    /// The hold ended; its zero-rate frame waits for room in the queue.
-    Stopping,
+struct RateHold {
+    rate: Rate,
+    refreshed: Instant,
+    next: Instant,
+}
+
+/// What keeps the gimbal moving besides single commands. A rate hold and a point-at are
+/// both pointing, and any pointing ends the other: one place holds either.
+#[derive(Clone, Copy, Debug)]
+enum Steering<const Q: usize, const T: usize> {
+    /// Nothing: the gimbal does what it was last told.
+    Manual,
+    /// A rate hold.
+    Rate(RateHold),
+    /// Pointing at a location.
+    Point(point::PointAt<Q, T>),
 }
 
 /// Advances a deadline by one period; after a long gap, resynchronises to `now` so that it
@@ -305,36 +311,33 @@ const MAX_QUIET_MS: u32 = 60_000;
 
 /// The sans-IO link to one gimbal; see the [module docs](self).
 ///
-/// `Q` is the number of control-frame slots, `T` the number of text-frame slots.
+/// `Q` is the number of control-frame slots, `T` the number of text-frame slots; each is at
+/// most 255 (checked when the link is built).
 #[derive(Clone, Debug)]
 pub struct Link<const Q: usize = 8, const T: usize = 8> {
     config: Config,
     tx: TxQueue<Q, T>,
     assembler: PostbackAssembler,
     vehicle: VehicleSources,
-    rate: RateState,
-    point: Option<point::PointAt<Q, T>>,
+    steering: Steering<Q, T>,
     latest: Option<(Postback, Instant)>,
-    up: bool,
+    status: event::Status,
     /// Nothing is due within `quiet_ms` after `last_poll` (0: poll fully next time): the
     /// idle poll's fast path, one load pair and a compare.
     last_poll: Instant,
     quiet_ms: u32,
-    events: heapless::Deque<Event, 8>,
     stats: Counters,
 }
 
-/// The counters the link itself keeps; the rest of [`LinkStats`] is the assembler's.
+/// The counters the link itself keeps; the rest of [`LinkStats`] is the assembler's or
+/// derived.
 #[derive(Clone, Copy, Debug, Default)]
 struct Counters {
-    frames_received: u32,
     frames_sent: u32,
     queue_full: u32,
     requeued: u32,
     superseded: u32,
     ignored_frames: u32,
-    events_dropped: u32,
-    vehicle_pushes: u32,
 }
 
 const ATTITUDE: usize = 0;
@@ -349,13 +352,11 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             tx: TxQueue::new(),
             assembler: PostbackAssembler::with_max_gap(config.postback_max_gap_ms),
             vehicle: VehicleSources::EMPTY,
-            rate: RateState::Idle,
-            point: None,
+            steering: Steering::Manual,
             latest: None,
-            up: false,
+            status: event::Status::new(),
             last_poll: Instant::from_millis(0),
             quiet_ms: 0,
-            events: heapless::Deque::new(),
             stats: Counters::default(),
         }
     }
@@ -365,15 +366,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         &self.config
     }
 
-    fn event(&mut self, e: Event) {
-        if self.events.push_back(e).is_err() {
-            self.stats.events_dropped = self.stats.events_dropped.wrapping_add(1);
-        }
-    }
-
-    /// The next event, oldest first. Up to 8 wait; later ones are dropped and counted.
+    /// The next event; see [`Event`] for how events wait. Nothing is ever dropped: an
+    /// event of a kind already waiting merges with it.
     pub fn next_event(&mut self) -> Option<Event> {
-        self.events.pop_front()
+        self.status.take()
     }
 
     // ---- receiving ----
@@ -382,7 +378,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// keeps few registers, which is what an idle poll pays for.
     #[inline(never)]
     pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) {
-        self.stats.frames_received = self.stats.frames_received.wrapping_add(1);
         if id != ids::POSTBACK {
             self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
             return;
@@ -391,24 +386,20 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.quiet_ms = 0;
         if let Some(p) = self.assembler.feed(id, data, now) {
             self.latest = Some((p, now));
-            if !self.up {
-                self.up = true;
-                self.event(Event::LinkUp);
-            }
-            self.event(Event::Postback);
+            self.status.set_up(true);
+            self.status.raise(Event::Postback);
         }
     }
 
     /// Counts a received frame that cannot be for this node (a standard ID or a remote
     /// frame); the driver calls it for what it does not pass to [`Link::receive`].
     pub fn receive_ignored(&mut self) {
-        self.stats.frames_received = self.stats.frames_received.wrapping_add(1);
         self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
     }
 
     /// Whether a valid postback arrived within the link timeout (as of the last poll).
     pub fn is_up(&self) -> bool {
-        self.up
+        self.status.is_up()
     }
 
     /// The latest valid postback and its age in milliseconds.
@@ -423,8 +414,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     // ---- commands ----
 
-    /// Queues a command. A pointing command (see [`Command::is_pointing`]) cancels a rate
-    /// hold and a point-at. A full queue hands the command back and cancels nothing.
+    /// Queues a command. A pointing command (see [`Command::is_pointing`]) ends a rate hold
+    /// (without a zero-rate command: it is the gimbal's new instruction) or a point-at. A
+    /// full queue hands the command back and ends nothing.
     pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         let command = command.into();
         if self.tx.push_control(command.encode()).is_err() {
@@ -432,10 +424,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             return Err(QueueFull(command));
         }
         if command.is_pointing() {
-            if let RateState::Holding { .. } = self.rate {
-                self.rate = RateState::Idle;
-            }
-            self.point = None;
+            self.steering = Steering::Manual;
+            // A zero-rate frame still waiting would arrive after this command and undo it.
+            self.tx.cancel_zero_rate();
         }
         Ok(())
     }
@@ -447,63 +438,49 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Starting a hold or changing its rate queues the command at once; a full queue hands
     /// the rate back and leaves the hold as it was. Refreshing the same rate queues nothing.
     pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        match &mut self.rate {
-            RateState::Holding {
-                rate: held,
-                refreshed,
-                ..
-            } if *held == rate => {
+        if let Steering::Rate(hold) = &mut self.steering {
+            if hold.rate == rate {
                 // Only the dead-man moves, later: no need to wake the next poll. (Called at
                 // every turn of a main loop, this must not defeat the idle fast path.)
-                *refreshed = now;
-                Ok(())
-            }
-            _ => {
-                if self
-                    .tx
-                    .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
-                    .is_err()
-                {
-                    self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-                    return Err(QueueFull(rate));
-                }
-                self.rate = RateState::Holding {
-                    rate,
-                    refreshed: now,
-                    next: now.add_millis(u32::from(self.config.rate_repeat_ms)),
-                };
-                self.point = None;
-                self.quiet_ms = 0;
-                Ok(())
+                hold.refreshed = now;
+                return Ok(());
             }
         }
+        if self
+            .tx
+            .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
+            .is_err()
+        {
+            self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+            return Err(QueueFull(rate));
+        }
+        self.steering = Steering::Rate(RateHold {
+            rate,
+            refreshed: now,
+            next: now.add_millis(u32::from(self.config.rate_repeat_ms)),
+        });
+        // The new rate supersedes a zero-rate frame still waiting.
+        self.tx.cancel_zero_rate();
+        self.quiet_ms = 0;
+        Ok(())
     }
 
-    /// Ends a rate hold with one zero-rate command. The zero-rate command is never lost: if
-    /// the queue is full it is sent as soon as there is room.
+    /// Ends a rate hold with one zero-rate command. The zero-rate command needs no queue
+    /// slot, so it is never refused: it leaves after the control frames already queued.
     pub fn stop_rate(&mut self) {
-        if let RateState::Holding { .. } = self.rate {
+        if let Steering::Rate(_) = self.steering {
             self.end_rate_hold();
         }
     }
 
     /// Whether a rate hold is active.
     pub fn is_rate_holding(&self) -> bool {
-        matches!(self.rate, RateState::Holding { .. })
+        matches!(self.steering, Steering::Rate(_))
     }
 
     fn end_rate_hold(&mut self) {
-        self.quiet_ms = 0;
-        self.rate = match self
-            .tx
-            .push_control(Command::from(GimbalCommand::Rate(Rate::ZERO)).encode())
-        {
-            Ok(()) => RateState::Idle,
-            Err(_) => {
-                self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-                RateState::Stopping
-            }
-        };
+        self.steering = Steering::Manual;
+        self.tx.mark_zero_rate();
     }
 
     /// Queues a text message, all of it or nothing.
@@ -522,7 +499,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     // ---- vehicle data ----
 
-    fn set_vehicle(&mut self, slot: usize, frame: VehicleFrame, stamp: Instant) {
+    /// Bookkeeping before slot `slot` takes a value measured at `stamp`.
+    fn set_vehicle(&mut self, slot: usize, stamp: Instant) {
         if !self.vehicle.has(slot) {
             self.vehicle.set_due(slot, true);
         }
@@ -532,27 +510,30 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         // main loop, this must not defeat the idle fast path.)
         let older = self
             .vehicle
-            .get(slot)
-            .is_some_and(|(_, old)| !stamp.is_at_or_after(old));
+            .stamp(slot)
+            .is_some_and(|old| !stamp.is_at_or_after(old));
         if self.vehicle.due(slot) || older {
             self.quiet_ms = 0;
         }
-        self.vehicle.set(slot, frame.encode(), stamp);
+        self.vehicle.stamped(slot, stamp);
     }
 
     /// Sets the latest vehicle attitude, measured at `stamp`.
     pub fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
-        self.set_vehicle(ATTITUDE, attitude.into(), stamp);
+        self.set_vehicle(ATTITUDE, stamp);
+        self.vehicle.attitude = attitude;
     }
 
     /// Sets the latest vehicle position, measured at `stamp`.
     pub fn set_gps(&mut self, gps: Gps, stamp: Instant) {
-        self.set_vehicle(GPS, gps.into(), stamp);
+        self.set_vehicle(GPS, stamp);
+        self.vehicle.gps = gps;
     }
 
     /// Sets the latest vehicle altitude, measured at `stamp`.
     pub fn set_altitude(&mut self, altitude: Altitude, stamp: Instant) {
-        self.set_vehicle(ALTITUDE, altitude.into(), stamp);
+        self.set_vehicle(ALTITUDE, stamp);
+        self.vehicle.altitude = altitude;
     }
 
     fn age(stamp: Instant, now: Instant) -> u32 {
@@ -564,25 +545,22 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// The latest data of vehicle slot `slot` if it is fresh at `now`.
-    fn fresh_vehicle(&self, slot: usize, now: Instant) -> Option<[u8; 8]> {
-        let (data, stamp) = self.vehicle.get(slot)?;
-        (Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms)).then_some(data)
+    /// Whether vehicle slot `slot` holds data that is fresh at `now`.
+    fn is_fresh(&self, slot: usize, now: Instant) -> bool {
+        self.vehicle
+            .stamp(slot)
+            .is_some_and(|stamp| Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms))
     }
 
     /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
     /// the gimbal references its heading to north rather than to the nose.
     pub fn attitude_is_pushed(&self, now: Instant) -> bool {
-        self.config.attitude_period_ms != 0 && self.fresh_vehicle(ATTITUDE, now).is_some()
+        self.config.attitude_period_ms != 0 && self.is_fresh(ATTITUDE, now)
     }
 
     /// The latest vehicle attitude set, fresh or not.
     pub fn attitude(&self) -> Option<Attitude> {
-        let (data, _) = self.vehicle.get(ATTITUDE)?;
-        match VehicleFrame::decode(ids::ATTITUDE, &data) {
-            Ok(VehicleFrame::Attitude(a)) => Some(a),
-            _ => None,
-        }
+        self.vehicle.has(ATTITUDE).then_some(self.vehicle.attitude)
     }
 
     // ---- time ----
@@ -619,18 +597,14 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             earliest.offer(at);
         }
         self.poll_rate(now, &mut earliest);
-        if let RateState::Stopping = self.rate {
-            // A zero-rate frame waits for room (the dead-man may have fired just now).
-            earliest.offer(now);
-        }
         self.poll_vehicle(now, &mut earliest);
         self.poll_point(now, &mut earliest);
         if let Some((_, at)) = self.latest {
-            if self.up && now.millis_since(at) > u32::from(self.config.link_timeout_ms) {
-                self.up = false;
-                self.event(Event::LinkDown);
+            if self.status.is_up() && now.millis_since(at) > u32::from(self.config.link_timeout_ms)
+            {
+                self.status.set_up(false);
             }
-            if self.up {
+            if self.status.is_up() {
                 earliest
                     .offer(at.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
             }
@@ -640,54 +614,31 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     fn poll_rate(&mut self, now: Instant, earliest: &mut Earliest) {
-        match self.rate {
-            RateState::Idle => {}
-            RateState::Stopping => {
-                if self
-                    .tx
-                    .push_control(Command::from(GimbalCommand::Rate(Rate::ZERO)).encode())
-                    .is_ok()
-                {
-                    self.rate = RateState::Idle;
-                } else {
-                    // Retry at every poll until there is room.
-                    earliest.offer(now);
-                }
-            }
-            RateState::Holding {
-                rate,
-                refreshed,
-                next,
-            } => {
-                let deadman = u32::from(self.config.rate_deadman_ms);
-                if now.millis_since(refreshed) > deadman {
-                    self.end_rate_hold();
-                    self.event(Event::RateHoldExpired);
-                    return;
-                }
-                let mut next = next;
-                if now.is_at_or_after(next) {
-                    if self
-                        .tx
-                        .push_control(Command::from(GimbalCommand::Rate(rate)).encode())
-                        .is_ok()
-                    {
-                        next = advance(next, u32::from(self.config.rate_repeat_ms), now);
-                        self.rate = RateState::Holding {
-                            rate,
-                            refreshed,
-                            next,
-                        };
-                    } else {
-                        // Try again at the next poll.
-                        self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
-                        earliest.offer(now);
-                    }
-                }
-                earliest.offer(next);
-                earliest.offer(refreshed.add_millis(deadman.saturating_add(1)));
+        let Steering::Rate(mut hold) = self.steering else {
+            return;
+        };
+        let deadman = u32::from(self.config.rate_deadman_ms);
+        if now.millis_since(hold.refreshed) > deadman {
+            self.end_rate_hold();
+            self.status.raise(Event::RateHoldExpired);
+            return;
+        }
+        if now.is_at_or_after(hold.next) {
+            if self
+                .tx
+                .push_control(Command::from(GimbalCommand::Rate(hold.rate)).encode())
+                .is_ok()
+            {
+                hold.next = advance(hold.next, u32::from(self.config.rate_repeat_ms), now);
+                self.steering = Steering::Rate(hold);
+            } else {
+                // Try again at the next poll.
+                self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+                earliest.offer(now);
             }
         }
+        earliest.offer(hold.next);
+        earliest.offer(hold.refreshed.add_millis(deadman.saturating_add(1)));
     }
 
     fn poll_vehicle(&mut self, now: Instant, earliest: &mut Earliest) {
@@ -698,7 +649,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         ];
         let stale = u32::from(self.config.vehicle_stale_ms);
         for (slot, period) in periods.into_iter().enumerate() {
-            let Some((_, stamp)) = self.vehicle.get(slot) else {
+            let Some(stamp) = self.vehicle.stamp(slot) else {
                 continue;
             };
             let Some(&next) = self.vehicle.next.get(slot) else {
@@ -727,7 +678,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 if self.tx.mark_vehicle(slot) {
                     self.stats.superseded = self.stats.superseded.wrapping_add(1);
                 }
-                self.stats.vehicle_pushes = self.stats.vehicle_pushes.wrapping_add(1);
             }
             earliest.offer(next);
             // Going stale changes what fresh data will do: wake up for it too.
@@ -738,34 +688,41 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     // ---- pointing at a location ----
 
     /// Keeps the gimbal pointed at `target` while the vehicle moves; see
-    /// [`point`](self#pointing-at-a-location). Cancels a rate hold.
+    /// [`point`](self#pointing-at-a-location). Ends a rate hold (the heading and pitch
+    /// commands that follow replace it).
     pub fn point_at(&mut self, target: Position) {
-        if let RateState::Holding { .. } = self.rate {
-            self.rate = RateState::Idle;
-        }
         self.quiet_ms = 0;
-        self.point = Some(point::PointAt::new(target));
+        // A zero-rate frame still waiting would arrive after the aim and could undo it.
+        self.tx.cancel_zero_rate();
+        self.steering = Steering::Point(point::PointAt::new(target));
     }
 
     /// Stops pointing at a location (the gimbal keeps its last aim).
     pub fn stop_pointing(&mut self) {
-        self.point = None;
+        if let Steering::Point(_) = self.steering {
+            self.steering = Steering::Manual;
+        }
     }
 
     /// The target being pointed at, if any (kept to 1e-7° and 1 cm).
     pub fn pointing_target(&self) -> Option<Position> {
-        self.point.and_then(|p| p.target.position())
+        match self.steering {
+            Steering::Point(p) => p.target.position(),
+            _ => None,
+        }
     }
 
     fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
-        if let Some(p) = self.point {
+        if let Steering::Point(p) = self.steering {
             (p.step)(self, now, earliest);
         }
     }
 
     /// One point-at step; see [`point::PointAt::step`].
     fn point_step(&mut self, now: Instant, earliest: &mut Earliest) {
-        let Some(mut p) = self.point else { return };
+        let Steering::Point(mut p) = self.steering else {
+            return;
+        };
         if p.due || now.is_at_or_after(p.next) {
             let period = u32::from(self.config.point_at_period_ms);
             p.next = if p.due {
@@ -779,21 +736,26 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             let reference = if self.attitude_is_pushed(now) {
                 Some(point::Reference::North)
             } else {
-                self.fresh_vehicle(ATTITUDE, now)
-                    .map(|a| point::Reference::Nose(i16::from_le_bytes([a[4], a[5]])))
+                self.is_fresh(ATTITUDE, now)
+                    .then(|| point::Reference::Nose(self.vehicle.attitude.heading_centideg()))
             };
-            if let (Some(gps), Some(alt), Some(reference)) = (
-                self.fresh_vehicle(GPS, now),
-                self.fresh_vehicle(ALTITUDE, now),
+            if let (true, true, Some(reference)) = (
+                self.is_fresh(GPS, now),
+                self.is_fresh(ALTITUDE, now),
                 reference,
             ) {
-                let aim = point::solve(&p.target, &gps, &alt, reference);
+                let aim = point::solve(
+                    &p.target,
+                    &self.vehicle.gps,
+                    &self.vehicle.altitude,
+                    reference,
+                );
                 self.aim(&mut p, aim);
             }
         }
         // Due again (no room for the aim): the next poll retries.
         earliest.offer(if p.due { now } else { p.next });
-        self.point = Some(p);
+        self.steering = Steering::Point(p);
     }
 
     fn aim(&mut self, p: &mut point::PointAt<Q, T>, aim: point::Aim) {
@@ -802,7 +764,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             point::Aim::Unreachable { elevation_cdeg } => {
                 if !p.unreachable {
                     p.unreachable = true;
-                    self.event(Event::TargetUnreachable { elevation_cdeg });
+                    self.status
+                        .raise(Event::TargetUnreachable { elevation_cdeg });
                 }
             }
             point::Aim::At(heading, pitch) => {
@@ -836,9 +799,10 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     pub fn next_transmit(&mut self) -> Option<Frame> {
         Some(match self.tx.pop()? {
             queue::Next::Control(data) => Frame::new(ids::CONTROL, data),
+            queue::Next::ZeroRate => Frame::new(ids::CONTROL, queue::zero_rate()),
             queue::Next::Vehicle(slot) => {
                 let id = *queue::VEHICLE_IDS.get(slot)?;
-                Frame::new(id, self.vehicle.get(slot)?.0)
+                Frame::new(id, self.vehicle.frame(slot)?)
             }
             queue::Next::Text(t) => {
                 Frame::new(if t.last { ids::TEXT_END } else { ids::TEXT }, t.data)
@@ -882,7 +846,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         let a = self.assembler.stats();
         let c = self.stats;
         LinkStats {
-            frames_received: c.frames_received,
+            // Every received frame is ignored or fed to the assembler, which accounts for
+            // each: counting them once more on the hot path would be redundant.
+            frames_received: c.ignored_frames.wrapping_add(a.frames),
             frames_sent: c.frames_sent,
             postbacks: a.messages,
             crc_errors: a.crc_errors,
@@ -893,8 +859,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             requeued: c.requeued,
             superseded: c.superseded,
             ignored_frames: c.ignored_frames,
-            events_dropped: c.events_dropped,
-            vehicle_pushes: c.vehicle_pushes,
         }
     }
 

@@ -21,8 +21,7 @@
 use crate::geo::{look_at, Position};
 use crate::time::Instant;
 use crate::wire::control::{Heading, Pitch};
-use crate::wire::ids;
-use crate::wire::vehicle::VehicleFrame;
+use crate::wire::vehicle::{Altitude, Gps};
 
 /// What the heading command is relative to.
 #[derive(Clone, Copy, Debug)]
@@ -44,15 +43,9 @@ pub(crate) enum Aim {
     Unknown,
 }
 
-/// Decodes the vehicle's latest GPS and altitude frames and computes the aim (reached only
-/// from the point-at step, see [`PointAt::step`]).
-pub(crate) fn solve(target: &Target, gps: &[u8; 8], alt: &[u8; 8], reference: Reference) -> Aim {
-    let (Ok(VehicleFrame::Gps(gps)), Ok(VehicleFrame::Altitude(alt))) = (
-        VehicleFrame::decode(ids::GPS, gps),
-        VehicleFrame::decode(ids::ALTITUDE, alt),
-    ) else {
-        return Aim::Unknown;
-    };
+/// Computes the aim from the vehicle's latest GPS position and altitude (reached only from
+/// the point-at step, see [`PointAt::step`]).
+pub(crate) fn solve(target: &Target, gps: &Gps, alt: &Altitude, reference: Reference) -> Aim {
     let Ok(vehicle) = Position::new(gps.lat_deg(), gps.lon_deg(), alt.metres()) else {
         return Aim::Unknown;
     };

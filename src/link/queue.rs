@@ -1,6 +1,9 @@
 //! The transmit queue: control frames before vehicle frames before text.
 //!
 //! - Control frames wait in a FIFO of `Q` slots. A full FIFO is an error to the caller.
+//! - The zero-rate frame that ends a rate hold needs no slot: it is a flag, sent after the
+//!   control frames queued before it (the last rate repeats among them), so ending a hold
+//!   cannot fail for want of room.
 //! - Vehicle frames are a pending flag per kind (attitude, GPS, altitude): the frame is
 //!   built from the latest value when it leaves, so a newer value always wins over one not
 //!   yet sent. Within the class they leave in CAN priority order (attitude `FF13`, GPS
@@ -8,10 +11,12 @@
 //! - Text frames wait in a FIFO of `T` slots; a text is queued all or nothing.
 //!
 //! Slots hold only the 8 data bytes (and, for text, whether the frame ends its message):
-//! the ID follows from the class.
+//! the ID follows from the class. The two FIFOs are rings with one-byte indices, so `Q` and
+//! `T` are at most 255 (checked at compile time).
 
+use super::ring::Ring;
+use crate::wire::control::{Command, GimbalCommand, Rate};
 use crate::wire::ids;
-use heapless::Deque;
 
 /// The priority class of a frame.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -56,6 +61,7 @@ pub(crate) struct TextSlot {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) enum Next {
     Control([u8; 8]),
+    ZeroRate,
     Vehicle(usize),
     Text(TextSlot),
 }
@@ -63,10 +69,11 @@ pub(crate) enum Next {
 /// The transmit queue; see the [module docs](self).
 #[derive(Clone, Debug)]
 pub struct TxQueue<const Q: usize, const T: usize> {
-    control: Deque<[u8; 8], Q>,
-    text: Deque<TextSlot, T>,
-    /// Bit `i` set: vehicle slot `i` waits.
-    vehicle: u8,
+    control: Ring<[u8; 8], Q>,
+    text: Ring<TextSlot, T>,
+    /// Bit `i` set (0 to 2): vehicle slot `i` waits; [`ZERO_RATE`]: the zero-rate frame
+    /// waits.
+    flags: u8,
     /// Frames waiting in all three classes, so that "anything to send?" is one compare.
     waiting: u16,
 }
@@ -81,9 +88,12 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// An empty queue.
     pub const fn new() -> Self {
         TxQueue {
-            control: Deque::new(),
-            text: Deque::new(),
-            vehicle: 0,
+            control: Ring::new([0; 8]),
+            text: Ring::new(TextSlot {
+                data: [0; 8],
+                last: false,
+            }),
+            flags: 0,
             waiting: 0,
         }
     }
@@ -101,12 +111,12 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
 
     /// Free control slots.
     pub fn control_free(&self) -> usize {
-        Q - self.control.len()
+        self.control.free()
     }
 
     /// Free text slots.
     pub fn text_free(&self) -> usize {
-        T - self.text.len()
+        self.text.free()
     }
 
     /// Queues a control frame's data; hands it back when the FIFO is full.
@@ -119,10 +129,27 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// Marks vehicle slot `slot` as waiting. Returns `true` when it already was (the value
     /// not yet sent is superseded by the latest).
     pub fn mark_vehicle(&mut self, slot: usize) -> bool {
-        let bit = 1u8 << (slot & 7);
-        let was = self.vehicle & bit != 0;
-        if !was {
-            self.vehicle |= bit;
+        self.mark(1u8 << (slot & 3) & VEHICLE)
+    }
+
+    /// Queues the zero-rate frame (once: it is one frame whenever it was asked for).
+    /// Returns `true` when it already waited.
+    pub fn mark_zero_rate(&mut self) -> bool {
+        self.mark(ZERO_RATE)
+    }
+
+    /// Withdraws a waiting zero-rate frame (a newer pointing instruction replaces it).
+    pub fn cancel_zero_rate(&mut self) {
+        if self.flags & ZERO_RATE != 0 {
+            self.flags &= !ZERO_RATE;
+            self.waiting -= 1;
+        }
+    }
+
+    fn mark(&mut self, bit: u8) -> bool {
+        let was = self.flags & bit != 0;
+        if !was && bit != 0 {
+            self.flags |= bit;
             self.waiting += 1;
         }
         was
@@ -155,10 +182,16 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         }
         let next = if let Some(d) = self.control.pop_front() {
             Next::Control(d)
-        } else if self.vehicle != 0 {
-            let slot = self.vehicle.trailing_zeros() as usize;
-            self.vehicle &= self.vehicle - 1;
-            Next::Vehicle(slot)
+        } else if self.flags != 0 {
+            // The zero-rate flag is above the vehicle bits: taken after them, so test first.
+            if self.flags & ZERO_RATE != 0 {
+                self.flags &= !ZERO_RATE;
+                Next::ZeroRate
+            } else {
+                let slot = self.flags.trailing_zeros() as usize;
+                self.flags &= self.flags - 1;
+                Next::Vehicle(slot)
+            }
         } else {
             Next::Text(self.text.pop_front()?)
         };
@@ -176,6 +209,14 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 Ok(()) => {
                     self.waiting += 1;
                     Requeued::Queued
+                }
+                // A zero-rate frame needs no slot.
+                Err(data) if data == zero_rate() => {
+                    if self.mark_zero_rate() {
+                        Requeued::Superseded
+                    } else {
+                        Requeued::Queued
+                    }
                 }
                 Err(_) => Requeued::NoRoom,
             },
@@ -201,6 +242,16 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     }
 }
 
+/// The vehicle slots' bits in [`TxQueue::flags`].
+const VEHICLE: u8 = 0b0111;
+/// The zero-rate frame's bit in [`TxQueue::flags`].
+const ZERO_RATE: u8 = 0b1000;
+
+/// The data of the zero-rate frame.
+pub(crate) fn zero_rate() -> [u8; 8] {
+    Command::from(GimbalCommand::Rate(Rate::ZERO)).encode()
+}
+
 /// What happened to a frame offered back to the queue.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) enum Requeued {
@@ -215,6 +266,7 @@ pub(crate) enum Requeued {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec::Vec;
 
     fn text(tag: u8, last: bool) -> TextSlot {
         TextSlot {
@@ -268,11 +320,19 @@ mod tests {
                     5 => { q.requeue(ids::CONTROL, [0; 8]); }
                     _ => { q.requeue(ids::TEXT_END, [0; 8]); }
                 }
-                let held = q.control.len() + q.vehicle.count_ones() as usize + q.text.len();
+                let held = q.control.len() + q.flags.count_ones() as usize + q.text.len();
                 proptest::prop_assert_eq!(q.len(), held);
                 proptest::prop_assert_eq!(q.is_empty(), held == 0);
             }
         }
+    }
+
+    #[test]
+    fn default_slots_are_the_136_bytes_the_size_report_subtracts() {
+        use core::mem::size_of;
+        assert_eq!(8 * size_of::<[u8; 8]>() + 8 * size_of::<TextSlot>(), 136);
+        // Beyond the slots: two bytes of ring indices per FIFO, the flags, the count.
+        assert_eq!(size_of::<TxQueue<8, 8>>(), 136 + 8);
     }
 
     #[test]

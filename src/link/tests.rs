@@ -222,7 +222,7 @@ fn postback_frames(link: &mut Link, at: u32, pitch: i16) {
 }
 
 #[test]
-fn a_dead_man_with_a_full_queue_sends_zero_as_soon_as_there_is_room() {
+fn a_dead_man_with_a_full_queue_still_queues_the_zero_rate_frame_after_the_others() {
     let mut link: Link<2, 2> = Link::new(Config::default());
     let r = Rate::new(3.0, 0.0).unwrap();
     link.set_rate(r, Instant::from_millis(0)).unwrap();
@@ -231,26 +231,86 @@ fn a_dead_man_with_a_full_queue_sends_zero_as_soon_as_there_is_room() {
     link.transmit_done(None);
     // Two camera commands (not pointing: the hold stays) fill the queue; nothing is sent
     // for a while (a busy bus).
-    link.send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
-        .unwrap();
-    link.send(GimbalCommand::Video(crate::wire::control::Video::Start))
-        .unwrap();
-    for t in 1..=251 {
-        link.poll(Instant::from_millis(t)); // the dead-man fires at 251 with no room
+    let zoom = Command::from(GimbalCommand::Zoom(crate::wire::control::Zoom::In));
+    let video = Command::from(GimbalCommand::Video(crate::wire::control::Video::Start));
+    link.send(zoom).unwrap();
+    link.send(video).unwrap();
+    for t in 1..=250 {
+        link.poll(Instant::from_millis(t)); // repeats find no room (counted)
     }
+    let refused = link.stats().queue_full;
+    link.poll(Instant::from_millis(251)); // the dead-man fires with no room
     assert_eq!(link.next_event(), Some(Event::RateHoldExpired));
-    // The bus frees the queue; the very next poll must queue the zero-rate frame.
-    while link.next_transmit().is_some() {
-        link.transmit_done(None);
-    }
-    link.poll(Instant::from_millis(252));
-    let zero = link
-        .next_transmit()
-        .expect("the zero-rate frame, at the first poll with room");
     assert_eq!(
-        Command::decode(&zero.data),
-        Ok(Command::from(GimbalCommand::Rate(Rate::ZERO)))
+        link.stats().queue_full,
+        refused,
+        "ending a hold needs no slot"
     );
+    // The bus frees the queue: the frames queued before the zero-rate frame, then it, once.
+    let sent: Vec<Command> = core::iter::from_fn(|| {
+        let f = link.next_transmit()?;
+        link.transmit_done(None);
+        Some(Command::decode(&f.data).unwrap())
+    })
+    .collect();
+    assert_eq!(
+        sent,
+        [zoom, video, Command::from(GimbalCommand::Rate(Rate::ZERO))]
+    );
+}
+
+#[test]
+fn a_waiting_zero_rate_frame_gives_way_to_a_newer_pointing_instruction() {
+    let mut link: Link<1, 2> = Link::new(Config::default());
+    let t0 = Instant::from_millis(0);
+    link.set_rate(Rate::new(3.0, 0.0).unwrap(), t0).unwrap();
+    // The control slot is taken by the rate frame; the zero-rate waits without a slot.
+    link.stop_rate();
+    assert_eq!(link.tx.len(), 2);
+    assert!(link.next_transmit().is_some());
+    link.transmit_done(None);
+    // Pitch goes out instead of the zero-rate, which would undo it if it came after.
+    let pitch = Command::from(GimbalCommand::Pitch(
+        crate::wire::control::Pitch::new(-30.0).unwrap(),
+    ));
+    link.send(pitch).unwrap();
+    assert_eq!(
+        Command::decode(&link.next_transmit().unwrap().data),
+        Ok(pitch)
+    );
+    link.transmit_done(None);
+    assert_eq!(link.next_transmit(), None);
+    // A new rate replaces it too; stopping again queues one zero-rate frame, however often.
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), t0).unwrap();
+    link.stop_rate();
+    link.stop_rate();
+    link.set_rate(Rate::new(2.0, 0.0).unwrap(), t0).unwrap_err(); // the slot is taken
+    assert!(!link.is_rate_holding());
+    let frames: Vec<Frame> = core::iter::from_fn(|| {
+        let f = link.next_transmit()?;
+        link.transmit_done(None);
+        Some(f)
+    })
+    .collect();
+    assert_eq!(frames.len(), 2);
+    assert_eq!(frames[1].data, queue::zero_rate());
+    // A zero-rate frame refused by the driver comes back even with the FIFO full.
+    link.set_rate(Rate::new(1.0, 0.0).unwrap(), t0).unwrap();
+    link.stop_rate();
+    assert!(link.next_transmit().is_some());
+    link.transmit_done(None);
+    let zero = link.next_transmit().unwrap();
+    let zoom = Command::from(GimbalCommand::Zoom(crate::wire::control::Zoom::In));
+    link.send(zoom).unwrap();
+    link.transmit_refused(zero);
+    let frames: Vec<[u8; 8]> = core::iter::from_fn(|| {
+        let f = link.next_transmit()?;
+        link.transmit_done(None);
+        Some(f.data)
+    })
+    .collect();
+    assert_eq!(frames, [zoom.encode(), queue::zero_rate()]);
+    assert_eq!(link.stats().queue_full, 1, "only the refused set_rate");
 }
 
 #[test]
@@ -287,17 +347,30 @@ fn link_up_down_and_latest_postback() {
 }
 
 #[test]
-fn events_overflow_is_counted() {
+fn events_wait_as_a_set_and_none_is_lost() {
     let mut link: Link = Link::new(Config::default());
+    // Ten postbacks and a link-up, never taken: one of each kind waits.
     for i in 0..10 {
-        postback_frames(&mut link, 1000 + i * 10, 0);
+        postback_frames(&mut link, 1000 + i * 10, -i16::try_from(i).unwrap());
     }
-    let mut n = 0;
-    while link.next_event().is_some() {
-        n += 1;
-    }
-    assert_eq!(n, 8);
-    assert_eq!(link.stats().events_dropped, 3); // 11 events: LinkUp + 10 postbacks
+    assert_eq!(link.next_event(), Some(Event::LinkUp));
+    assert_eq!(link.next_event(), Some(Event::Postback));
+    assert_eq!(link.next_event(), None);
+    assert_eq!(link.stats().postbacks, 10);
+    // The newest is the one to read.
+    assert_eq!(
+        link.latest_postback(Instant::from_millis(1090))
+            .map(|(p, _)| p.pitch),
+        Some(-9)
+    );
+    // Down and up again between two reads: both, in order, ending in the current state.
+    link.poll(Instant::from_millis(2591));
+    assert!(!link.is_up());
+    postback_frames(&mut link, 3000, 0);
+    assert_eq!(link.next_event(), Some(Event::LinkDown));
+    assert_eq!(link.next_event(), Some(Event::LinkUp));
+    assert_eq!(link.next_event(), Some(Event::Postback));
+    assert_eq!(link.next_event(), None);
 }
 
 #[test]

@@ -48,6 +48,11 @@ pub struct Gps {
 impl Gps {
     /// CAN ID of the GPS frame.
     pub const ID: u32 = ids::GPS;
+    /// Latitude and longitude 0 (a placeholder for storage that is not yet set).
+    pub(crate) const ZERO: Gps = Gps {
+        lat_e7: 0,
+        lon_e7: 0,
+    };
 
     /// A position from degrees: latitude in [-90, 90], longitude in [-180, 180].
     pub fn new(lat_deg: f64, lon_deg: f64) -> Result<Self, RangeError> {
@@ -148,6 +153,12 @@ pub struct Attitude {
 impl Attitude {
     /// CAN ID of the attitude frame.
     pub const ID: u32 = ids::ATTITUDE;
+    /// Level, heading north (a placeholder for storage that is not yet set).
+    pub(crate) const ZERO: Attitude = Attitude {
+        pitch: 0,
+        roll: 0,
+        heading: 0,
+    };
 
     /// An attitude from degrees: pitch in [-90, 90], roll in [-180, 180], heading any finite
     /// value (normalised into [-180, 180) for the wire).
