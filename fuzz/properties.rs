@@ -2,10 +2,13 @@
 //! `tests/no_panic.rs` includes this file (`#[path]`) so that `cargo test` checks the same
 //! properties on every run. Each panics (an `assert!`) when its property fails.
 
+use idu_gimbal::geo::Position;
 use idu_gimbal::link::postback::PostbackAssembler;
-use idu_gimbal::wire::control::Command;
+use idu_gimbal::link::{Config, Event, Link};
+use idu_gimbal::wire::control::{Command, Rate};
 use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, MAX_FRAME_LEN};
-use idu_gimbal::wire::{ids, postback::Postback};
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::wire::{ids, postback::Postback, Frame};
 use idu_gimbal::Instant;
 
 /// Any bytes: decoding never panics, and whatever decodes re-encodes to the same bytes.
@@ -56,5 +59,159 @@ pub fn assembler(data: &[u8]) {
     assert_eq!(
         s.frames,
         4 * s.messages + s.discarded_frames + asm.pending() as u32
+    );
+}
+
+/// Any sequence of operations on a [`Link`] with small queues, as 12-byte records (operation,
+/// time step, two arguments, eight bytes): received frames of any ID and length, time,
+/// commands, rate holds, texts, vehicle data, point-at, every transmit outcome, events. The
+/// link never panics, and its accounting holds: every received frame is counted once,
+/// `has_transmit` says whether a frame is waiting, and link transitions alternate and end in
+/// the link's state.
+pub fn link(data: &[u8]) {
+    let mut link: Link<3, 4> = Link::new(Config::default());
+    let mut t = 0u32;
+    let mut received = 0u32;
+    let mut told_up = false;
+    let take_events = |link: &mut Link<3, 4>, told_up: &mut bool| {
+        while let Some(e) = link.next_event() {
+            match e {
+                Event::LinkUp => assert!(!*told_up, "LinkUp twice"),
+                Event::LinkDown => assert!(*told_up, "LinkDown twice"),
+                _ => continue,
+            }
+            *told_up = !*told_up;
+        }
+    };
+    for rec in data.chunks(12) {
+        let [op, dt, a, b, rest @ ..] = rec else {
+            break;
+        };
+        // Steps of up to about a second: every timeout is reached.
+        t = t.wrapping_add(u32::from(*dt) * 4);
+        let now = Instant::from_millis(t);
+        let mut bytes = [0u8; 8];
+        bytes[..rest.len()].copy_from_slice(rest);
+        let (a, b) = (*a, *b);
+        let centi = |x: u8| i16::from(x as i8) * 100;
+        match op % 16 {
+            0..=2 => {
+                let id = match a % 4 {
+                    0 | 1 => ids::POSTBACK,
+                    2 => ids::CONTROL,
+                    _ => u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) & 0x1FFF_FFFF,
+                };
+                let len = usize::from(b % 10).min(rest.len());
+                link.receive(id, &rest[..len], now);
+                received += 1;
+            }
+            3 => {
+                link.receive_ignored();
+                received += 1;
+            }
+            4 => {
+                if let Ok(c) = Command::decode(&bytes) {
+                    let _ = link.send(c);
+                }
+            }
+            5 => {
+                if let Ok(r) = Rate::from_centi(centi(a), centi(b)) {
+                    let _ = link.set_rate(r, now);
+                }
+            }
+            6 => link.stop_rate(),
+            7 => {
+                let _ = link.send_text(&rest[..usize::from(b) % (rest.len() + 1)]);
+            }
+            8 => {
+                // Stamps a little in the past, or (clock skew) in the future.
+                let stamp = now
+                    .add_millis(u32::from(b) * 16)
+                    .add_millis(u32::MAX - 2047);
+                match a % 3 {
+                    0 => {
+                        if let Ok(att) = Attitude::from_centideg(
+                            centi(bytes[0]) / 2,
+                            centi(bytes[1]),
+                            centi(bytes[2]),
+                        ) {
+                            link.set_attitude(att, stamp);
+                        }
+                    }
+                    1 => {
+                        let lat = i32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
+                            % 900_000_000;
+                        let lon = i32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]])
+                            % 1_800_000_000;
+                        if let Ok(g) = Gps::from_e7(lat, lon) {
+                            link.set_gps(g, stamp);
+                        }
+                    }
+                    _ => link.set_altitude(
+                        Altitude::from_cm(i32::from(i16::from_le_bytes([bytes[0], bytes[1]])) * 10),
+                        stamp,
+                    ),
+                }
+            }
+            9 => {
+                if a & 1 == 0 {
+                    let lat = f64::from(i16::from_le_bytes([bytes[0], bytes[1]])) / 400.0;
+                    let lon = f64::from(i16::from_le_bytes([bytes[2], bytes[3]])) / 200.0;
+                    let alt = f64::from(i16::from_le_bytes([bytes[4], bytes[5]]));
+                    if let Ok(p) = Position::new(lat, lon, alt) {
+                        link.point_at(p);
+                    }
+                } else {
+                    link.stop_pointing();
+                }
+            }
+            10..=12 => {
+                let waiting = link.has_transmit();
+                let frame = link.next_transmit();
+                assert_eq!(
+                    waiting,
+                    frame.is_some(),
+                    "has_transmit disagrees with the queue"
+                );
+                if let Some(f) = frame {
+                    match b % 4 {
+                        0 | 1 => link.transmit_done(None),
+                        2 => link.transmit_refused(f),
+                        _ => {
+                            // The driver hands back a frame it displaced: one sent before,
+                            // or anything at all.
+                            let id = [
+                                ids::CONTROL,
+                                ids::ATTITUDE,
+                                ids::GPS,
+                                ids::ALTITUDE,
+                                ids::TEXT,
+                                ids::TEXT_END,
+                                0x123,
+                            ][usize::from(a) % 7];
+                            let displaced = if a & 0x80 == 0 {
+                                f
+                            } else {
+                                Frame::new(id, bytes)
+                            };
+                            link.transmit_done(Some(displaced));
+                        }
+                    }
+                }
+            }
+            13 => take_events(&mut link, &mut told_up),
+            _ => link.poll(now),
+        }
+    }
+    take_events(&mut link, &mut told_up);
+    assert_eq!(
+        told_up,
+        link.is_up(),
+        "the last transition told is not the link's state"
+    );
+    assert_eq!(
+        link.stats().frames_received,
+        received,
+        "a received frame was not counted once"
     );
 }

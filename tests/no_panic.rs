@@ -23,6 +23,13 @@ proptest! {
         properties::stream_parser(&data);
     }
 
+    /// Operations biased toward postback frames and the transmit path (see
+    /// `properties::link` for the record layout).
+    #[test]
+    fn link(data in proptest::collection::vec(prop_oneof![any::<u8>(), Just(0xEB), Just(0x90)], 0..600)) {
+        properties::link(&data);
+    }
+
     #[test]
     fn assembler(data in proptest::collection::vec(prop_oneof![any::<u8>(), Just(0xEB), Just(0x90)], 0..400)) {
         properties::assembler(&data);

@@ -125,7 +125,8 @@ pub struct LinkStats {
     /// Postback-ID frames that were not 8 bytes.
     pub malformed: u32,
     /// Commands, rate holds or texts refused because the queue was full (including
-    /// scheduled frames that had to wait for room).
+    /// scheduled frames that had to wait for room), and frames the CAN driver handed back
+    /// that could not be re-queued (no room, or not this link's frames).
     pub queue_full: u32,
     /// Frames handed back by the CAN driver (displaced from a mailbox) and re-queued.
     pub requeued: u32,
@@ -797,17 +798,25 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// it with [`Link::transmit_done`] or [`Link::transmit_refused`].
     #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
-        Some(match self.tx.pop()? {
-            queue::Next::Control(data) => Frame::new(ids::CONTROL, data),
-            queue::Next::ZeroRate => Frame::new(ids::CONTROL, queue::zero_rate()),
-            queue::Next::Vehicle(slot) => {
-                let id = *queue::VEHICLE_IDS.get(slot)?;
-                Frame::new(id, self.vehicle.frame(slot)?)
+        loop {
+            let frame = match self.tx.pop()? {
+                queue::Next::Control(data) => Some(Frame::new(ids::CONTROL, data)),
+                queue::Next::ZeroRate => Some(Frame::new(ids::CONTROL, queue::zero_rate())),
+                // Only a slot holding a value is ever marked (see `requeue`); were one not,
+                // the frames behind it would still come out now.
+                queue::Next::Vehicle(slot) => queue::VEHICLE_IDS
+                    .get(slot)
+                    .zip(self.vehicle.frame(slot))
+                    .map(|(&id, data)| Frame::new(id, data)),
+                queue::Next::Text(t) => Some(Frame::new(
+                    if t.last { ids::TEXT_END } else { ids::TEXT },
+                    t.data,
+                )),
+            };
+            if frame.is_some() {
+                return frame;
             }
-            queue::Next::Text(t) => {
-                Frame::new(if t.last { ids::TEXT_END } else { ids::TEXT }, t.data)
-            }
-        })
+        }
     }
 
     /// Whether frames wait for transmission.
@@ -820,15 +829,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
-        if let Some(frame) = displaced {
+        let Some(frame) = displaced else { return };
+        let requeued = self.requeue(frame);
+        if requeued != Requeued::Foreign {
             // The displaced frame had been counted as sent; it is not yet.
             self.stats.frames_sent = self.stats.frames_sent.wrapping_sub(1);
-            match self.tx.requeue(frame.id, frame.data) {
-                Requeued::Queued => self.stats.requeued = self.stats.requeued.wrapping_add(1),
-                Requeued::Superseded => {
-                    self.stats.superseded = self.stats.superseded.wrapping_add(1)
-                }
-                Requeued::NoRoom => self.stats.queue_full = self.stats.queue_full.wrapping_add(1),
+        }
+        match requeued {
+            Requeued::Queued => self.stats.requeued = self.stats.requeued.wrapping_add(1),
+            Requeued::Superseded => self.stats.superseded = self.stats.superseded.wrapping_add(1),
+            Requeued::NoRoom | Requeued::Foreign => {
+                self.stats.queue_full = self.stats.queue_full.wrapping_add(1)
             }
         }
     }
@@ -836,9 +847,20 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// The driver did not take the frame last taken (it was busy or failed): it goes back
     /// to the front of its class.
     pub fn transmit_refused(&mut self, frame: Frame) {
-        if self.tx.requeue(frame.id, frame.data) == Requeued::NoRoom {
+        if let Requeued::NoRoom | Requeued::Foreign = self.requeue(frame) {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
         }
+    }
+
+    fn requeue(&mut self, frame: Frame) -> Requeued {
+        // A vehicle frame is re-sent from the value the link holds: with none, the frame
+        // cannot have been this link's.
+        if let queue::Class::Vehicle(slot) = queue::Class::of(frame.id) {
+            if !self.vehicle.has(slot) {
+                return Requeued::Foreign;
+            }
+        }
+        self.tx.requeue(frame.id, frame.data)
     }
 
     /// Counters, including the postback assembler's.

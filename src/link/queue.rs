@@ -200,9 +200,10 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     }
 
     /// Puts a frame back at the front of its class: for a frame popped and refused by the
-    /// driver, or one the driver handed back from a mailbox. Returns `false` when a control
-    /// or text FIFO is full (cannot happen for a frame just popped) or the ID is foreign.
-    /// A vehicle frame whose slot is already waiting again is superseded, not an error.
+    /// driver, or one the driver handed back from a mailbox. A full control or text FIFO
+    /// cannot take it back (this cannot happen to a frame just popped), except the
+    /// zero-rate frame, which needs no slot. A vehicle frame whose slot is already waiting
+    /// again is superseded, not an error.
     pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8]) -> Requeued {
         match Class::of(id) {
             Class::Control => match self.control.push_front(data) {
@@ -237,7 +238,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                     Requeued::Queued
                 }
             }
-            Class::Foreign => Requeued::NoRoom,
+            Class::Foreign => Requeued::Foreign,
         }
     }
 }
@@ -259,8 +260,10 @@ pub(crate) enum Requeued {
     Queued,
     /// A newer vehicle value of the same kind waits: the old one is superseded.
     Superseded,
-    /// No room, or not a frame of this crate.
+    /// No room in its FIFO.
     NoRoom,
+    /// Not a frame this crate sends.
+    Foreign,
 }
 
 #[cfg(test)]
@@ -379,6 +382,6 @@ mod tests {
         assert_eq!(q.requeue(ids::CONTROL, [7; 8]), Requeued::Queued);
         assert_eq!(q.requeue(ids::CONTROL, [6; 8]), Requeued::NoRoom);
         assert_eq!(q.pop(), Some(Next::Control([7; 8])));
-        assert_eq!(q.requeue(0x123, [0; 8]), Requeued::NoRoom);
+        assert_eq!(q.requeue(0x123, [0; 8]), Requeued::Foreign);
     }
 }

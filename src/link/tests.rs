@@ -374,6 +374,27 @@ fn events_wait_as_a_set_and_none_is_lost() {
 }
 
 #[test]
+fn a_handed_back_frame_that_is_not_the_links_is_counted_not_queued() {
+    // Found by the `link` fuzz property: a vehicle frame handed back for a slot that holds
+    // no value was marked, and `next_transmit` then answered None with a text waiting.
+    let mut link: Link = Link::new(Config::default());
+    link.send(GimbalCommand::Recenter).unwrap();
+    link.send_text(b"HI").unwrap();
+    assert_eq!(link.next_transmit().map(|f| f.id), Some(ids::CONTROL));
+    link.transmit_done(Some(Frame::new(ids::GPS, [0; 8])));
+    assert_eq!(link.next_transmit().map(|f| f.id), Some(ids::TEXT_END));
+    link.transmit_done(Some(Frame::new(0x123, [0; 8])));
+    let s = link.stats();
+    assert_eq!(s.queue_full, 2);
+    assert_eq!(
+        s.frames_sent, 2,
+        "neither frame handed back was counted as sent"
+    );
+    assert_eq!(s.requeued, 0);
+    assert!(!link.has_transmit());
+}
+
+#[test]
 fn displaced_frames_are_requeued_and_refused_frames_go_back() {
     let mut link: Link = Link::new(Config::default());
     link.send_text(b"ABCDEFGHIJ").unwrap();
