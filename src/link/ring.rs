@@ -105,23 +105,23 @@ mod tests {
         let mut model = VecDeque::new();
         for &(op, x) in ops {
             match op % 3 {
-                0 => {
-                    let expected = if model.len() < N {
+                push @ (0 | 1) => {
+                    let back = push == 0;
+                    let expected = if model.len() >= N {
+                        Err(x)
+                    } else if back {
                         model.push_back(x);
                         Ok(())
                     } else {
-                        Err(x)
-                    };
-                    prop_assert_eq!(ring.push_back(x), expected);
-                }
-                1 => {
-                    let expected = if model.len() < N {
                         model.push_front(x);
                         Ok(())
-                    } else {
-                        Err(x)
                     };
-                    prop_assert_eq!(ring.push_front(x), expected);
+                    let got = if back {
+                        ring.push_back(x)
+                    } else {
+                        ring.push_front(x)
+                    };
+                    prop_assert_eq!(got, expected);
                 }
                 _ => prop_assert_eq!(ring.pop_front(), model.pop_front()),
             }
