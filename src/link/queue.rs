@@ -129,6 +129,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// Marks vehicle slot `slot` as waiting. Returns `true` when it already was (the value
     /// not yet sent is superseded by the latest).
     pub fn mark_vehicle(&mut self, slot: usize) -> bool {
+        // Slots are 0 to 2; anything else marks nothing.
         self.mark(1u8 << (slot & 3) & VEHICLE)
     }
 
@@ -183,7 +184,8 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         let next = if let Some(d) = self.control.pop_front() {
             Next::Control(d)
         } else if self.flags != 0 {
-            // The zero-rate flag is above the vehicle bits: taken after them, so test first.
+            // The zero-rate frame is a control frame: it leaves before the vehicle frames,
+            // though its bit is above theirs.
             if self.flags & ZERO_RATE != 0 {
                 self.flags &= !ZERO_RATE;
                 Next::ZeroRate
