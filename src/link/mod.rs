@@ -243,18 +243,17 @@ impl VehicleSources {
         }
     }
 
-    /// The frame data of the value in `slot`, if one was set.
-    fn frame(&self, slot: usize) -> Option<[u8; 8]> {
+    /// The value in `slot`, if one was set.
+    fn value(&self, slot: usize) -> Option<VehicleFrame> {
         if !self.has(slot) {
             return None;
         }
-        let frame = match slot {
-            ATTITUDE => VehicleFrame::Attitude(self.attitude),
-            GPS => VehicleFrame::Gps(self.gps),
-            ALTITUDE => VehicleFrame::Altitude(self.altitude),
-            _ => return None,
-        };
-        Some(frame.encode())
+        match slot {
+            ATTITUDE => Some(VehicleFrame::Attitude(self.attitude)),
+            GPS => Some(VehicleFrame::Gps(self.gps)),
+            ALTITUDE => Some(VehicleFrame::Altitude(self.altitude)),
+            _ => None,
+        }
     }
 }
 
@@ -804,10 +803,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 queue::Next::ZeroRate => Some(Frame::new(ids::CONTROL, queue::zero_rate())),
                 // Only a slot holding a value is ever marked (see `requeue`); were one not,
                 // the frames behind it would still come out now.
-                queue::Next::Vehicle(slot) => queue::VEHICLE_IDS
-                    .get(slot)
-                    .zip(self.vehicle.frame(slot))
-                    .map(|(&id, data)| Frame::new(id, data)),
+                queue::Next::Vehicle(slot) => self.vehicle.value(slot).map(|v| v.to_frame()),
                 queue::Next::Text(t) => Some(Frame::new(
                     if t.last { ids::TEXT_END } else { ids::TEXT },
                     t.data,
