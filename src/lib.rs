@@ -1,6 +1,7 @@
-//! Drive an IDU camera gimbal over CAN from a flight controller.
+//! Drive an IDU camera gimbal over CAN or its UART from a flight controller.
 //!
-//! `no_std`, allocation-free and panic-free, over any [`embedded_can`] 0.4 driver.
+//! `no_std`, allocation-free and panic-free, over any [`embedded_can`] 0.4 driver, or any
+//! serial port through `embedded-io` 0.7 or `embedded-hal-nb`.
 //!
 //! # Layers
 //!
@@ -11,11 +12,17 @@
 //! - [`link`]: the sans-IO state machine: transmit queue, vehicle push, rate hold with
 //!   dead-man, postback and text reassembly, link health, counters. Frames in, frames out,
 //!   time passed in: usable from async or non-`embedded-can` stacks.
-//! - [`Gimbal`]: the driver, moving frames between an `embedded_can::nb::Can` driver and the
-//!   link ([`Blocking`] adapts `embedded_can::blocking::Can` drivers).
-//! - Beside it: `sim` (a simulated gimbal), `mock` (feature `mock`: an in-memory CAN bus
-//!   with fault injection), [`geo`] (WGS84 look-at), [`video`] (RTSP addresses) and
-//!   [`interface`] (network, UART and CAN defaults, filter helpers).
+//!   [`link::serial::SerialLink`] is the same link over the serial byte stream: bytes in,
+//!   bytes out.
+//! - [`driver`]: one module per transport over that link. [`Gimbal`] moves frames between
+//!   an `embedded_can::nb::Can` driver and the link ([`Blocking`] adapts
+//!   `embedded_can::blocking::Can` drivers); [`SerialGimbal`] moves bytes between a UART
+//!   ([`driver::Io`] for `embedded-io` 0.7, [`driver::Nb`] for `embedded-hal-nb`) and the
+//!   serial link, which carries control commands and postbacks only.
+//! - Beside them: `sim` (a simulated gimbal, on CAN or serial), `mock` (feature `mock`: an
+//!   in-memory CAN bus and serial pipe with fault injection), [`geo`] (WGS84 look-at),
+//!   [`video`] (RTSP addresses) and [`interface`] (network, UART and CAN defaults, filter
+//!   helpers).
 //!
 //! # Time
 //!
@@ -80,7 +87,7 @@ pub mod time;
 pub mod video;
 pub mod wire;
 
-pub use driver::{Blocking, Gimbal};
+pub use driver::{Blocking, Gimbal, SerialGimbal};
 
 // The README's examples are compiled and run as doctests.
 #[cfg(doctest)]

@@ -1,4 +1,5 @@
-//! An in-memory CAN bus with fault injection, for host tests and emulated firmware.
+//! An in-memory CAN bus with fault injection, for host tests and emulated firmware; the
+//! serial line's counterpart is [`serial::Pipe`].
 //!
 //! A [`Bus`] has `ENDPOINTS` nodes. Each node, taken once with [`Bus::endpoint`], is an
 //! [`Endpoint`] that implements [`embedded_can::nb::Can`] and [`embedded_can::blocking::Can`]
@@ -52,6 +53,8 @@
 //! assert_eq!(gimbal.receive(), Err(nb::Error::WouldBlock));
 //! assert_eq!(bus.stats().delivered, 1);
 //! ```
+
+pub mod serial;
 
 use core::cell::RefCell;
 use core::fmt;

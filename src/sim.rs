@@ -117,6 +117,8 @@
 //! queue (`TX` frames) lacks room for all four the whole postback is dropped, counted in
 //! [`SimStats::tx_overflows`] and `poll` returns `None` (a `TX` below 4 drops them all).
 
+pub mod serial;
+
 use core::fmt;
 
 use heapless::Deque;

@@ -35,6 +35,7 @@ mod point;
 pub mod postback;
 pub mod queue;
 mod ring;
+pub mod serial;
 pub mod text;
 
 use core::fmt;
@@ -385,10 +386,18 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         // The assembler's expiry and the link's health deadline may move.
         self.quiet_ms = 0;
         if let Some(p) = self.assembler.feed(id, data, now) {
-            self.latest = Some((p, now));
-            self.status.set_up(true);
-            self.status.raise(Event::Postback);
+            self.receive_postback(p, now);
         }
+    }
+
+    /// Takes a whole postback that arrived in one piece, as on the serial link, where the
+    /// stream parser has already checked its header, length byte and CRC. The assembler
+    /// (and its counters) is for CAN frames only and is not involved.
+    pub fn receive_postback(&mut self, postback: Postback, now: Instant) {
+        self.quiet_ms = 0;
+        self.latest = Some((postback, now));
+        self.status.set_up(true);
+        self.status.raise(Event::Postback);
     }
 
     /// Counts a received frame that cannot be for this node (a standard ID or a remote

@@ -1,4 +1,4 @@
-//! The driver: a [`Link`] over any `embedded-can` 0.4 driver.
+//! The CAN transport: a [`Link`] over any `embedded-can` 0.4 driver.
 //!
 //! [`Gimbal`] is thin: it moves frames between the CAN driver and the link, converts them
 //! to and from the driver's frame type, and counts what the driver reports.

@@ -1,0 +1,19 @@
+//! The drivers: one [`Link`](crate::link::Link) over either of the gimbal's two control
+//! paths.
+//!
+//! | transport | driver | sans-IO core | what it carries |
+//! |---|---|---|---|
+//! | CAN, 1 Mbit/s, extended IDs | [`Gimbal`] over any `embedded_can::nb::Can` ([`Blocking`] for `embedded_can::blocking::Can`) | [`Link`](crate::link::Link): frames in, frames out | control commands, postbacks, vehicle attitude, GPS and altitude, text |
+//! | UART, 115200 8N1 | [`SerialGimbal`] over a [`SerialPort`] ([`Io`] for `embedded-io` 0.7, [`Nb`] for `embedded-hal-nb`) | [`SerialLink`](crate::link::serial::SerialLink): bytes in, bytes out | control commands and postbacks only |
+//!
+//! Both share the link: the transmit queue and its priorities, the rate hold and its
+//! dead-man, point-at, link health, events and counters. The transport is the only
+//! difference. The serial link carries no vehicle or text frames (the protocol document
+//! defines none on it), so [`SerialGimbal`] offers no way to push them, and the gimbal's
+//! heading reference over serial is the nose (see [`serial`]).
+
+pub mod can;
+pub mod serial;
+
+pub use can::{Blocking, DriverError, DriverErrors, Gimbal, Stats};
+pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialPort};

@@ -1,0 +1,155 @@
+//! The simulated gimbal on its UART: bytes in, bytes out.
+//!
+//! [`SerialSimulator`] wraps a [`Simulator`] with the serial framing: control frames arrive
+//! as the 24-byte serial frame, in any split, through a [`StreamParser`]; each postback
+//! leaves as its 27-byte stream form. No vehicle frames exist on the serial link, so the
+//! simulated gimbal references headings to the nose, as the real one does without a
+//! vehicle attitude.
+//!
+//! ```
+//! use idu_gimbal::sim::serial::SerialSimulator;
+//! use idu_gimbal::sim::SimConfig;
+//! use idu_gimbal::wire::{postback::Postback, serial::control_frame};
+//! use idu_gimbal::Instant;
+//!
+//! let t0 = Instant::from_millis(0);
+//! let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t0);
+//! // Look down 90°, NOTES.md's serial vector, split in two.
+//! let frame = control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
+//! sim.receive(&frame[..7], t0);
+//! sim.receive(&frame[7..], t0);
+//! assert_eq!(sim.sim().state().target_pitch_deg, Some(-90.0));
+//!
+//! let status = sim.poll(t0.add_millis(500)).unwrap();
+//! assert_eq!(sim.transmit_bytes(), &status.to_stream_bytes()[..]);
+//! ```
+
+use heapless::Deque;
+
+use super::{SimConfig, Simulator};
+use crate::driver::SerialPort;
+use crate::time::Instant;
+use crate::wire::ids;
+use crate::wire::postback::{Postback, MESSAGE_LEN};
+use crate::wire::serial::{StreamItem, StreamParser};
+
+/// A simulated gimbal on a serial line with `OUT` bytes of transmit buffer (see the
+/// [module docs](self)).
+#[derive(Clone, Debug)]
+pub struct SerialSimulator<const OUT: usize = 64> {
+    // The CAN frame queue is unused here (no CAN frames); heapless needs at least one slot.
+    sim: Simulator<1>,
+    parser: StreamParser,
+    out: Deque<u8, OUT>,
+    out_overflows: u32,
+}
+
+impl<const OUT: usize> SerialSimulator<OUT> {
+    /// A gimbal at rest (see [`Simulator::new`]); `emit_can_frames` is not used.
+    pub fn new(config: SimConfig, now: Instant) -> Self {
+        SerialSimulator {
+            sim: Simulator::with_tx_capacity(
+                SimConfig {
+                    emit_can_frames: false,
+                    ..config
+                },
+                now,
+            ),
+            parser: StreamParser::new(),
+            out: Deque::new(),
+            out_overflows: 0,
+        }
+    }
+
+    /// Takes received bytes, in any split: each control frame acts on the model (a frame the
+    /// simulator rejects is counted in its [`SimStats`](super::SimStats)). A postback
+    /// arriving at the gimbal is not for it: it is counted by the parser only.
+    pub fn receive(&mut self, bytes: &[u8], now: Instant) {
+        for item in self.parser.feed(bytes) {
+            if let StreamItem::Control(data) = item {
+                // Rejections are counted by the simulator.
+                let _ = self.sim.receive(ids::CONTROL, &data, now);
+            }
+        }
+    }
+
+    /// Advances the model to `now`; a postback due is queued as its 27 stream bytes and
+    /// returned. When the transmit buffer lacks room for all 27 bytes the postback is
+    /// dropped, counted in [`SerialSimulator::out_overflows`], and `None` is returned.
+    pub fn poll(&mut self, now: Instant) -> Option<Postback> {
+        let status = self.sim.poll(now)?;
+        if OUT - self.out.len() < MESSAGE_LEN {
+            self.out_overflows = self.out_overflows.wrapping_add(1);
+            return None;
+        }
+        for b in status.to_stream_bytes() {
+            // Room for all of them was checked above.
+            let _ = self.out.push_back(b);
+        }
+        Some(status)
+    }
+
+    /// The bytes to write next (a prefix of what waits); empty when nothing waits.
+    pub fn transmit_bytes(&self) -> &[u8] {
+        self.out.as_slices().0
+    }
+
+    /// `n` bytes of [`SerialSimulator::transmit_bytes`] were written.
+    pub fn transmit_written(&mut self, n: usize) {
+        for _ in 0..n {
+            if self.out.pop_front().is_none() {
+                break;
+            }
+        }
+    }
+
+    /// One exchange over a port: reads what waits, polls, writes what the port takes. A
+    /// port error ends the exchange; it is returned, and nothing is lost.
+    pub fn serve<P: SerialPort>(
+        &mut self,
+        port: &mut P,
+        now: Instant,
+    ) -> Result<Option<Postback>, crate::driver::PortError<P::ReadError, P::WriteError>> {
+        let mut buf = [0u8; 32];
+        loop {
+            match port.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => self.receive(buf.get(..n).unwrap_or(&buf), now),
+                Err(e) => return Err(crate::driver::PortError::Read(e)),
+            }
+        }
+        let status = self.poll(now);
+        loop {
+            let bytes = self.transmit_bytes();
+            if bytes.is_empty() {
+                break;
+            }
+            match port.write(bytes) {
+                Ok(0) => break,
+                Ok(n) => self.transmit_written(n),
+                Err(e) => return Err(crate::driver::PortError::Write(e)),
+            }
+        }
+        Ok(status)
+    }
+
+    /// Postbacks dropped for lack of room in the transmit buffer.
+    pub fn out_overflows(&self) -> u32 {
+        self.out_overflows
+    }
+
+    /// The simulated gimbal.
+    pub fn sim(&self) -> &Simulator<1> {
+        &self.sim
+    }
+
+    /// The simulated gimbal, mutably (e.g. [`Simulator::set_silent`]).
+    pub fn sim_mut(&mut self) -> &mut Simulator<1> {
+        &mut self.sim
+    }
+
+    /// The stream parser, for its counters.
+    pub fn parser(&self) -> &StreamParser {
+        &self.parser
+    }
+}

@@ -1,0 +1,594 @@
+//! The serial driver against the simulated gimbal over the in-memory serial pipe, through
+//! both adapters (`embedded-io` 0.7 and `embedded-hal-nb`), with every fault the pipe has.
+#![cfg(feature = "mock")]
+
+use idu_gimbal::driver::{Io, Nb, SerialPort};
+use idu_gimbal::geo::Position;
+use idu_gimbal::link::Config;
+use idu_gimbal::mock::serial::{Pipe, PipeStats, Rx, SerialFaults, Tx};
+use idu_gimbal::sim::serial::SerialSimulator;
+use idu_gimbal::sim::SimConfig;
+use idu_gimbal::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
+use idu_gimbal::wire::postback::{Postback, MESSAGE_LEN};
+use idu_gimbal::wire::serial::{StreamItem, StreamParser, FRAME_LEN};
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::{Event, Instant, SerialGimbal};
+
+const N: usize = 256;
+
+/// The driver on port 0, the simulated gimbal on port 1. Everything the gimbal receives
+/// also goes through a parser of the test's own, so the test sees each command that
+/// arrived.
+struct Bench<'p, P: SerialPort> {
+    gimbal: SerialGimbal<P>,
+    sim: SerialSimulator<512>,
+    sim_port: Io<Rx<'p, N>, Tx<'p, N>>,
+    sniffer: StreamParser,
+    /// Control frames the gimbal received, in order.
+    arrived: Vec<[u8; 8]>,
+    /// Postbacks the gimbal sent, and those the driver delivered.
+    sent_postbacks: Vec<Postback>,
+    delivered: Vec<Postback>,
+    events: Vec<(u32, Event)>,
+    /// Errors the gimbal's side of the pipe returned.
+    sim_errors: u32,
+    now: u32,
+}
+
+fn io_port(pipe: &Pipe<N>, index: usize) -> Io<Rx<'_, N>, Tx<'_, N>> {
+    let (rx, tx) = pipe.port(index).unwrap();
+    Io::new(rx, tx)
+}
+
+fn nb_port(pipe: &Pipe<N>, index: usize) -> Nb<Rx<'_, N>, Tx<'_, N>> {
+    let (rx, tx) = pipe.port(index).unwrap();
+    Nb::new(rx, tx)
+}
+
+impl<'p, P: SerialPort> Bench<'p, P> {
+    fn new(pipe: &'p Pipe<N>, port: P, sim_config: SimConfig, start: u32) -> Self {
+        Bench {
+            gimbal: SerialGimbal::new(port, Config::default()),
+            sim: SerialSimulator::new(sim_config, Instant::from_millis(start)),
+            sim_port: io_port(pipe, 1),
+            sniffer: StreamParser::new(),
+            arrived: Vec::new(),
+            sent_postbacks: Vec::new(),
+            delivered: Vec::new(),
+            events: Vec::new(),
+            sim_errors: 0,
+            now: start,
+        }
+    }
+
+    fn instant(&self) -> Instant {
+        Instant::from_millis(self.now)
+    }
+
+    /// One millisecond of both sides.
+    fn tick(&mut self) {
+        let now = self.instant();
+        let _ = self.gimbal.poll(now);
+        while let Some(e) = self.gimbal.next_event() {
+            if e == Event::Postback {
+                if let Some((p, 0)) = self.gimbal.latest_postback(now) {
+                    self.delivered.push(p);
+                }
+            }
+            self.events.push((self.now, e));
+        }
+        // The gimbal's side, by hand so that the sniffer sees what arrives.
+        let mut buf = [0u8; 64];
+        loop {
+            match self.sim_port.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => {
+                    self.sim.receive(&buf[..n], now);
+                    for item in self.sniffer.feed(&buf[..n]) {
+                        if let StreamItem::Control(d) = item {
+                            self.arrived.push(d);
+                        }
+                    }
+                }
+                // Nothing was consumed: the bytes after it are read next.
+                Err(_) => self.sim_errors += 1,
+            }
+        }
+        if let Some(p) = self.sim.poll(now) {
+            self.sent_postbacks.push(p);
+        }
+        loop {
+            let bytes = self.sim.transmit_bytes();
+            if bytes.is_empty() {
+                break;
+            }
+            match self.sim_port.write(bytes) {
+                Ok(0) => break,
+                Ok(n) => self.sim.transmit_written(n),
+                Err(_) => {
+                    self.sim_errors += 1;
+                    break;
+                }
+            }
+        }
+        self.now = self.now.wrapping_add(1);
+    }
+
+    fn run(&mut self, ms: u32) {
+        for _ in 0..ms {
+            self.tick();
+        }
+    }
+
+    fn latest(&self) -> Postback {
+        self.gimbal.latest_postback(self.instant()).unwrap().0
+    }
+}
+
+fn encode(c: GimbalCommand) -> [u8; 8] {
+    Command::from(c).encode()
+}
+
+/// Every item of `got` is in `sent`, in the same order (a subsequence).
+fn is_subsequence<T: PartialEq>(got: &[T], sent: &[T]) -> bool {
+    let mut it = sent.iter();
+    got.iter().all(|g| it.any(|s| s == g))
+}
+
+fn round_trip<P: SerialPort>(pipe: &Pipe<N>, port: P) {
+    let mut b = Bench::new(pipe, port, SimConfig::default(), 0);
+    b.gimbal
+        .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()))
+        .unwrap();
+    b.gimbal
+        .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()))
+        .unwrap();
+    b.run(2_000);
+    // Both commands arrived, whole and in order; the gimbal slewed there (60°/s).
+    assert_eq!(
+        b.arrived,
+        [
+            [0x0F, 0x08, 0x02, 0x3E, 0xFE, 0, 0, 0],
+            [0x0F, 0x08, 0x01, 0x84, 0x03, 0, 0, 0]
+        ]
+    );
+    let p = b.latest();
+    assert_eq!((p.pitch, p.motor_heading), (-4500, 9000));
+    // Nose-referenced: no vehicle attitude on the serial link, so heading = motor.
+    assert_eq!(p.heading, 9000);
+    assert!(b.gimbal.is_link_up());
+    assert_eq!(b.delivered, b.sent_postbacks);
+    // Due at 500, 1000 and 1500 ms within the 2 s run (0 to 1999 ms).
+    assert_eq!(b.sent_postbacks.len(), 3);
+    assert_eq!(b.events.first().map(|e| e.1), Some(Event::LinkUp));
+    let s = b.gimbal.stats();
+    assert_eq!((s.link.frames_sent, s.bytes_sent), (2, 48));
+    assert_eq!(s.link.postbacks, 3);
+    assert_eq!(s.bytes_received, 3 * MESSAGE_LEN as u32);
+    assert_eq!(s.stream.skipped_bytes, 0);
+}
+
+#[test]
+fn round_trip_through_embedded_io() {
+    let pipe: Pipe<N> = Pipe::new(1);
+    let port = io_port(&pipe, 0);
+    round_trip(&pipe, port);
+}
+
+#[test]
+fn round_trip_through_embedded_hal_nb() {
+    let pipe: Pipe<N> = Pipe::new(1);
+    let port = nb_port(&pipe, 0);
+    round_trip(&pipe, port);
+}
+
+/// A write side that takes one byte a call, and one that often takes nothing: every frame
+/// is finished before the next starts, so the gimbal sees each whole, in order, with no
+/// byte skipped.
+#[test]
+fn slow_writers_never_interleave_or_lose_a_frame() {
+    for (faults, nb) in [
+        (
+            SerialFaults {
+                max_write: 1,
+                ..SerialFaults::NONE
+            },
+            true,
+        ),
+        (
+            SerialFaults {
+                max_write: 1,
+                ..SerialFaults::NONE
+            },
+            false,
+        ),
+        (
+            SerialFaults {
+                max_write: 7,
+                write_stall: 0.6,
+                tx_error: 0.1,
+                max_read: 5,
+                ..SerialFaults::NONE
+            },
+            false,
+        ),
+    ] {
+        let pipe: Pipe<N> = Pipe::new(3).with_faults(faults);
+        let commands: Vec<GimbalCommand> = (0..40)
+            .map(|i| GimbalCommand::Pitch(Pitch::new(-(i as f32)).unwrap()))
+            .collect();
+        let arrived = if nb {
+            let mut b = Bench::new(&pipe, nb_port(&pipe, 0), SimConfig::default(), 0);
+            send_all(&mut b, &commands);
+            (b.arrived, b.sniffer.stats(), b.gimbal.stats())
+        } else {
+            let mut b = Bench::new(&pipe, io_port(&pipe, 0), SimConfig::default(), 0);
+            send_all(&mut b, &commands);
+            (b.arrived, b.sniffer.stats(), b.gimbal.stats())
+        };
+        let expected: Vec<[u8; 8]> = commands.iter().map(|&c| encode(c)).collect();
+        assert_eq!(arrived.0, expected, "{faults:?}");
+        assert_eq!(
+            (
+                arrived.1.skipped_bytes,
+                arrived.1.crc_errors,
+                arrived.1.invalid_frames
+            ),
+            (0, 0, 0)
+        );
+        assert_eq!(arrived.2.bytes_sent, 40 * FRAME_LEN as u32);
+        assert_eq!(pipe.stats(0).written, 40 * FRAME_LEN as u32);
+    }
+}
+
+/// Sends every command, waiting for room in the queue, then runs until all went out.
+fn send_all<P: SerialPort>(b: &mut Bench<P>, commands: &[GimbalCommand]) {
+    for &c in commands {
+        while b.gimbal.send(c).is_err() {
+            b.tick();
+        }
+        b.tick();
+    }
+    b.run(1_000);
+}
+
+#[test]
+fn the_dead_man_stops_the_gimbal_over_serial() {
+    let pipe: Pipe<N> = Pipe::new(5);
+    let mut b = Bench::new(&pipe, io_port(&pipe, 0), SimConfig::default(), 0);
+    let rate = Rate::new(20.0, 0.0).unwrap();
+    // Refreshed every 20 ms from 0 to 980 ms, then released.
+    for _ in 0..50 {
+        b.gimbal.set_rate(rate, b.instant()).unwrap();
+        b.run(20);
+    }
+    let last_refresh = 980;
+    let yaw_at_release = b.sim.sim().state().motor_yaw_deg;
+    b.run(1_000);
+    // The dead-man (250 ms) fires at the first poll more than 250 ms after the last
+    // refresh; until then the rate repeats every 50 ms: at 0, 50, …, 1200 ms, 25 frames.
+    // Then exactly one zero-rate frame.
+    let zero = encode(GimbalCommand::Rate(Rate::new(0.0, 0.0).unwrap()));
+    assert_eq!(b.arrived.last(), Some(&zero));
+    assert_eq!(b.arrived.iter().filter(|&&d| d == zero).count(), 1);
+    let repeats = b
+        .arrived
+        .iter()
+        .filter(|&&d| d == encode(GimbalCommand::Rate(rate)))
+        .count();
+    assert_eq!(repeats, 25);
+    let expired: Vec<u32> = b
+        .events
+        .iter()
+        .filter(|e| e.1 == Event::RateHoldExpired)
+        .map(|e| e.0)
+        .collect();
+    assert_eq!(expired, [last_refresh + 251]);
+    // The gimbal turned while held and stopped: yaw at 20°/s for about 1 s, and the zero
+    // rate reached it within the dead-man (250 ms) plus the sim's own 200 ms rate timeout.
+    assert!(yaw_at_release > 15.0, "{yaw_at_release}");
+    let stopped = b.sim.sim().state().motor_yaw_deg;
+    b.run(500);
+    assert_eq!(b.sim.sim().state().motor_yaw_deg, stopped);
+    assert_eq!(b.sim.sim().state().rate, (0.0, 0.0));
+    assert!(
+        stopped - yaw_at_release < 20.0 * 0.251 + 0.01,
+        "{stopped} vs {yaw_at_release}"
+    );
+}
+
+/// The serial link carries no vehicle frames: the gimbal references headings to the nose,
+/// and point-at aims from the vehicle heading it observes.
+#[test]
+fn headings_are_nose_referenced_and_point_at_aims_from_the_vehicle_heading() {
+    let pipe: Pipe<N> = Pipe::new(9);
+    let mut b = Bench::new(
+        &pipe,
+        io_port(&pipe, 0),
+        SimConfig {
+            slew_dps: f32::INFINITY,
+            ..SimConfig::default()
+        },
+        0,
+    );
+    let here = (47.397_742, 8.545_594, 450.0);
+    // A target 1 km due east of the vehicle, 450 m lower (ground level).
+    let east = Position::new(
+        here.0,
+        here.1 + 1_000.0 / (111_320.0 * here.0.to_radians().cos()),
+        0.0,
+    )
+    .unwrap();
+    let observe = |b: &mut Bench<_>| {
+        let now = b.instant();
+        b.gimbal
+            .observe_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
+        b.gimbal.observe_gps(Gps::new(here.0, here.1).unwrap(), now);
+        b.gimbal
+            .observe_altitude(Altitude::new(here.2).unwrap(), now);
+    };
+    observe(&mut b);
+    b.gimbal.point_at(east);
+    for _ in 0..10 {
+        observe(&mut b);
+        b.run(100);
+    }
+    // Bearing 90° from a nose at 30°: 60° right of the nose; elevation atan(450/1000) down.
+    let s = b.sim.sim().state();
+    assert!((s.motor_yaw_deg - 60.0).abs() < 0.2, "{}", s.motor_yaw_deg);
+    let elevation = -(450.0_f32 / 1_000.0).atan().to_degrees();
+    assert!(
+        (s.pitch_deg - elevation).abs() < 0.2,
+        "{} vs {elevation}",
+        s.pitch_deg
+    );
+    // No vehicle frame ever went out: nothing but control frames arrived.
+    assert_eq!(b.sniffer.stats().skipped_bytes, 0);
+    assert_eq!(b.sim.sim().stats().vehicle_frames, 0);
+    assert!(b.arrived.iter().all(|d| d[0] == 0x0F && d[1] == 0x08));
+}
+
+/// 10^6 bytes and more through a line that loses, corrupts and splits: no wrong postback or
+/// command, and every byte is accounted for on both sides.
+#[test]
+fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
+    let faults = SerialFaults {
+        loss: 0.001,
+        corruption: 0.001,
+        max_read: 9,
+        max_write: 11,
+        write_stall: 0.2,
+        rx_error: 0.01,
+        tx_error: 0.01,
+    };
+    let pipe: Pipe<N> = Pipe::new(0x5eed).with_faults(faults);
+    let sim_config = SimConfig {
+        postback_period_ms: 2,
+        ..SimConfig::default()
+    };
+    let mut b = Bench::new(&pipe, io_port(&pipe, 0), sim_config, u32::MAX - 20_000);
+    let mut sent = Vec::new();
+    let mut i = 0u32;
+    while pipe.stats(0).written + pipe.stats(1).written < 1_000_000 {
+        let c = GimbalCommand::Pitch(Pitch::new(-((i % 10_000) as f32) / 100.0).unwrap());
+        if b.gimbal.send(c).is_ok() {
+            sent.push(encode(c));
+            i += 1;
+        }
+        b.tick();
+    }
+    b.run(100);
+    let (to_gimbal, to_fc) = (pipe.stats(0), pipe.stats(1));
+    assert!(to_gimbal.lost > 0 && to_gimbal.corrupted > 0 && to_fc.lost > 0 && to_fc.corrupted > 0);
+    // No wrong item got through either way (CRC-16 and the fixed bytes).
+    assert!(
+        is_subsequence(&b.arrived, &sent),
+        "a command that was never sent arrived"
+    );
+    assert!(
+        is_subsequence(&b.delivered, &b.sent_postbacks),
+        "a wrong postback was delivered"
+    );
+    // Most got through: loss and corruption hit about 0.2 % of bytes, so about 5 % of frames.
+    assert!(
+        b.arrived.len() * 10 > sent.len() * 8,
+        "{} of {}",
+        b.arrived.len(),
+        sent.len()
+    );
+    let received = b.gimbal.stats().link.postbacks as usize;
+    assert!(
+        received * 10 > b.sent_postbacks.len() * 8,
+        "{received} of {}",
+        b.sent_postbacks.len()
+    );
+    // Each poll shows the newest postback only: two arriving in one poll show as one.
+    assert!(b.delivered.len() <= received && b.delivered.len() * 2 > received);
+    // Every byte is accounted for, on the wire and in each parser.
+    let accounted = |s: PipeStats, pending: usize| {
+        assert_eq!(
+            s.written,
+            s.delivered + s.lost + s.overruns + pending as u32,
+            "{s:?}"
+        );
+    };
+    accounted(to_gimbal, pipe.pending(1));
+    accounted(to_fc, pipe.pending(0));
+    let g = b.gimbal.stats();
+    assert_eq!(g.bytes_sent, to_gimbal.written);
+    assert_eq!(g.bytes_received, to_fc.delivered);
+    assert_eq!(
+        g.bytes_received,
+        g.stream.postbacks * MESSAGE_LEN as u32
+            + g.stream.control_frames * FRAME_LEN as u32
+            + g.stream.skipped_bytes
+            + b.gimbal.link().parser().pending() as u32
+    );
+    let p = b.sim.parser().stats();
+    assert_eq!(
+        to_gimbal.delivered,
+        p.postbacks * MESSAGE_LEN as u32
+            + p.control_frames * FRAME_LEN as u32
+            + p.skipped_bytes
+            + b.sim.parser().pending() as u32
+    );
+    assert_eq!(p.control_frames as usize, b.arrived.len());
+    // Each read or write error the pipe injected was counted by the driver.
+    let e = b.gimbal.port_errors();
+    assert!(e.read > 0 && e.write > 0);
+    assert_eq!(
+        e.read + e.write + b.sim_errors,
+        to_gimbal.errors + to_fc.errors
+    );
+}
+
+/// A scripted `embedded-hal-nb` half: each call takes the next step.
+struct Script<T> {
+    steps: std::collections::VecDeque<nb::Result<T, Fault>>,
+    written: Vec<u8>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fault(u8);
+
+impl embedded_hal_nb::serial::Error for Fault {
+    fn kind(&self) -> embedded_hal_nb::serial::ErrorKind {
+        embedded_hal_nb::serial::ErrorKind::Overrun
+    }
+}
+
+impl<T> Script<T> {
+    fn new(steps: impl IntoIterator<Item = nb::Result<T, Fault>>) -> Self {
+        Script {
+            steps: steps.into_iter().collect(),
+            written: Vec::new(),
+        }
+    }
+    fn next(&mut self) -> nb::Result<T, Fault> {
+        self.steps.pop_front().unwrap_or(Err(nb::Error::WouldBlock))
+    }
+}
+
+impl<T> embedded_hal_nb::serial::ErrorType for Script<T> {
+    type Error = Fault;
+}
+
+impl embedded_hal_nb::serial::Read<u8> for Script<u8> {
+    fn read(&mut self) -> nb::Result<u8, Fault> {
+        self.next()
+    }
+}
+
+impl embedded_hal_nb::serial::Write<u8> for Script<()> {
+    fn write(&mut self, word: u8) -> nb::Result<(), Fault> {
+        let r = self.next();
+        if r.is_ok() {
+            self.written.push(word);
+        }
+        r
+    }
+    fn flush(&mut self) -> nb::Result<(), Fault> {
+        Ok(())
+    }
+}
+
+/// An error after some words were moved is returned by the next call: neither the words
+/// nor the error are lost.
+#[test]
+fn the_nb_adapter_keeps_an_error_that_follows_words() {
+    let rx = Script::new([Ok(1), Ok(2), Err(nb::Error::Other(Fault(1))), Ok(3)]);
+    let tx = Script::new([
+        Ok(()),
+        Ok(()),
+        Err(nb::Error::Other(Fault(2))),
+        Ok(()),
+        Err(nb::Error::WouldBlock),
+        Ok(()),
+    ]);
+    let mut port = Nb::new(rx, tx);
+    let mut buf = [0u8; 8];
+    assert_eq!(port.read(&mut buf), Ok(2));
+    assert_eq!(&buf[..2], &[1, 2]);
+    assert_eq!(port.read(&mut buf), Err(Fault(1)));
+    assert_eq!(port.read(&mut buf), Ok(1));
+    assert_eq!(buf[0], 3);
+    assert_eq!(port.read(&mut buf), Ok(0));
+    assert_eq!(port.write(&[10, 11, 12, 13]), Ok(2));
+    assert_eq!(port.write(&[12, 13]), Err(Fault(2)));
+    assert_eq!(port.write(&[12, 13]), Ok(1));
+    assert_eq!(port.write(&[13]), Ok(1));
+    let (_, tx) = port.release();
+    assert_eq!(tx.written, [10, 11, 12, 13]);
+}
+
+/// An `embedded-io` half that must never be read or written while it says it is not
+/// ready (that call would block on a real UART).
+struct Gate {
+    ready: bool,
+    calls: u32,
+}
+
+impl embedded_io::ErrorType for Gate {
+    type Error = embedded_io::ErrorKind;
+}
+
+impl embedded_io::Read for Gate {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        assert!(self.ready, "read while not ready: it would block");
+        self.calls += 1;
+        buf[0] = 0xAA;
+        Ok(1)
+    }
+}
+
+impl embedded_io::ReadReady for Gate {
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(self.ready)
+    }
+}
+
+impl embedded_io::Write for Gate {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        assert!(self.ready, "write while not ready: it would block");
+        self.calls += 1;
+        Ok(buf.len().min(3))
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+impl embedded_io::WriteReady for Gate {
+    fn write_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(self.ready)
+    }
+}
+
+#[test]
+fn the_io_adapter_never_calls_what_would_block() {
+    let gate = |ready| Gate { ready, calls: 0 };
+    let mut port = Io::new(gate(false), gate(false));
+    let mut buf = [0u8; 4];
+    assert_eq!(port.read(&mut buf), Ok(0));
+    assert_eq!(port.write(&[1, 2, 3, 4]), Ok(0));
+    let mut port = Io::new(gate(true), gate(true));
+    assert_eq!(port.read(&mut buf), Ok(1));
+    assert_eq!(port.write(&[1, 2, 3, 4]), Ok(3));
+    // An empty write or read asks nothing of the port.
+    assert_eq!(port.write(&[]), Ok(0));
+    assert_eq!(port.read(&mut []), Ok(0));
+    let (rx, tx) = port.release();
+    assert_eq!((rx.calls, tx.calls), (1, 1));
+
+    // Through the driver: a port that is never ready leaves the command queued.
+    let mut gimbal: SerialGimbal<_> =
+        SerialGimbal::new(Io::new(gate(false), gate(false)), Config::default());
+    gimbal
+        .send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
+    for ms in 0..100 {
+        gimbal.poll(Instant::from_millis(ms)).unwrap();
+    }
+    assert_eq!(gimbal.stats().link.frames_sent, 0);
+    assert!(gimbal.link().has_transmit());
+}
