@@ -1,6 +1,6 @@
-//! The driver against the simulated gimbal on the host: a scripted session of a few
-//! simulated seconds with readable telemetry. Exits non-zero if the gimbal did not do what
-//! was asked.
+//! The driver against the simulated gimbal on the host: the scripted session of a few
+//! simulated seconds with readable telemetry, over CAN and then over the serial line. Exits
+//! non-zero if the gimbal did not do what was asked on either.
 //!
 //! ```sh
 //! cargo run --example host_sim --features mock,std
@@ -19,7 +19,15 @@ impl core::fmt::Write for Stdout {
 }
 
 fn main() {
-    let bus = session::DemoBus::new(42);
-    let failures = session::Session::new(&bus, Stdout, 0).map_or(1, session::Session::play);
-    std::process::exit(i32::from(failures != 0));
+    use idu_gimbal::Instant;
+    use session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
+
+    let bus = DemoBus::new(42);
+    let can = CanRig::new(&bus, Instant::from_millis(0))
+        .map_or(1, |rig| Session::new(rig, Stdout, 0).play());
+    println!();
+    let pipe = DemoPipe::new(42);
+    let serial = SerialRig::new(&pipe, Instant::from_millis(0))
+        .map_or(1, |rig| Session::new(rig, Stdout, 0).play());
+    std::process::exit(i32::from(can + serial != 0));
 }

@@ -5,8 +5,10 @@
 //! (`mock::Bus`) inside the firmware. It plays the scripted session of
 //! `examples/common/session.rs` (shared with `host_sim`): re-center, pitch -45°, heading 90°,
 //! a rate hold released to test the dead-man, zoom 10x, photo, recording on and off, a text
-//! message, with vehicle data pushed throughout. Telemetry goes to the host's stdout through
-//! semihosting.
+//! message, with vehicle data pushed throughout. Then it plays the same session over the
+//! serial path: `SerialGimbal` and `sim::serial::SerialSimulator` on the in-memory serial
+//! line (`mock::serial::Pipe`), where headings are nose-referenced and there is no text.
+//! Telemetry goes to the host's stdout through semihosting.
 //!
 //! **Clock.** Time is simulated: each loop iteration advances the driver's and the
 //! simulator's millisecond tick by exactly 1. Without `-icount`, QEMU's virtual clock (and so
@@ -16,7 +18,7 @@
 //! goes. The real firmware (`examples/stm32f405.rs`) takes its tick from SysTick.
 //!
 //! Exit status (through semihosting `SYS_EXIT`): 0 only if every step's expected effect was
-//! seen; 1 otherwise, on a panic, or on a HardFault.
+//! seen on both transports; 1 otherwise, on a panic, or on a HardFault.
 //!
 //! ```sh
 //! scripts/demo.sh   # installs the target and qemu-system-arm when missing, then:
@@ -37,7 +39,8 @@ mod session;
 mod fw {
     use core::fmt::{self, Write};
 
-    use crate::session::{DemoBus, Session};
+    use crate::session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
+    use idu_gimbal::Instant;
 
     /// Line-buffered semihosting output: one host call per line rather than per fragment.
     struct Semihosting {
@@ -69,17 +72,28 @@ mod fw {
     #[cortex_m_rt::entry]
     fn main() -> ! {
         println!("qemu_demo: STM32F405 (QEMU netduinoplus2), driver and simulated gimbal on an in-memory CAN bus");
-        let bus = DemoBus::new(42);
-        let out = Semihosting {
+        let out = || Semihosting {
             line: heapless::String::new(),
         };
-        let Some(session) = Session::new(&bus, out, 0) else {
+        let bus = DemoBus::new(42);
+        let Some(can) = CanRig::new(&bus, Instant::from_millis(0)) else {
             println!("qemu_demo: could not set up the bus");
             crate::qemu::exit(false)
         };
-        let failures = session.play();
+        let can_failures = Session::new(can, out(), 0).play();
+        println!("");
+        let pipe = DemoPipe::new(42);
+        let Some(serial) = SerialRig::new(&pipe, Instant::from_millis(0)) else {
+            println!("qemu_demo: could not set up the serial line");
+            crate::qemu::exit(false)
+        };
+        let serial_failures = Session::new(serial, out(), 0).play();
+        let failures = can_failures + serial_failures;
         if failures != 0 {
-            println!("qemu_demo: {} step(s) failed", failures);
+            println!(
+                "qemu_demo: {} step(s) failed over CAN, {} over serial",
+                can_failures, serial_failures
+            );
         }
         crate::qemu::exit(failures == 0)
     }
