@@ -328,6 +328,83 @@ mod replay {
 }
 
 #[cfg(target_os = "none")]
+mod replay_serial {
+    //! A minimal [`SerialPort`] for measuring the serial driver: it hands out bytes from a
+    //! fixed cycle of postbacks in their stream form, as many as the bench makes available,
+    //! and takes every byte written. Its own cost (a copy per read) stands in for draining
+    //! an interrupt-fed receive ring.
+
+    use core::cell::Cell;
+    use core::convert::Infallible;
+
+    use idu_gimbal::driver::SerialPort;
+
+    /// Bytes in the replay cycle: four 27-byte postbacks.
+    pub const CYCLE: usize = 4 * 27;
+
+    pub struct Bytes {
+        data: [u8; CYCLE],
+        next: Cell<usize>,
+        available: Cell<u32>,
+        written: Cell<u32>,
+    }
+
+    impl Bytes {
+        pub fn new(data: [u8; CYCLE]) -> Self {
+            Bytes {
+                data,
+                next: Cell::new(0),
+                available: Cell::new(0),
+                written: Cell::new(0),
+            }
+        }
+
+        /// Makes `n` more bytes receivable.
+        #[inline(always)]
+        pub fn make_available(&self, n: u32) {
+            self.available.set(self.available.get() + n);
+        }
+
+        pub fn written(&self) -> u32 {
+            self.written.get()
+        }
+    }
+
+    pub struct ReplayPort<'a>(pub &'a Bytes);
+
+    impl SerialPort for ReplayPort<'_> {
+        type ReadError = Infallible;
+        type WriteError = Infallible;
+
+        // Inline, as a HAL's or ring buffer's read of a few loads would be; the check for
+        // nothing waiting comes first, as in a ring buffer.
+        #[inline]
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+            let s = self.0;
+            if s.available.get() == 0 {
+                return Ok(0);
+            }
+            let n = (s.available.get() as usize).min(buf.len());
+            let mut i = s.next.get();
+            for b in &mut buf[..n] {
+                *b = s.data[i];
+                i = if i + 1 == CYCLE { 0 } else { i + 1 };
+            }
+            s.next.set(i);
+            s.available.set(s.available.get() - n as u32);
+            Ok(n)
+        }
+
+        fn write(&mut self, bytes: &[u8]) -> Result<usize, Infallible> {
+            self.0
+                .written
+                .set(self.0.written.get().wrapping_add(bytes.len() as u32));
+            Ok(bytes.len())
+        }
+    }
+}
+
+#[cfg(target_os = "none")]
 mod fw {
     use core::hint::black_box;
 
@@ -389,6 +466,7 @@ mod fw {
         );
 
         bench_driver(&mut m, &mut table);
+        bench_serial(&mut m, &mut table);
         bench_assembler(&mut m, &mut table);
         bench_encode(&mut m, &mut table);
         bench_crc(&mut m, &mut table);
@@ -570,6 +648,124 @@ mod fw {
             "B",
         );
         black_box(Event::LinkUp);
+    }
+
+    /// The serial driver (`SerialGimbal::poll`) over the replay port: bytes read, the
+    /// stream parser, the link, events; an idle poll; a command written.
+    fn bench_serial(m: &mut Meter, table: &mut Table) {
+        use crate::replay_serial::{Bytes, ReplayPort, CYCLE};
+        use idu_gimbal::SerialGimbal;
+
+        const N: u32 = 512;
+        let msgs = messages();
+        let mut cycle = [0u8; CYCLE];
+        for (chunk, msg) in cycle.chunks_exact_mut(27).zip(msgs.iter()) {
+            let mut can = [0u8; 32];
+            for (dst, frame) in can.chunks_exact_mut(8).zip(msg.iter()) {
+                dst.copy_from_slice(frame);
+            }
+            chunk.copy_from_slice(&can[..27]);
+        }
+        let bytes = Bytes::new(cycle);
+        let mut gimbal: SerialGimbal<_> = SerialGimbal::new(ReplayPort(&bytes), Config::default());
+        let mut t = 1000u32;
+
+        let idle_fresh = m.per_op(N, |_| {
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+        });
+        let drain = |g: &mut SerialGimbal<ReplayPort<'_>>| {
+            while let Some(e) = g.next_event() {
+                black_box(e);
+            }
+        };
+        // A whole postback (27 bytes, one read) per poll, event taken; and the same loop
+        // with nothing received.
+        let whole = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            bytes.make_available(27);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let empty = m.per_op(N, |_| {
+            t = t.wrapping_add(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let per_postback = whole - empty;
+        // A byte per poll (a poll per byte as it arrives at 115200 baud), idle part included.
+        let byte_per_poll = m.per_op(27 * N, |i| {
+            if i % 27 == 0 {
+                t = t.wrapping_add(1);
+            }
+            bytes.make_available(1);
+            black_box(gimbal.poll(Instant::from_millis(t)).is_ok());
+            drain(&mut gimbal);
+        });
+        let now = Instant::from_millis(t);
+        let idle_up = m.per_op(N, |_| {
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if !gimbal.is_link_up() {
+            println!("serial bench: link should be up");
+            crate::qemu::exit(false);
+        }
+        let Ok(pitch) = Pitch::new(-45.0) else {
+            crate::qemu::exit(false)
+        };
+        let written_before = bytes.written();
+        let send_poll = m.per_op(N, |_| {
+            black_box(gimbal.send(black_box(GimbalCommand::Pitch(pitch))).is_ok());
+            black_box(gimbal.poll(now).is_ok());
+        });
+        if bytes.written() - written_before != 3 * N * 24 {
+            println!(
+                "serial bench: {} bytes written, expected {}",
+                bytes.written() - written_before,
+                3 * N * 24
+            );
+            crate::qemu::exit(false);
+        }
+        let stats = gimbal.stats();
+        if stats.link.postbacks != 3 * N + 3 * N
+            || stats.stream.crc_errors != 0
+            || stats.stream.skipped_bytes != 0
+        {
+            println!("serial bench: unexpected stats {:?}", stats);
+            crate::qemu::exit(false);
+        }
+
+        table.add(
+            "serial: per received postback (27 bytes in one read, marginal, event taken)",
+            per_postback,
+            "",
+        );
+        table.add(
+            "serial: per received byte (the same, / 27)",
+            per_postback / 27.0,
+            "",
+        );
+        table.add(
+            "serial: poll with one received byte (one poll per byte)",
+            byte_per_poll,
+            "",
+        );
+        table.budget(
+            "serial: idle poll (fresh driver)",
+            idle_fresh,
+            "",
+            BUDGET_IDLE_POLL,
+        );
+        table.budget("serial: idle poll, link up", idle_up, "", BUDGET_IDLE_POLL);
+        table.add(
+            "serial: send one command + poll that writes its 24 bytes",
+            send_poll - idle_up,
+            "",
+        );
+        table.add(
+            "size_of SerialGimbal<P> with the default queue (RAM, bytes; without the 4-byte P here)",
+            core::mem::size_of::<SerialGimbal<ReplayPort<'static>>>() as f32 - 4.0,
+            "B",
+        );
     }
 
     /// The link's postback reassembly alone (no CAN driver).

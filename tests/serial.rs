@@ -592,3 +592,50 @@ fn the_io_adapter_never_calls_what_would_block() {
     assert_eq!(gimbal.stats().link.frames_sent, 0);
     assert!(gimbal.link().has_transmit());
 }
+
+/// A backlog larger than one poll reads (`max_rx_per_poll` reads of up to 32 bytes) is
+/// taken over the following polls, every byte of it: the bound spreads the work, it
+/// never drops anything.
+#[test]
+fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
+    let pipe: Pipe<N> = Pipe::new(11).with_faults(SerialFaults {
+        max_read: 3,
+        ..SerialFaults::NONE
+    });
+    let config = Config {
+        max_rx_per_poll: core::num::NonZeroU16::new(2).unwrap(),
+        ..Config::default()
+    };
+    let mut gimbal: SerialGimbal<_> = SerialGimbal::new(io_port(&pipe, 0), config);
+    let mut sim_port = io_port(&pipe, 1);
+    // Nine postbacks (243 bytes) waiting at once.
+    let sent: Vec<Postback> = (0..9)
+        .map(|i| Postback {
+            pitch: -100 * i,
+            ..Postback::default()
+        })
+        .collect();
+    for p in &sent {
+        assert_eq!(sim_port.write(&p.to_stream_bytes()), Ok(MESSAGE_LEN));
+    }
+    let mut got = Vec::new();
+    let mut polls = 0;
+    while pipe.pending(0) > 0 {
+        gimbal.poll(Instant::from_millis(polls)).unwrap();
+        polls += 1;
+        // At most 2 reads of at most 3 bytes a poll.
+        assert!(gimbal.stats().bytes_received <= 6 * polls);
+        if gimbal.next_event().is_some() {
+            got.push(
+                gimbal
+                    .latest_postback(Instant::from_millis(polls))
+                    .unwrap()
+                    .0,
+            );
+        }
+        while gimbal.next_event().is_some() {}
+    }
+    assert_eq!(gimbal.stats().bytes_received, 9 * MESSAGE_LEN as u32);
+    assert_eq!(gimbal.stats().link.postbacks, 9);
+    assert_eq!(got, sent);
+}

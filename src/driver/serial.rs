@@ -248,6 +248,8 @@ const READ_CHUNK: usize = 32;
 pub struct SerialGimbal<P: SerialPort, const Q: usize = 8> {
     port: P,
     link: SerialLink<Q>,
+    /// Kept between polls so that an idle poll need not clear it.
+    rx_buf: [u8; READ_CHUNK],
     errors: PortErrors,
 }
 
@@ -258,6 +260,7 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         SerialGimbal {
             port,
             link: SerialLink::new(config),
+            rx_buf: [0; READ_CHUNK],
             errors: PortErrors::default(),
         }
     }
@@ -269,16 +272,10 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
     /// error seen is returned at the end.
     pub fn poll(&mut self, now: Instant) -> Result<(), PortError<P::ReadError, P::WriteError>> {
         let mut first_error = None;
-        let mut buf = [0u8; READ_CHUNK];
-        for _ in 0..self.link.link().config().max_rx_per_poll.get() {
-            match self.port.read(&mut buf) {
-                Ok(0) => break,
-                Ok(n) => self.link.receive(buf.get(..n).unwrap_or(&buf), now),
-                Err(e) => {
-                    self.errors.read = self.errors.read.wrapping_add(1);
-                    first_error.get_or_insert(PortError::Read(e));
-                }
-            }
+        // The first read inline, the rest out of line: an idle poll pays for one read.
+        match self.port.read(&mut self.rx_buf) {
+            Ok(0) => {}
+            first => self.receive(first, now, &mut first_error),
         }
         self.link.poll(now);
         if self.link.has_transmit() {
@@ -287,6 +284,35 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
             }
         }
         first_error.map_or(Ok(()), Err)
+    }
+
+    /// Takes the result of the poll's first read, then reads on until nothing waits or
+    /// [`Config::max_rx_per_poll`] reads were made.
+    #[inline(never)]
+    fn receive(
+        &mut self,
+        mut read: Result<usize, P::ReadError>,
+        now: Instant,
+        first_error: &mut Option<PortError<P::ReadError, P::WriteError>>,
+    ) {
+        let mut left = self.link.link().config().max_rx_per_poll.get();
+        loop {
+            match read {
+                Ok(0) => return,
+                Ok(n) => self
+                    .link
+                    .receive(self.rx_buf.get(..n).unwrap_or(&self.rx_buf), now),
+                Err(e) => {
+                    self.errors.read = self.errors.read.wrapping_add(1);
+                    first_error.get_or_insert(PortError::Read(e));
+                }
+            }
+            left -= 1;
+            if left == 0 {
+                return;
+            }
+            read = self.port.read(&mut self.rx_buf);
+        }
     }
 
     #[inline(never)]

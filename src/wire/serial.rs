@@ -35,6 +35,8 @@ use super::postback::{self, Postback};
 
 mod field {
     use core::ops::Range;
+    // Written whole with the rest of `CONTROL_PREFIX`; named for the layout and its test.
+    #[cfg_attr(not(test), allow(dead_code))]
     pub const HEADER: Range<usize> = 0..2;
     pub const LENGTH: usize = 2;
     pub const RESERVED: Range<usize> = 3..12;
@@ -53,22 +55,37 @@ pub const MARKER: [u8; 2] = [0x40, 0x88];
 /// The longest frame the stream carries (a postback).
 pub const MAX_FRAME_LEN: usize = postback::MESSAGE_LEN;
 
+/// A control frame's first 14 bytes: header, length byte, nine zeros, marker.
+const CONTROL_PREFIX: [u8; 14] = [
+    postback::HEADER[0],
+    postback::HEADER[1],
+    CONTROL_LENGTH_BYTE,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    0,
+    MARKER[0],
+    MARKER[1],
+];
+
+/// The CRC state after [`CONTROL_PREFIX`], computed at compile time: a frame's CRC then
+/// costs its 8 data bytes only.
+const CONTROL_PREFIX_CRC: u16 = crc::checksum_const(&CONTROL_PREFIX);
+
 /// The 24-byte serial/TCP frame that carries a control frame's 8 CAN data bytes.
 pub fn control_frame(can_data: &[u8; 8]) -> [u8; FRAME_LEN] {
+    let crc = crc::update(CONTROL_PREFIX_CRC, can_data).to_le_bytes();
     let mut f = [0u8; FRAME_LEN];
-    let mut put = |range: core::ops::Range<usize>, bytes: &[u8]| {
-        if let Some(dst) = f.get_mut(range) {
-            dst.copy_from_slice(bytes);
-        }
-    };
-    put(field::HEADER, &postback::HEADER);
-    put(field::LENGTH..field::LENGTH + 1, &[CONTROL_LENGTH_BYTE]);
-    put(field::MARKER, &MARKER);
-    put(field::DATA, can_data);
-    let crc = f.get(field::CHECKED).map_or(0, crc::checksum);
-    if let Some(dst) = f.get_mut(field::CRC) {
-        dst.copy_from_slice(&crc.to_le_bytes());
-    }
+    let (prefix, rest) = f.split_at_mut(CONTROL_PREFIX.len());
+    prefix.copy_from_slice(&CONTROL_PREFIX);
+    let (data, tail) = rest.split_at_mut(can_data.len());
+    data.copy_from_slice(can_data);
+    tail.copy_from_slice(&crc);
     f
 }
 
@@ -315,6 +332,29 @@ mod tests {
         let mut p = StreamParser::new();
         let items: Vec<_> = p.feed(bytes).collect();
         (items, p.stats())
+    }
+
+    /// The precomputed prefix is the documented one, field by field.
+    #[test]
+    fn control_prefix_is_the_documented_layout() {
+        let mut f = [0u8; 14];
+        f[field::HEADER].copy_from_slice(&[0xEB, 0x90]);
+        f[field::LENGTH] = 0x0A;
+        f[field::MARKER].copy_from_slice(&[0x40, 0x88]);
+        assert_eq!(CONTROL_PREFIX, f);
+        assert_eq!(CONTROL_PREFIX_CRC, crc::checksum(&f));
+    }
+
+    proptest! {
+        /// The frame's CRC is CRC-16/MODBUS over bytes 0..=21, low byte first, whatever the
+        /// data (checked against the document's own nibble-table algorithm).
+        #[test]
+        fn control_frame_crc_over_any_data(data in any::<[u8; 8]>()) {
+            let f = control_frame(&data);
+            let crc = crate::wire::crc::tests::crc_fly16(&f[..22]);
+            prop_assert_eq!(&f[22..], &crc.to_le_bytes()[..]);
+            prop_assert_eq!(&f[14..22], &data[..]);
+        }
     }
 
     #[test]

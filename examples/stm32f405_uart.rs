@@ -1,0 +1,236 @@
+//! Flight-controller firmware for an STM32F405RG driving an IDU gimbal over its UART.
+//!
+//! * USART2 at **115200 8N1**: **PA2 (TX)** to the gimbal's connector pin 5 (USART RX),
+//!   **PA3 (RX)** from pin 6 (USART TX), ground to pin 7. The document gives no logic level:
+//!   check it is 3.3 V before wiring (use a level shifter otherwise).
+//! * Receive is interrupt-driven: the USART2 interrupt (RXNE) moves every byte into a
+//!   256-byte ring the main loop drains, so no byte is lost while the main loop is busy (a
+//!   postback is 27 bytes every 500 ms; the ring holds over 9 of them). A full ring or a
+//!   line error (overrun, framing, parity, noise) is reported to the driver as a read
+//!   error, which counts it; the stream parser resynchronises on the next header.
+//! * Transmit is polled without blocking: the driver writes while the data register is
+//!   empty and finishes a partly written frame at the next poll (a 24-byte frame takes
+//!   about 2.1 ms at 115200 baud).
+//! * Clocks: 8 MHz HSE crystal, SYSCLK 168 MHz. SysTick interrupts at 1 kHz: the
+//!   millisecond tick the driver runs on. Logging through defmt-rtt.
+//!
+//! The serial link carries control commands and postbacks only: no vehicle frames, so the
+//! gimbal references headings to the nose; the vehicle state below is observed for
+//! `point_at` only (see `idu_gimbal::driver::serial`). `point_at` links the WGS84 solver
+//! (f64, soft-float on the M4F): about 19 KB of the image; without it the image is 11.8 KB.
+//!
+//! Build: `cargo build --release --target thumbv7em-none-eabihf --example stm32f405_uart`.
+//! Flash and watch the logs with a debug probe: `cargo run --release --target
+//! thumbv7em-none-eabihf --example stm32f405_uart` (the runner calls `probe-rs run`).
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+mod fw {
+    use core::cell::RefCell;
+    use core::sync::atomic::{AtomicU32, Ordering};
+
+    use cortex_m::interrupt::Mutex;
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m_rt::{entry, exception};
+    use defmt_rtt as _;
+    use heapless::Deque;
+    use panic_probe as _;
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Error as LineError, Rx, RxListen, Serial};
+    use stm32f4xx_hal::{interrupt, pac, prelude::*, rcc::Config as RccConfig};
+
+    use idu_gimbal::driver::{Nb, PortError};
+    use idu_gimbal::geo::Position;
+    use idu_gimbal::interface::UART_BAUD;
+    use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+    use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+    use idu_gimbal::{Config, Event, Instant, SerialGimbal};
+
+    const HSE_HZ: u32 = 8_000_000;
+    const SYSCLK_HZ: u32 = 168_000_000;
+
+    /// Milliseconds since boot, advanced by the SysTick interrupt. Wraps after ~49.7 days,
+    /// which `Instant` handles.
+    static TICKS_MS: AtomicU32 = AtomicU32::new(0);
+
+    #[exception]
+    fn SysTick() {
+        TICKS_MS.fetch_add(1, Ordering::Relaxed);
+    }
+
+    fn now() -> Instant {
+        Instant::from_millis(TICKS_MS.load(Ordering::Relaxed))
+    }
+
+    defmt::timestamp!("{=u32:ms}", TICKS_MS.load(Ordering::Relaxed));
+
+    /// Bytes received, from the interrupt to the main loop.
+    const RING: usize = 256;
+
+    /// The receive half, owned by the interrupt once set up.
+    static UART_RX: Mutex<RefCell<Option<Rx<pac::USART2>>>> = Mutex::new(RefCell::new(None));
+    /// Bytes the interrupt received and the main loop has not taken yet.
+    static RECEIVED: Mutex<RefCell<Deque<u8, RING>>> = Mutex::new(RefCell::new(Deque::new()));
+    /// The latest line error or ring overflow not yet reported to the driver.
+    static LINE_ERROR: Mutex<RefCell<Option<LineError>>> = Mutex::new(RefCell::new(None));
+
+    #[interrupt]
+    fn USART2() {
+        cortex_m::interrupt::free(|cs| {
+            let mut rx = UART_RX.borrow(cs).borrow_mut();
+            let Some(rx) = rx.as_mut() else { return };
+            let mut ring = RECEIVED.borrow(cs).borrow_mut();
+            loop {
+                match embedded_hal_nb::serial::Read::read(rx) {
+                    Ok(byte) => {
+                        if ring.push_back(byte).is_err() {
+                            // The main loop fell behind: the byte is lost, and said so.
+                            LINE_ERROR.borrow(cs).replace(Some(LineError::Overrun));
+                        }
+                    }
+                    Err(nb::Error::WouldBlock) => break,
+                    // The HAL read the data register to clear the error flag.
+                    Err(nb::Error::Other(e)) => {
+                        LINE_ERROR.borrow(cs).replace(Some(e));
+                    }
+                }
+            }
+        });
+    }
+
+    /// The main loop's end of the receive ring, as an `embedded-hal-nb` reader.
+    struct RingRx;
+
+    impl embedded_hal_nb::serial::ErrorType for RingRx {
+        type Error = LineError;
+    }
+
+    impl embedded_hal_nb::serial::Read<u8> for RingRx {
+        fn read(&mut self) -> nb::Result<u8, LineError> {
+            cortex_m::interrupt::free(|cs| {
+                if let Some(e) = LINE_ERROR.borrow(cs).take() {
+                    return Err(nb::Error::Other(e));
+                }
+                RECEIVED
+                    .borrow(cs)
+                    .borrow_mut()
+                    .pop_front()
+                    .ok_or(nb::Error::WouldBlock)
+            })
+        }
+    }
+
+    /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates, each with the time it
+    /// was measured. Used for point-at only: the serial link carries no vehicle frames.
+    fn vehicle_stand_in() -> Option<(Gps, Altitude, Attitude)> {
+        Some((
+            Gps::new(47.397_742, 8.545_594).ok()?,
+            Altitude::new(488.0).ok()?,
+            Attitude::new(0.0, 0.0, 30.0).ok()?,
+        ))
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+            panic!("peripherals taken twice");
+        };
+
+        let mut rcc = dp
+            .RCC
+            .freeze(RccConfig::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz()));
+
+        // The millisecond tick.
+        let mut syst = cp.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(rcc.clocks.hclk().raw() / 1000 - 1);
+        syst.clear_current();
+        syst.enable_interrupt();
+        syst.enable_counter();
+
+        // USART2 on PA2 (TX) / PA3 (RX), 115200 8N1 (the HAL's default framing).
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let Ok(serial) = Serial::new(
+            dp.USART2,
+            (gpioa.pa2, gpioa.pa3),
+            SerialConfig::default().baudrate(UART_BAUD.bps()),
+            &mut rcc,
+        ) else {
+            panic!("USART2 configuration refused");
+        };
+        let (tx, mut rx) = serial.split();
+        rx.listen();
+        cortex_m::interrupt::free(|cs| UART_RX.borrow(cs).replace(Some(rx)));
+        // SAFETY: the handler only touches state behind `cortex_m::interrupt::Mutex`.
+        unsafe { cortex_m::peripheral::NVIC::unmask(pac::Interrupt::USART2) };
+        defmt::info!("USART2 up: {=u32} baud 8N1, PA2 TX, PA3 RX", UART_BAUD);
+
+        let mut gimbal: SerialGimbal<_> = SerialGimbal::new(Nb::new(RingRx, tx), Config::default());
+        // An example target: look at a point on the ground 200 m north of the stand-in
+        // position (nose-referenced over serial, from the observed vehicle heading).
+        if let Ok(target) = Position::new(47.399_541, 8.545_594, 440.0) {
+            gimbal.point_at(target);
+        }
+        if let Ok(pitch) = Pitch::new(-30.0) {
+            let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+        }
+        let mut next_vehicle = now();
+        let mut next_stats = now().add_millis(10_000);
+
+        loop {
+            let now = now();
+            if now.is_at_or_after(next_vehicle) {
+                next_vehicle = now.add_millis(100);
+                if let Some((gps, altitude, attitude)) = vehicle_stand_in() {
+                    gimbal.observe_gps(gps, now);
+                    gimbal.observe_altitude(altitude, now);
+                    gimbal.observe_attitude(attitude, now);
+                }
+            }
+
+            match gimbal.poll(now) {
+                Ok(()) => {}
+                Err(PortError::Read(e)) => {
+                    defmt::warn!("UART receive: {}", defmt::Debug2Format(&e))
+                }
+                Err(PortError::Write(e)) => {
+                    defmt::warn!("UART transmit: {}", defmt::Debug2Format(&e))
+                }
+            }
+
+            while let Some(event) = gimbal.next_event() {
+                match event {
+                    Event::Postback => {
+                        if let Some((p, _age_ms)) = gimbal.latest_postback(now) {
+                            defmt::info!(
+                                "postback: pitch {=f32} deg, heading {=f32} deg (nose), motor {=f32} deg, {}",
+                                p.pitch_deg(),
+                                p.heading_deg(),
+                                p.motor_heading_deg(),
+                                p.mode,
+                            )
+                        }
+                    }
+                    Event::LinkUp => defmt::info!("gimbal link up"),
+                    Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
+                    Event::RateHoldExpired => defmt::info!("rate hold expired: gimbal stopped"),
+                    Event::TargetUnreachable { elevation_cdeg } => defmt::warn!(
+                        "look-at target out of the gimbal's pitch range (needs {=i16} cdeg)",
+                        elevation_cdeg
+                    ),
+                }
+            }
+
+            if now.is_at_or_after(next_stats) {
+                next_stats = now.add_millis(10_000);
+                defmt::info!(
+                    "stats: {}, port errors {}",
+                    gimbal.stats(),
+                    gimbal.port_errors()
+                );
+            }
+        }
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
