@@ -23,6 +23,7 @@ fn main() -> ! {
     };
     footprint::use_mem_builtins();
     loop {
+        footprint::port_skeleton();
         let now = Instant::from_millis(input(4));
         let arg = input(6);
         let a = arg as i16;

@@ -1,10 +1,12 @@
-//! The common part of the two footprint builds (`footprint_base`, `footprint_driver`).
+//! The common part of the footprint builds (`footprint_base`, `footprint_driver`,
+//! `footprint_serial`).
 //!
-//! `scripts/size-report.sh` builds both and subtracts their sizes: what remains is what the
-//! driver costs a firmware (flash: code and constant data; RAM: static data). Both builds
-//! share this skeleton: the vector table, a panic handler, and a CAN driver whose "hardware"
-//! is a handful of volatile reads and writes, so the optimizer can fold nothing away.
-//! They are never run (the runner refuses them); only their sizes matter.
+//! `scripts/size-report.sh` builds them and subtracts the base's sizes from each driver's:
+//! what remains is what that driver costs a firmware (flash: code and constant data; RAM:
+//! static data). All share this skeleton: the vector table, a panic handler, a CAN driver
+//! and a serial port whose "hardware" is a handful of volatile reads and writes (so the
+//! optimizer can fold nothing away), each used directly by [`skeleton`]. They are never run
+//! (the runner refuses them); only their sizes matter.
 
 use core::ptr::{read_volatile, write_volatile};
 
@@ -65,6 +67,79 @@ impl embedded_can::nb::Can for RegCan {
             }
         }
     }
+}
+
+/// A serial port over opaque registers.
+#[allow(dead_code)] // each build uses it directly or through its driver
+pub struct RegPort;
+
+impl idu_gimbal::driver::SerialPort for RegPort {
+    type ReadError = u32;
+    type WriteError = u32;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, u32> {
+        match input(11) & 3 {
+            0 => Ok(0),
+            1 => Err(input(12)),
+            _ => {
+                let n = (input(12) as usize).min(buf.len());
+                for b in &mut buf[..n] {
+                    *b = input(13) as u8;
+                }
+                Ok(n)
+            }
+        }
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<usize, u32> {
+        match input(11) & 12 {
+            0 => Ok(0),
+            4 => Err(input(12)),
+            _ => {
+                for &b in bytes {
+                    output(u32::from(b));
+                }
+                Ok(bytes.len())
+            }
+        }
+    }
+}
+
+/// Uses the CAN stand-in directly, as a firmware's own code would. Each build has each
+/// stand-in exactly once, directly or through its driver (base: both directly;
+/// `footprint_driver`: the port directly; `footprint_serial`: the CAN driver directly), so
+/// neither is charged to a driver.
+#[inline(never)]
+#[allow(dead_code)] // each build uses one or both
+pub fn can_skeleton() {
+    use embedded_can::nb::Can;
+
+    match RegCan.receive() {
+        Ok(frame) => {
+            if let Some(data) = frame.data() {
+                output(u32::from(data[0]));
+            }
+        }
+        Err(nb::Error::Other(e)) => output(e as u32),
+        Err(nb::Error::WouldBlock) => {}
+    }
+    if let Some(id) = bxcan::ExtendedId::new(input(5) & 0x1FFF_FFFF) {
+        let _ = RegCan.transmit(&bxcan::Frame::new_data(id, input(6).to_le_bytes()));
+    }
+}
+
+/// Uses the serial stand-in directly (see [`can_skeleton`]).
+#[inline(never)]
+#[allow(dead_code)] // each build uses one or both
+pub fn port_skeleton() {
+    use idu_gimbal::driver::SerialPort;
+
+    let mut buf = [0u8; 32];
+    match RegPort.read(&mut buf) {
+        Ok(n) => output(u32::from(buf[n & 31])),
+        Err(e) => output(e),
+    }
+    let _ = RegPort.write(&input(7).to_le_bytes());
 }
 
 /// Links `memcpy` and `memmove` (compiler-builtins), as virtually every firmware does, so
