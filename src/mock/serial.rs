@@ -464,3 +464,141 @@ impl<const N: usize> embedded_hal_nb::serial::Write<u8> for Tx<'_, N> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_hal_nb::serial::{Read as NbRead, Write as NbWrite};
+    use embedded_io::{Read, ReadReady, Write, WriteReady};
+
+    #[test]
+    fn ports_are_taken_once_and_lines_cross() {
+        let pipe: Pipe<8> = Pipe::new(1);
+        let (mut a_rx, mut a_tx) = pipe.port(0).unwrap();
+        assert!(pipe.port(0).is_none());
+        assert!(pipe.port(2).is_none());
+        let (mut b_rx, mut b_tx) = pipe.port(1).unwrap();
+        assert_eq!(Write::write(&mut a_tx, b"ab"), Ok(2));
+        assert_eq!(Write::write(&mut b_tx, b"xyz"), Ok(3));
+        let mut buf = [0u8; 8];
+        assert_eq!(Read::read(&mut b_rx, &mut buf), Ok(2));
+        assert_eq!(&buf[..2], b"ab");
+        assert_eq!(Read::read(&mut a_rx, &mut buf), Ok(3));
+        assert_eq!(&buf[..3], b"xyz");
+        assert_eq!(Read::read(&mut a_rx, &mut buf), Ok(0));
+        assert_eq!(a_rx.read_ready(), Ok(false));
+        assert_eq!(pipe.stats(0).delivered, 2);
+        assert_eq!(pipe.stats(1).delivered, 3);
+    }
+
+    #[test]
+    fn a_full_receive_buffer_drops_the_byte_and_reports_an_overrun_once() {
+        let pipe: Pipe<4> = Pipe::new(1);
+        let (_, mut tx) = pipe.port(0).unwrap();
+        let (mut rx, _) = pipe.port(1).unwrap();
+        // A UART transmits regardless of the receiver: all 6 are taken, 2 are dropped.
+        assert_eq!(Write::write(&mut tx, &[1, 2, 3, 4, 5, 6]), Ok(6));
+        assert_eq!(rx.read_ready(), Ok(true));
+        let mut buf = [0u8; 8];
+        assert_eq!(Read::read(&mut rx, &mut buf), Err(MockSerialError::Overrun));
+        assert_eq!(Read::read(&mut rx, &mut buf), Ok(4));
+        assert_eq!(&buf[..4], &[1, 2, 3, 4]);
+        let s = pipe.stats(0);
+        assert_eq!((s.written, s.delivered, s.overruns, s.errors), (6, 4, 2, 1));
+    }
+
+    #[test]
+    fn split_reads_and_slow_writes_stay_within_their_limits() {
+        let pipe: Pipe<64> = Pipe::new(9).with_faults(SerialFaults {
+            max_read: 3,
+            max_write: 5,
+            ..SerialFaults::NONE
+        });
+        let (_, mut tx) = pipe.port(0).unwrap();
+        let (mut rx, _) = pipe.port(1).unwrap();
+        let data: [u8; 40] = core::array::from_fn(|i| i as u8);
+        let mut sent = 0;
+        while sent < data.len() {
+            let n = Write::write(&mut tx, &data[sent..]).unwrap();
+            assert!((1..=5).contains(&n));
+            sent += n;
+        }
+        let mut got = [0u8; 40];
+        let mut have = 0;
+        while have < got.len() {
+            let n = Read::read(&mut rx, &mut got[have..]).unwrap();
+            assert!((1..=3).contains(&n));
+            have += n;
+        }
+        assert_eq!(got, data);
+    }
+
+    #[test]
+    fn the_nb_writer_refuses_a_word_after_max_write_in_a_row() {
+        let pipe: Pipe<64> = Pipe::new(3).with_faults(SerialFaults {
+            max_write: 2,
+            ..SerialFaults::NONE
+        });
+        let (_, mut tx) = pipe.port(0).unwrap();
+        let (mut rx, _) = pipe.port(1).unwrap();
+        assert_eq!(NbWrite::write(&mut tx, 1u8), Ok(()));
+        assert_eq!(NbWrite::write(&mut tx, 2u8), Ok(()));
+        assert_eq!(NbWrite::write(&mut tx, 3u8), Err(nb::Error::WouldBlock));
+        assert_eq!(NbWrite::write(&mut tx, 3u8), Ok(()));
+        assert_eq!(
+            [
+                NbRead::read(&mut rx),
+                NbRead::read(&mut rx),
+                NbRead::read(&mut rx),
+                NbRead::read(&mut rx)
+            ],
+            [Ok(1), Ok(2), Ok(3), Err(nb::Error::WouldBlock)]
+        );
+    }
+
+    #[test]
+    fn faults_are_counted_and_every_byte_accounted_for() {
+        let faults = SerialFaults {
+            loss: 0.1,
+            corruption: 0.1,
+            write_stall: 0.3,
+            rx_error: 0.1,
+            tx_error: 0.1,
+            ..SerialFaults::NONE
+        };
+        let run = |seed| {
+            let pipe: Pipe<32> = Pipe::new(seed).with_faults(faults);
+            let (_, mut tx) = pipe.port(0).unwrap();
+            let (mut rx, _) = pipe.port(1).unwrap();
+            let mut received = std::vec::Vec::new();
+            let (mut errors, mut stalls) = (0u32, 0u32);
+            for i in 0..2_000u32 {
+                if !tx.write_ready().unwrap() {
+                    stalls += 1;
+                } else if Write::write(&mut tx, &[i as u8]).is_err() {
+                    errors += 1;
+                }
+                let mut buf = [0u8; 4];
+                match Read::read(&mut rx, &mut buf) {
+                    Ok(n) => received.extend_from_slice(&buf[..n]),
+                    Err(_) => errors += 1,
+                }
+            }
+            let s = pipe.stats(0);
+            assert_eq!(
+                s.written,
+                s.delivered + s.lost + s.overruns + pipe.pending(1) as u32
+            );
+            assert_eq!(s.errors, errors);
+            assert_eq!(received.len() as u32, s.delivered);
+            // About 10 % each (2,000 draws: a binomial's 5-sigma band is about ±7 %).
+            assert!(s.lost > 40 && s.lost < 300, "{s:?}");
+            assert!(s.corrupted > 40 && s.corrupted < 300, "{s:?}");
+            assert!(stalls > 300, "{stalls}");
+            (s, received)
+        };
+        // The same seed gives the same run; another seed another.
+        assert_eq!(run(5), run(5));
+        assert_ne!(run(5).1, run(6).1);
+    }
+}
