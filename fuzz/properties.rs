@@ -4,8 +4,9 @@
 
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::postback::PostbackAssembler;
+use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{Config, Event, Link};
-use idu_gimbal::wire::control::{Command, Rate};
+use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, MAX_FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::{ids, postback::Postback, Frame};
@@ -214,4 +215,113 @@ pub fn link(data: &[u8]) {
         received,
         "a received frame was not counted once"
     );
+}
+
+/// Any sequence of operations on a [`SerialLink`] with a small queue, as 4-byte records
+/// (operation, time step, two arguments): garbage bytes and real postbacks received in any
+/// split, commands, rate holds, polls, and transmission with writes of any length. The link
+/// never panics; every received byte is accounted for (in a frame, skipped, or pending);
+/// and the bytes written, read back by an independent parser, are whole control frames,
+/// never interleaved, one per frame the link counts as sent.
+pub fn serial_link(data: &[u8]) {
+    let mut link: SerialLink<3> = SerialLink::new(Config::default());
+    let mut wire = StreamParser::new();
+    let mut t = 0u32;
+    // The rest of a postback whose first part was received.
+    let mut tail: Option<([u8; 27], usize)> = None;
+    let mut pitches = Vec::new();
+    let mut on_wire = Vec::new();
+    for rec in data.chunks(4) {
+        let [op, dt, a, b] = *rec else {
+            break;
+        };
+        t = t.wrapping_add(u32::from(dt) * 4);
+        let now = Instant::from_millis(t);
+        match op % 8 {
+            0 => link.receive(rec, now),
+            1 => {
+                let p = Postback {
+                    pitch: i16::from(a as i8) * 10,
+                    heading: u16::from(b) * 100,
+                    ..Postback::default()
+                }
+                .to_stream_bytes();
+                let cut = usize::from(b) % 28;
+                link.receive(&p[..cut], now);
+                tail = Some((p, cut));
+            }
+            2 => {
+                if let Some((p, cut)) = tail.take() {
+                    link.receive(&p[cut..], now);
+                }
+            }
+            3 => {
+                if let Ok(p) = Pitch::from_deci(i16::from_le_bytes([a, b]) % 600) {
+                    let c = GimbalCommand::Pitch(p);
+                    if link.link_mut().send(c).is_ok() {
+                        pitches.push(Command::from(c).encode());
+                    }
+                }
+            }
+            4 => {
+                if let Ok(r) = Rate::from_centi(i16::from(a as i8) * 100, i16::from(b as i8) * 100)
+                {
+                    let _ = link.link_mut().set_rate(r, now);
+                }
+            }
+            5 | 6 => {
+                let bytes = link.transmit_bytes();
+                let n = usize::from(a) % (bytes.len() + 2);
+                on_wire.extend(wire.feed(&bytes[..n.min(bytes.len())]));
+                link.transmit_written(n);
+            }
+            _ => link.poll(now),
+        }
+    }
+    // Drain what waits: a started frame is finished.
+    loop {
+        let bytes = link.transmit_bytes();
+        if bytes.is_empty() {
+            break;
+        }
+        let n = bytes.len();
+        on_wire.extend(wire.feed(bytes));
+        link.transmit_written(n);
+    }
+    // Every pitch command accepted went out, once, in order (nothing else sends pitch).
+    let pitch_frames: Vec<[u8; 8]> = on_wire
+        .iter()
+        .filter_map(|item| match item {
+            StreamItem::Control(d) if d[1] == 0x08 && d[2] == 0x02 => Some(*d),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        pitch_frames, pitches,
+        "an accepted command was lost or repeated"
+    );
+    let w = wire.stats();
+    assert_eq!(
+        (
+            w.skipped_bytes,
+            w.crc_errors,
+            w.invalid_frames,
+            wire.pending()
+        ),
+        (0, 0, 0, 0),
+        "the bytes written are not whole frames"
+    );
+    let s = link.stats();
+    assert_eq!(
+        w.control_frames, s.link.frames_sent,
+        "a frame sent is not on the wire once"
+    );
+    assert_eq!(s.bytes_sent, 24 * w.control_frames);
+    let r = s.stream;
+    assert_eq!(
+        s.bytes_received,
+        24 * r.control_frames + 27 * r.postbacks + r.skipped_bytes + link.parser().pending() as u32,
+        "a received byte is not accounted for"
+    );
+    assert_eq!(s.link.postbacks, r.postbacks);
 }

@@ -35,3 +35,16 @@ proptest! {
         properties::assembler(&data);
     }
 }
+
+proptest! {
+    // Each case runs up to 150 operations with a stream parser on either side: 300 cases
+    // keep this near the others' time (the fuzz target runs it at length).
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Operations biased toward postbacks received in two parts and partial writes (see
+    /// `properties::serial_link` for the record layout).
+    #[test]
+    fn serial_link(data in proptest::collection::vec(prop_oneof![any::<u8>(), Just(0xEB), Just(0x90), Just(1), Just(2), Just(5)], 0..600)) {
+        properties::serial_link(&data);
+    }
+}
