@@ -23,6 +23,10 @@ cargo build --target thumbv7em-none-eabihf --lib
 cargo build --target thumbv7em-none-eabihf --lib --features defmt
 cargo build --target thumbv7em-none-eabihf --lib --features mock
 
+step "MAVLink bridge (idu-gimbal-mavlink): clippy and build for thumbv7em-none-eabihf"
+cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib -- -D warnings
+cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib
+
 step "docs, warnings denied"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 

@@ -1,0 +1,254 @@
+//! Gimbal attitude as MAVLink quaternions, built and read from the gimbal's axis
+//! rotations: yaw about the down axis, then pitch about the rotated right axis.
+//!
+//! The IDU gimbal pitches from +60° to −100°: past −90° it looks backwards, upside down.
+//! 3-2-1 Euler angles cannot hold that (their pitch is confined to ±90°, and a pitch of
+//! −100° reads back as −80° with yaw and roll turned by 180°). The gimbal has no roll axis,
+//! so its attitude is exactly `q = q_yaw(ψ) ⊗ q_pitch(θ)`, and that product is inverted
+//! directly: for `q = (w, x, y, z)`,
+//!
+//! - `w = cos(ψ/2)·cos(θ/2)`, `x = −sin(ψ/2)·sin(θ/2)`, `y = cos(ψ/2)·sin(θ/2)`,
+//!   `z = sin(ψ/2)·cos(θ/2)`;
+//! - so `ψ/2 = atan2(z, w)` (for `cos(θ/2) > 0`, which holds for every |θ| < 180°), and
+//!   with `c = cos(ψ/2)`, `s = sin(ψ/2)`: `cos(θ/2) = w·c + z·s`, `sin(θ/2) = y·c − x·s`.
+//!
+//! That is exact over the whole range, −90° and −100° included, with no singularity. A
+//! quaternion with a roll component (which the gimbal cannot follow) is read as the nearest
+//! roll-free attitude in this parametrisation, and [`YawPitch::roll_residual_rad`] says how far
+//! it was.
+//!
+//! Angles are in radians, MAVLink's unit, as `f32` (MAVLink's quaternions are `f32`).
+//! Positive pitch is up, positive yaw is to the right (clockwise seen from above), as in
+//! MAVLink's NED/FRD frames and on the gimbal's wire.
+
+use core::f32::consts::PI;
+
+/// A gimbal attitude as its two axis angles, radians.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct YawPitch {
+    /// Yaw, in (−π, π].
+    pub yaw_rad: f32,
+    /// Pitch, in (−π, π); the gimbal reaches [−100°, 60°].
+    pub pitch_rad: f32,
+}
+
+/// Wraps an angle into (−π, π].
+pub fn wrap_pi(a: f32) -> f32 {
+    let r = libm::remainderf(a, 2.0 * PI);
+    if r <= -PI {
+        r + 2.0 * PI
+    } else {
+        r
+    }
+}
+
+impl YawPitch {
+    /// The quaternion `q_yaw(ψ) ⊗ q_pitch(θ)`, as MAVLink orders it: `[w, x, y, z]`.
+    pub fn to_quaternion(self) -> [f32; 4] {
+        let (sy, cy) = libm::sincosf(self.yaw_rad / 2.0);
+        let (sp, cp) = libm::sincosf(self.pitch_rad / 2.0);
+        [cy * cp, -sy * sp, cy * sp, sy * cp]
+    }
+
+    /// Reads yaw and pitch back from a quaternion `[w, x, y, z]` (see the module docs).
+    /// `None` when it is not finite or far from unit length (|q| outside [0.9, 1.1]: not a
+    /// rotation, whatever rounding the sender did).
+    pub fn from_quaternion(q: [f32; 4]) -> Option<YawPitch> {
+        let [w, x, y, z] = q;
+        let norm = libm::sqrtf(w * w + x * x + y * y + z * z);
+        if !norm.is_finite() || !(0.9..=1.1).contains(&norm) {
+            return None;
+        }
+        let [w, x, y, z] = [w / norm, x / norm, y / norm, z / norm];
+        let half_yaw = libm::atan2f(z, w);
+        let (s, c) = libm::sincosf(half_yaw);
+        let half_pitch = libm::atan2f(y * c - x * s, w * c + z * s);
+        Some(YawPitch {
+            yaw_rad: wrap_pi(2.0 * half_yaw),
+            pitch_rad: 2.0 * half_pitch,
+        })
+    }
+
+    /// How far `q` is from the roll-free attitude this reads it as: the rotation angle between
+    /// the two, radians (0 for a quaternion built by [`YawPitch::to_quaternion`]).
+    pub fn roll_residual_rad(self, q: [f32; 4]) -> f32 {
+        let r = self.to_quaternion();
+        let norm = libm::sqrtf(q.iter().map(|v| v * v).sum());
+        let dot: f32 = q.iter().zip(r.iter()).map(|(a, b)| a * b).sum::<f32>() / norm;
+        2.0 * libm::acosf(libm::fabsf(dot).min(1.0))
+    }
+}
+
+/// The NaN quaternion MAVLink uses for "no attitude given" (with angular velocities instead).
+pub fn is_nan_quaternion(q: [f32; 4]) -> bool {
+    q.iter().all(|v| v.is_nan())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn deg(d: f32) -> f32 {
+        d.to_radians()
+    }
+
+    /// Rotates vector `v` by unit quaternion `q` (q v q*), as an independent check.
+    fn rotate(q: [f32; 4], v: [f32; 3]) -> [f32; 3] {
+        let [w, x, y, z] = q;
+        let (w, x, y, z) = (w as f64, x as f64, y as f64, z as f64);
+        let m = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - w * z),
+                2.0 * (x * z + w * y),
+            ],
+            [
+                2.0 * (x * y + w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - w * x),
+            ],
+            [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        let v = [v[0] as f64, v[1] as f64, v[2] as f64];
+        core::array::from_fn(|i| (m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2]) as f32)
+    }
+
+    #[test]
+    fn axis_rotations_point_the_camera_where_expected() {
+        // NED: the camera's forward axis is body x. Yaw 90° points it east.
+        let east = rotate(
+            YawPitch {
+                yaw_rad: deg(90.0),
+                pitch_rad: 0.0,
+            }
+            .to_quaternion(),
+            [1.0, 0.0, 0.0],
+        );
+        assert!((east[0]).abs() < 1e-6 && (east[1] - 1.0).abs() < 1e-6 && east[2].abs() < 1e-6);
+        // Pitch −90° points it down (+z in NED).
+        let down = rotate(
+            YawPitch {
+                yaw_rad: deg(30.0),
+                pitch_rad: deg(-90.0),
+            }
+            .to_quaternion(),
+            [1.0, 0.0, 0.0],
+        );
+        assert!((down[2] - 1.0).abs() < 1e-6, "{down:?}");
+        // Pitch −100° at yaw 0 looks down and 10° backwards (−x), upside down: the camera's
+        // up axis (−z body) points north-ish and down.
+        let q = YawPitch {
+            yaw_rad: 0.0,
+            pitch_rad: deg(-100.0),
+        }
+        .to_quaternion();
+        let fwd = rotate(q, [1.0, 0.0, 0.0]);
+        assert!(
+            (fwd[0] - deg(-100.0).cos()).abs() < 1e-6 && (fwd[2] + deg(-100.0).sin()).abs() < 1e-6
+        );
+    }
+
+    #[test]
+    fn the_whole_pitch_range_reads_back_including_minus_90_and_minus_100() {
+        for pitch in [-100.0, -95.0, -90.0, -89.9, -45.0, 0.0, 30.0, 60.0] {
+            for yaw in [-179.0, -90.0, 0.0, 45.0, 90.0, 180.0] {
+                let a = YawPitch {
+                    yaw_rad: deg(yaw),
+                    pitch_rad: deg(pitch),
+                };
+                let q = a.to_quaternion();
+                let b = YawPitch::from_quaternion(q).unwrap();
+                // f32 trigonometry: a few 1e-7 rad each way (checked below at 1e-5 rad, 0.0006°).
+                assert!(
+                    (b.pitch_rad - a.pitch_rad).abs() < 1e-5,
+                    "pitch {pitch} yaw {yaw}: {b:?}"
+                );
+                assert!(
+                    wrap_pi(b.yaw_rad - a.yaw_rad).abs() < 1e-5,
+                    "pitch {pitch} yaw {yaw}: {b:?}"
+                );
+                assert!(b.roll_residual_rad(q) < 1e-3);
+            }
+        }
+    }
+
+    #[test]
+    fn three_two_one_euler_would_misread_minus_100() {
+        // The classic 3-2-1 extraction: pitch = asin(2(wy − xz)) cannot exceed 90°.
+        let [w, x, y, z] = YawPitch {
+            yaw_rad: 0.0,
+            pitch_rad: deg(-100.0),
+        }
+        .to_quaternion();
+        let euler_pitch = (2.0 * (w * y - x * z)).clamp(-1.0, 1.0).asin().to_degrees();
+        assert!((euler_pitch + 80.0).abs() < 1e-3, "{euler_pitch}");
+        // This module reads it right.
+        let b = YawPitch::from_quaternion([w, x, y, z]).unwrap();
+        assert!((b.pitch_rad.to_degrees() + 100.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn nan_and_non_unit_quaternions_are_refused() {
+        assert_eq!(YawPitch::from_quaternion([f32::NAN; 4]), None);
+        assert!(is_nan_quaternion([f32::NAN; 4]));
+        assert!(!is_nan_quaternion([1.0, 0.0, 0.0, 0.0]));
+        assert_eq!(YawPitch::from_quaternion([0.0; 4]), None);
+        assert_eq!(YawPitch::from_quaternion([2.0, 0.0, 0.0, 0.0]), None);
+        // The negated quaternion is the same rotation.
+        let q = YawPitch {
+            yaw_rad: deg(120.0),
+            pitch_rad: deg(-30.0),
+        }
+        .to_quaternion();
+        let b = YawPitch::from_quaternion(q.map(|v| -v)).unwrap();
+        assert!(
+            (wrap_pi(b.yaw_rad - deg(120.0))).abs() < 1e-5
+                && (b.pitch_rad - deg(-30.0)).abs() < 1e-5
+        );
+    }
+
+    #[test]
+    fn roll_is_measured_not_followed() {
+        // Yaw 10°, pitch −20°, then roll 15° about the camera axis.
+        let base = YawPitch {
+            yaw_rad: deg(10.0),
+            pitch_rad: deg(-20.0),
+        }
+        .to_quaternion();
+        let (s, c) = (deg(15.0) / 2.0).sin_cos();
+        let roll = [c, s, 0.0, 0.0];
+        let [a1, b1, c1, d1] = base;
+        let [a2, b2, c2, d2] = roll;
+        let q = [
+            a1 * a2 - b1 * b2 - c1 * c2 - d1 * d2,
+            a1 * b2 + b1 * a2 + c1 * d2 - d1 * c2,
+            a1 * c2 - b1 * d2 + c1 * a2 + d1 * b2,
+            a1 * d2 + b1 * c2 - c1 * b2 + d1 * a2,
+        ];
+        let read = YawPitch::from_quaternion(q).unwrap();
+        assert!(read.roll_residual_rad(q) > deg(5.0));
+    }
+
+    proptest! {
+        #[test]
+        fn round_trip_over_the_gimbals_range(yaw in -179.99f32..180.0, pitch in -100.0f32..=60.0) {
+            let a = YawPitch { yaw_rad: deg(yaw), pitch_rad: deg(pitch) };
+            let b = YawPitch::from_quaternion(a.to_quaternion()).unwrap();
+            prop_assert!((b.pitch_rad - a.pitch_rad).abs() < 1e-5);
+            prop_assert!(wrap_pi(b.yaw_rad - a.yaw_rad).abs() < 1e-5);
+        }
+
+        #[test]
+        fn any_unit_quaternion_reads_without_panic(q in proptest::array::uniform4(-1.0f32..1.0)) {
+            if let Some(a) = YawPitch::from_quaternion(q) {
+                prop_assert!(a.yaw_rad > -PI - 1e-6 && a.yaw_rad <= PI + 1e-6);
+                prop_assert!(a.pitch_rad.abs() <= PI + 1e-6);
+            }
+        }
+    }
+}

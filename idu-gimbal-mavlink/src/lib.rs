@@ -1,0 +1,70 @@
+//! An IDU gimbal as a standard MAVLink **Gimbal Device** (gimbal protocol v2), so that PX4
+//! (`MNT_MODE_OUT` = MAVLink gimbal v2) and ArduPilot (`MNTx_TYPE` = MAVLink) drive it with
+//! no autopilot code changed.
+//!
+//! `no_std`, allocation-free, `forbid(unsafe_code)`, and sans-IO like the core: MAVLink 2
+//! bytes in ([`Bridge::receive`]), MAVLink 2 bytes out ([`Bridge::transmit_bytes`]), time
+//! passed in ([`Bridge::poll`]); it drives the gimbal through [`GimbalControl`], implemented
+//! for the core's links and drivers on either transport (CAN or UART), and never reads a
+//! clock.
+//!
+//! # What it does
+//!
+//! - HEARTBEAT at 1 Hz as `MAV_TYPE_GIMBAL`, `MAV_AUTOPILOT_INVALID`, component 154
+//!   (configurable); system id configured, or the autopilot's from its HEARTBEAT.
+//! - `MAV_CMD_REQUEST_MESSAGE` → `GIMBAL_DEVICE_INFORMATION` (model from the postback's
+//!   gimbal type; pitch and yaw axes, no roll; limits in radians) or an attitude status;
+//!   `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status. Every `COMMAND_LONG` addressed
+//!   to the gimbal component gets one `COMMAND_ACK` (`UNSUPPORTED` for what it does not do);
+//!   a broadcast command another component owns is left to it.
+//! - `GIMBAL_DEVICE_SET_ATTITUDE`: a quaternion becomes heading and pitch commands (re-sent
+//!   only past a dead-band), converted from the setpoint's yaw frame to the gimbal's
+//!   reference (north while vehicle attitude is pushed, nose otherwise); a NaN quaternion
+//!   with angular velocities becomes the core's rate hold, whose dead-man stops the gimbal
+//!   when the stream stops; NEUTRAL re-centres, RETRACT looks down (the gimbal has no
+//!   retracted pose).
+//! - `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` → the core's attitude push; `GLOBAL_POSITION_INT`
+//!   (asked of the autopilot with `MAV_CMD_SET_MESSAGE_INTERVAL`) → GPS and altitude.
+//! - `GIMBAL_DEVICE_ATTITUDE_STATUS` at 10 Hz from the latest postback, with
+//!   `COMMS_ERROR` while the gimbal link is down.
+//!
+//! Quaternions are built and read from the gimbal's axis rotations (see [`attitude`]), so
+//! the whole pitch range, past −90° down to −100°, is exact.
+//!
+//! # Choice of MAVLink crate
+//!
+//! Framing, CRC_EXTRA and (de)serialization are `mavio`'s (0.5, `dlct-common`), and only the
+//! messages handled are decoded, each through its own type. The `mavlink` crate (0.21) was
+//! the first choice, but with `default-features = false` and the features `embedded`,
+//! `dialect-common` and `mav2-message-extensions` it does not build for a no_std target:
+//! that last feature is written `mavlink-bindgen/mav2-message-extensions`, which turns the
+//! optional code generator `mavlink-bindgen` (regex, quick-xml, memchr with `std`) into a
+//! normal dependency. Without the feature, GIMBAL_DEVICE_ATTITUDE_STATUS lacks `delta_yaw`
+//! and `gimbal_device_id`. `mavio` builds for `thumbv7em-none-eabihf` with every extension
+//! field.
+//!
+//! # Not yet here
+//!
+//! The camera (camera protocol v2), the firmware example, the emulated demo and the host
+//! bridge in `gimbalctl` are the rest of issue 13.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod attitude;
+pub mod bridge;
+pub mod framing;
+pub mod gimbal;
+
+pub use bridge::{Bridge, BridgeConfig, BridgeStats};
+pub use gimbal::GimbalControl;
+pub use mavio;
