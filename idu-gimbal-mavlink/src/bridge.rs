@@ -18,6 +18,8 @@ use mavio::protocol::{Frame, V2};
 use mavio::Message;
 
 use crate::attitude::{is_nan_quaternion, wrap_pi, YawPitch};
+use crate::camera::{self, Camera, CameraConfig, Tx};
+
 use crate::framing::{Check, FrameReader, Outbox, OutboxError, ReaderStats};
 use crate::gimbal::GimbalControl;
 
@@ -25,8 +27,6 @@ use crate::gimbal::GimbalControl;
 pub const AUTOPILOT_COMPONENT: u8 = 1;
 /// `MAV_COMP_ID_GIMBAL`.
 pub const GIMBAL_COMPONENT: u8 = 154;
-/// `MAV_COMP_ID_CAMERA`.
-pub const CAMERA_COMPONENT: u8 = 100;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
 
@@ -42,7 +42,7 @@ const POSITION_INTERVAL_US: f32 = 200_000.0;
 const POSITION_RETRY_MS: u32 = 5_000;
 
 /// How the bridge presents itself and paces what it sends.
-#[derive(Clone, Copy, PartialEq, Debug)]
+#[derive(Clone, PartialEq, Debug)]
 pub struct BridgeConfig {
     /// System id; `None`: the autopilot's, from its HEARTBEAT (component 1), and 1 until one
     /// arrives.
@@ -58,6 +58,8 @@ pub struct BridgeConfig {
     /// An angle setpoint re-commands the gimbal only when heading or pitch moved by more
     /// than this, 0.1° units (default 2: 0.2°, twice the wire's resolution).
     pub deadband_deci: u16,
+    /// The camera component; `None`: the bridge is a gimbal device only.
+    pub camera: Option<CameraConfig>,
 }
 
 impl Default for BridgeConfig {
@@ -68,6 +70,7 @@ impl Default for BridgeConfig {
             heartbeat_ms: 1000,
             attitude_status_ms: 100,
             deadband_deci: 2,
+            camera: None,
         }
     }
 }
@@ -100,7 +103,6 @@ pub struct BridgeStats {
 /// docs.
 pub struct Bridge<G: GimbalControl> {
     gimbal: G,
-    config: BridgeConfig,
     reader: FrameReader,
     state: State,
 }
@@ -124,6 +126,10 @@ struct State {
     commanded: (Option<u16>, Option<i16>),
     /// The last setpoint's neutral/retract flags, to act on a change only.
     last_flags: u16,
+    /// The vehicle's position from GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative
+    /// alt (mm), for the camera's captures.
+    position: Option<[i32; 4]>,
+    camera: Option<Camera>,
     stats: BridgeStats,
 }
 
@@ -134,23 +140,27 @@ const VEHICLE_YAW_STALE_MS: u32 = 1_000;
 impl<G: GimbalControl> Bridge<G> {
     /// A bridge in front of `gimbal`.
     pub fn new(gimbal: G, config: BridgeConfig) -> Self {
+        let camera = config.camera.clone().map(Camera::new);
+        let system_id = config.system_id.unwrap_or(1);
+        let status_ms = config.attitude_status_ms;
         Bridge {
             gimbal,
-            config,
             reader: FrameReader::new(),
             state: State {
                 config,
                 out: Outbox::new(),
-                system_id: config.system_id.unwrap_or(1),
+                system_id,
                 autopilot: None,
                 next_heartbeat: None,
                 next_status: None,
-                status_ms: config.attitude_status_ms,
+                status_ms,
                 position_asked: None,
                 position_seen: false,
                 vehicle_yaw: None,
                 commanded: (None, None),
                 last_flags: 0,
+                position: None,
+                camera,
                 stats: BridgeStats::default(),
             },
         }
@@ -190,7 +200,7 @@ impl<G: GimbalControl> Bridge<G> {
 
     /// The configuration.
     pub fn config(&self) -> &BridgeConfig {
-        &self.config
+        &self.state.config
     }
 
     /// The gimbal.
@@ -264,7 +274,21 @@ impl State {
         }
     }
 
+    fn camera_component(&self) -> Option<u8> {
+        self.camera.as_ref().map(|c| c.config.component)
+    }
+
+    /// Whether a message to `(system, component)` is for one of the bridge's components.
     fn for_us(&self, system: u8, component: u8) -> bool {
+        (system == 0 || system == self.system_id)
+            && (component == 0
+                || component == self.config.gimbal_component
+                || Some(component) == self.camera_component())
+    }
+
+    /// Whether a gimbal message (set attitude, autopilot state) to `(system, component)` is
+    /// the gimbal device's.
+    fn for_gimbal(&self, system: u8, component: u8) -> bool {
         (system == 0 || system == self.system_id)
             && (component == 0 || component == self.config.gimbal_component)
     }
@@ -293,7 +317,7 @@ impl State {
             let Some(set) = decode::<GimbalDeviceSetAttitude>(frame) else {
                 return Check::Bad;
             };
-            if self.for_us(set.target_system, set.target_component) {
+            if self.for_gimbal(set.target_system, set.target_component) {
                 self.set_attitude(gimbal, &set, now);
             } else {
                 bump(&mut self.stats.not_for_us);
@@ -303,7 +327,7 @@ impl State {
             let Some(state) = decode::<AutopilotStateForGimbalDevice>(frame) else {
                 return Check::Bad;
             };
-            if self.for_us(state.target_system, state.target_component) {
+            if self.for_gimbal(state.target_system, state.target_component) {
                 self.autopilot_state(gimbal, &state, now);
             } else {
                 bump(&mut self.stats.not_for_us);
@@ -337,7 +361,7 @@ impl State {
         let _ = now;
     }
 
-    fn ack(&mut self, to: (u8, u8), command: MavCmd, result: MavResult) {
+    fn ack(&mut self, from: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
         bump(&mut self.stats.acks);
         let ack = CommandAck {
             command,
@@ -347,7 +371,7 @@ impl State {
             target_system: to.0,
             target_component: to.1,
         };
-        self.send(self.config.gimbal_component, &ack);
+        self.send(from, &ack);
     }
 
     fn command<G: GimbalControl>(
@@ -363,35 +387,98 @@ impl State {
             return;
         }
         let from = (system, component);
+        let gimbal_id = self.config.gimbal_component;
+        let camera_id = self.camera_component();
+        let camera_owns = camera_id.is_some() && camera::owns(cmd);
+        let gimbal_owns = Self::gimbal_owns(cmd);
+        // Broadcast: the owner answers, or nobody (another component may own it).
+        // Addressed: the addressee answers, UNSUPPORTED if it does not own the command.
+        let (me, owner) = match cmd.target_component {
+            0 if gimbal_owns => (gimbal_id, true),
+            0 if camera_owns => (camera_id.unwrap_or(gimbal_id), true),
+            0 => {
+                bump(&mut self.stats.not_for_us);
+                return;
+            }
+            c if c == gimbal_id => (gimbal_id, gimbal_owns),
+            c => (c, camera_owns),
+        };
+        if !owner {
+            self.ack(me, from, cmd.command, MavResult::Unsupported);
+            return;
+        }
+        if me == gimbal_id {
+            let result = self.gimbal_command(gimbal, cmd, now);
+            self.ack(me, from, cmd.command, result);
+            // The information follows the ACK.
+            if result == MavResult::Accepted && cmd.command == MavCmd::RequestMessage {
+                if cmd.param1 == id_of::<GimbalDeviceInformation>() as f32 {
+                    self.information(gimbal, now);
+                } else {
+                    self.status(gimbal, now);
+                }
+            }
+        } else {
+            let State {
+                camera,
+                out,
+                system_id,
+                stats,
+                position,
+                ..
+            } = self;
+            let Some(camera) = camera.as_mut() else {
+                return;
+            };
+            let (result, reply) = camera.command(gimbal, cmd, now);
+            // The ACK first, then what the command produced.
+            bump(&mut stats.acks);
+            let ack = CommandAck {
+                command: cmd.command,
+                result,
+                progress: 0,
+                result_param2: 0,
+                target_system: from.0,
+                target_component: from.1,
+            };
+            let mut send = |c: u8, m: &dyn Message| {
+                if out.push(*system_id, c, m).is_err() {
+                    bump(&mut stats.outbox_full);
+                }
+            };
+            send(me, &ack);
+            let mut tx = Tx {
+                send: &mut send,
+                position: *position,
+            };
+            camera.reply(reply, now, &mut tx);
+        }
+    }
+
+    fn gimbal_owns(cmd: &CommandLong) -> bool {
         match cmd.command {
             MavCmd::RequestMessage => {
-                let id = cmd.param1;
-                if id == id_of::<GimbalDeviceInformation>() as f32 {
-                    self.ack(from, cmd.command, MavResult::Accepted);
-                    self.information(gimbal, now);
-                } else if id == id_of::<GimbalDeviceAttitudeStatus>() as f32 {
-                    self.ack(from, cmd.command, MavResult::Accepted);
-                    self.status(gimbal, now);
-                } else if cmd.target_component == 0 {
-                    // A broadcast request for a message another component may own: only
-                    // the owner answers.
-                    bump(&mut self.stats.not_for_us);
-                } else {
-                    self.ack(from, cmd.command, MavResult::Unsupported);
-                }
+                cmd.param1 == id_of::<GimbalDeviceInformation>() as f32
+                    || cmd.param1 == id_of::<GimbalDeviceAttitudeStatus>() as f32
             }
             MavCmd::SetMessageInterval => {
-                if cmd.param1 == id_of::<GimbalDeviceAttitudeStatus>() as f32 {
-                    let result = self.set_status_interval(cmd.param2, now);
-                    self.ack(from, cmd.command, result);
-                } else if cmd.target_component == 0 {
-                    bump(&mut self.stats.not_for_us);
-                } else {
-                    self.ack(from, cmd.command, MavResult::Unsupported);
-                }
+                cmd.param1 == id_of::<GimbalDeviceAttitudeStatus>() as f32
             }
-            _ if cmd.target_component == 0 => bump(&mut self.stats.not_for_us),
-            _ => self.ack(from, cmd.command, MavResult::Unsupported),
+            _ => false,
+        }
+    }
+
+    /// A gimbal command's result (the gimbal owns it).
+    fn gimbal_command<G: GimbalControl>(
+        &mut self,
+        _gimbal: &mut G,
+        cmd: &CommandLong,
+        now: Instant,
+    ) -> MavResult {
+        match cmd.command {
+            MavCmd::SetMessageInterval => self.set_status_interval(cmd.param2, now),
+            MavCmd::RequestMessage => MavResult::Accepted,
+            _ => MavResult::Unsupported,
         }
     }
 
@@ -591,6 +678,7 @@ impl State {
         now: Instant,
     ) {
         self.position_seen = true;
+        self.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
         if let Ok(g) = Gps::from_e7(pos.lat, pos.lon) {
             gimbal.set_gps(g, now);
             bump(&mut self.stats.vehicle_updates);
@@ -611,6 +699,35 @@ impl State {
                 mavlink_version: 3,
             };
             self.send(self.config.gimbal_component, &hb);
+            if let Some(camera) = self.camera_component() {
+                self.send(
+                    camera,
+                    &Heartbeat {
+                        type_: MavType::Camera,
+                        ..hb
+                    },
+                );
+            }
+        }
+        let State {
+            camera,
+            out,
+            system_id,
+            stats,
+            position,
+            ..
+        } = self;
+        if let Some(camera) = camera.as_mut() {
+            let mut send = |c: u8, m: &dyn Message| {
+                if out.push(*system_id, c, m).is_err() {
+                    bump(&mut stats.outbox_full);
+                }
+            };
+            let mut tx = Tx {
+                send: &mut send,
+                position: *position,
+            };
+            camera.poll(now, &mut tx);
         }
         if self.status_ms > 0 && self.next_status.is_none_or(|t| now.is_at_or_after(t)) {
             self.next_status = Some(now.add_millis(self.status_ms));

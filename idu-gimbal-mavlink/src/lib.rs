@@ -1,6 +1,7 @@
-//! An IDU gimbal as a standard MAVLink **Gimbal Device** (gimbal protocol v2), so that PX4
-//! (`MNT_MODE_OUT` = MAVLink gimbal v2) and ArduPilot (`MNTx_TYPE` = MAVLink) drive it with
-//! no autopilot code changed.
+//! An IDU gimbal as a standard MAVLink **Gimbal Device** (gimbal protocol v2) and **Camera**
+//! (camera protocol v2), so that PX4 (`MNT_MODE_OUT` = MAVLink gimbal v2) and ArduPilot
+//! (`MNTx_TYPE` = MAVLink) drive it and a ground station sees its camera, with no autopilot
+//! code changed.
 //!
 //! `no_std`, allocation-free, `forbid(unsafe_code)`, and sans-IO like the core: MAVLink 2
 //! bytes in ([`Bridge::receive`]), MAVLink 2 bytes out ([`Bridge::transmit_bytes`]), time
@@ -28,6 +29,8 @@
 //! - `GIMBAL_DEVICE_ATTITUDE_STATUS` at 10 Hz from the latest postback, with
 //!   `COMMS_ERROR` while the gimbal link is down.
 //!
+//! - The camera (component 100, when configured): see [`camera`] for what maps to what.
+//!
 //! Quaternions are built and read from the gimbal's axis rotations (see [`attitude`]), so
 //! the whole pitch range, past −90° down to −100°, is exact.
 //!
@@ -45,8 +48,8 @@
 //!
 //! # Not yet here
 //!
-//! The camera (camera protocol v2), the firmware example, the emulated demo and the host
-//! bridge in `gimbalctl` are the rest of issue 13.
+//! The firmware example, the emulated demo and the host bridge in `gimbalctl` are the rest
+//! of issue 13.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -62,6 +65,7 @@
 
 pub mod attitude;
 pub mod bridge;
+pub mod camera;
 pub mod framing;
 pub mod gimbal;
 

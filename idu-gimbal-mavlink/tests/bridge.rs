@@ -1,106 +1,23 @@
 //! The bridge as an autopilot sees it: MAVLink frames built with `mavio` in, the bridge's
 //! bytes parsed back, the gimbal's command queue (the core's sans-IO `Link`) read out.
 
+mod common;
+use common::*;
+
 use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
-use idu_gimbal_mavlink::framing::{Check, FrameReader};
-use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
+use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{
-    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavModeFlag, MavResult,
-    MavState, MavType,
+    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandAck, CommandLong, GimbalDeviceAttitudeStatus,
     GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
-use mavio::mavspec::rust::spec::MessageSpecStatic;
-use mavio::protocol::{Frame, V2};
-use mavio::Message;
-
-const AP: (u8, u8) = (7, 1);
-const GCS: (u8, u8) = (255, 190);
-
-fn t(ms: u32) -> Instant {
-    Instant::from_millis(ms)
-}
-
-/// One MAVLink 2 frame from `(system, component)`.
-fn frame(from: (u8, u8), seq: u8, message: &dyn Message) -> Vec<u8> {
-    let f = Frame::builder()
-        .version(V2)
-        .sequence(seq)
-        .system_id(from.0)
-        .component_id(from.1)
-        .message(message)
-        .unwrap()
-        .build();
-    let mut buf = [0u8; 300];
-    let n = f.serialize(&mut buf).unwrap();
-    buf[..n].to_vec()
-}
-
-/// Every frame the bridge wrote since the last call, drained.
-fn sent<G: GimbalControl>(bridge: &mut Bridge<G>) -> Vec<Frame<V2>> {
-    let bytes = bridge.transmit_bytes().to_vec();
-    bridge.transmit_written(bytes.len());
-    let mut more = bridge.transmit_bytes().to_vec();
-    bridge.transmit_written(more.len());
-    let mut all = bytes;
-    all.append(&mut more);
-    let mut frames = Vec::new();
-    let mut reader = FrameReader::new();
-    reader.feed(&all, |f| {
-        frames.push(f.clone());
-        Check::Unhandled
-    });
-    assert_eq!(reader.pending(), 0);
-    assert_eq!(reader.stats().skipped_bytes, 0);
-    frames
-}
-
-fn of<M>(frames: &[Frame<V2>]) -> Vec<M>
-where
-    M: MessageSpecStatic
-        + for<'a> TryFrom<&'a mavio::protocol::Payload, Error = mavio::error::SpecError>,
-{
-    frames
-        .iter()
-        .filter(|f| f.message_id() == M::spec().id())
-        .map(|f| f.decode_message::<M>().unwrap())
-        .collect()
-}
-
-fn heartbeat() -> Heartbeat {
-    Heartbeat {
-        type_: MavType::Quadrotor,
-        autopilot: MavAutopilot::Ardupilotmega,
-        base_mode: MavModeFlag::empty(),
-        custom_mode: 0,
-        system_status: MavState::Active,
-        mavlink_version: 3,
-    }
-}
-
-fn command(target: (u8, u8), command: MavCmd, p1: f32, p2: f32) -> CommandLong {
-    CommandLong {
-        target_system: target.0,
-        target_component: target.1,
-        command,
-        confirmation: 0,
-        param1: p1,
-        param2: p2,
-        param3: 0.0,
-        param4: 0.0,
-        param5: 0.0,
-        param6: 0.0,
-        param7: 0.0,
-    }
-}
 
 fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
     GimbalDeviceSetAttitude {
@@ -138,20 +55,6 @@ fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
         landed_state: Default::default(),
         angular_velocity_z: 0.0,
     }
-}
-
-/// The commands the link queued, in order.
-fn queued<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<GimbalCommand> {
-    let mut out = Vec::new();
-    while let Some(f) = link.next_transmit() {
-        link.transmit_done(None);
-        if f.id == ids::CONTROL {
-            if let Ok(Command::Gimbal(c)) = Command::decode(&f.data) {
-                out.push(c);
-            }
-        }
-    }
-    out
 }
 
 fn fresh() -> Bridge<Link> {

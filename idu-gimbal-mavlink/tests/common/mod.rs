@@ -1,0 +1,109 @@
+//! Helpers shared by the bridge's tests: frames built with `mavio`, the bridge's output
+//! parsed back, the core link's queue read out.
+#![allow(dead_code)] // each test file uses some
+
+use idu_gimbal::link::Link;
+use idu_gimbal::wire::control::{Command, GimbalCommand};
+use idu_gimbal::wire::ids;
+use idu_gimbal::Instant;
+use idu_gimbal_mavlink::framing::{Check, FrameReader};
+use idu_gimbal_mavlink::{Bridge, GimbalControl};
+use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
+use mavio::dialects::common::messages::{CommandLong, Heartbeat};
+use mavio::mavspec::rust::spec::MessageSpecStatic;
+use mavio::protocol::{Frame, V2};
+use mavio::Message;
+
+pub const AP: (u8, u8) = (7, 1);
+pub const GCS: (u8, u8) = (255, 190);
+
+pub fn t(ms: u32) -> Instant {
+    Instant::from_millis(ms)
+}
+
+/// One MAVLink 2 frame from `(system, component)`.
+pub fn frame(from: (u8, u8), seq: u8, message: &dyn Message) -> Vec<u8> {
+    let f = Frame::builder()
+        .version(V2)
+        .sequence(seq)
+        .system_id(from.0)
+        .component_id(from.1)
+        .message(message)
+        .unwrap()
+        .build();
+    let mut buf = [0u8; 300];
+    let n = f.serialize(&mut buf).unwrap();
+    buf[..n].to_vec()
+}
+
+/// Every frame the bridge wrote since the last call, drained.
+pub fn sent<G: GimbalControl>(bridge: &mut Bridge<G>) -> Vec<Frame<V2>> {
+    let bytes = bridge.transmit_bytes().to_vec();
+    bridge.transmit_written(bytes.len());
+    let mut more = bridge.transmit_bytes().to_vec();
+    bridge.transmit_written(more.len());
+    let mut all = bytes;
+    all.append(&mut more);
+    let mut frames = Vec::new();
+    let mut reader = FrameReader::new();
+    reader.feed(&all, |f| {
+        frames.push(f.clone());
+        Check::Unhandled
+    });
+    assert_eq!(reader.pending(), 0);
+    assert_eq!(reader.stats().skipped_bytes, 0);
+    frames
+}
+
+pub fn of<M>(frames: &[Frame<V2>]) -> Vec<M>
+where
+    M: MessageSpecStatic
+        + for<'a> TryFrom<&'a mavio::protocol::Payload, Error = mavio::error::SpecError>,
+{
+    frames
+        .iter()
+        .filter(|f| f.message_id() == M::spec().id())
+        .map(|f| f.decode_message::<M>().unwrap())
+        .collect()
+}
+
+pub fn heartbeat() -> Heartbeat {
+    Heartbeat {
+        type_: MavType::Quadrotor,
+        autopilot: MavAutopilot::Ardupilotmega,
+        base_mode: MavModeFlag::empty(),
+        custom_mode: 0,
+        system_status: MavState::Active,
+        mavlink_version: 3,
+    }
+}
+
+pub fn command(target: (u8, u8), command: MavCmd, p1: f32, p2: f32) -> CommandLong {
+    CommandLong {
+        target_system: target.0,
+        target_component: target.1,
+        command,
+        confirmation: 0,
+        param1: p1,
+        param2: p2,
+        param3: 0.0,
+        param4: 0.0,
+        param5: 0.0,
+        param6: 0.0,
+        param7: 0.0,
+    }
+}
+
+/// The commands the link queued, in order.
+pub fn queued<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<GimbalCommand> {
+    let mut out = Vec::new();
+    while let Some(f) = link.next_transmit() {
+        link.transmit_done(None);
+        if f.id == ids::CONTROL {
+            if let Ok(Command::Gimbal(c)) = Command::decode(&f.data) {
+                out.push(c);
+            }
+        }
+    }
+    out
+}
