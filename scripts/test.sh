@@ -39,5 +39,12 @@ fi
 step "cargo test --workspace --all-features"
 cargo test --workspace --all-features
 
+step "MAVLink end to end: pymavlink as the autopilot against gimbalctl mavlink --sim"
+if ! python3 -c "import pymavlink" 2>/dev/null; then
+    python3 -m pip install --quiet --disable-pip-version-check pymavlink==2.4.50
+fi
+cargo build --quiet -p gimbalctl
+python3 gimbalctl/tests/mavlink_e2e.py target/debug/gimbalctl
+
 step "host_sim: the driver against the simulated gimbal, scripted"
 cargo run --quiet --example host_sim --features mock,std

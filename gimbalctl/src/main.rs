@@ -14,6 +14,7 @@ mod command;
 mod decode;
 mod error;
 mod json;
+mod mavlink;
 mod net;
 mod rtsp;
 mod sim;
@@ -96,6 +97,31 @@ enum Top {
         #[arg(long, value_name = "N", default_value_t = 8)]
         max_clients: usize,
     },
+    /// Bridge MAVLink 2 on UDP to a gimbal: a MAVLink gimbal device (154) and camera (100)
+    #[command(group(clap::ArgGroup::new("gimbal").required(true).args(["sim", "tcp"])))]
+    Mavlink {
+        /// The gimbal is the in-process simulated gimbal (on an in-memory CAN link)
+        #[arg(long)]
+        sim: bool,
+        /// The gimbal is behind the serial server (or gimbalctl sim), HOST:PORT
+        #[arg(long, value_name = "HOST:PORT")]
+        tcp: Option<String>,
+        /// UDP address to listen on (port 0: any free port; the first stdout line says which)
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:14560")]
+        listen: String,
+        /// Also send to this UDP peer (repeatable); peers heard from are always sent to
+        #[arg(long, value_name = "ADDR")]
+        to: Vec<String>,
+        /// MAVLink system id (default: the autopilot's, from its heartbeat)
+        #[arg(long, value_name = "1-255", value_parser = clap::value_parser!(u8).range(1..))]
+        system_id: Option<u8>,
+        /// Camera family for the stream URI: a2000, x3, argus, dual-light or f10
+        #[arg(long, value_name = "FAMILY", default_value = "x3")]
+        camera: String,
+        /// Exit after MS milliseconds (for scripted tests)
+        #[arg(long, value_name = "MS")]
+        exit_after_ms: Option<u64>,
+    },
     /// Print the RTSP address of a camera's video stream
     Rtsp {
         /// a2000, x3, argus, dual-light or f10
@@ -162,6 +188,24 @@ fn run(cli: Cli) -> Result<(), Failure> {
             exit_after_ms,
             max_clients,
         } => sim::run(&listen, exit_after_ms, max_clients),
+        Top::Mavlink {
+            sim: _,
+            tcp,
+            listen,
+            to,
+            system_id,
+            camera,
+            exit_after_ms,
+        } => mavlink::run(&mavlink::Options {
+            gimbal: tcp
+                .as_deref()
+                .map_or(mavlink::Gimbal::Sim, mavlink::Gimbal::Tcp),
+            listen: &listen,
+            to: &to,
+            system_id,
+            camera: &camera,
+            exit_after_ms,
+        }),
         Top::Rtsp {
             family,
             stream,

@@ -1,0 +1,84 @@
+//! `gimbalctl mavlink`: usage errors (exit 2, stderr naming the argument, stdout empty), a
+//! runtime failure (exit 1), and a clean run. The protocol itself is tested end to end by
+//! `tests/mavlink_e2e.py` with pymavlink (run by `scripts/test.sh`).
+
+mod common;
+
+use common::*;
+use std::net::{TcpListener, UdpSocket};
+
+#[test]
+fn usage_errors_name_the_argument() {
+    for (args, words) in [
+        (&["mavlink"][..], &["--sim", "--tcp"][..]),
+        (
+            &["mavlink", "--sim", "--tcp", "127.0.0.1:2000"],
+            &["--sim", "--tcp"],
+        ),
+        (
+            &["mavlink", "--sim", "--system-id", "0"],
+            &["--system-id", "1..=255"],
+        ),
+        (
+            &["mavlink", "--sim", "--system-id", "256"],
+            &["--system-id"],
+        ),
+        (
+            &["mavlink", "--sim", "--camera", "x9"],
+            &["--camera", "a2000", "f10"],
+        ),
+        (&["mavlink", "--sim", "--listen", "nowhere"], &["--listen"]),
+        (&["mavlink", "--sim", "--to", "nowhere"], &["--to"]),
+    ] {
+        let out = usage_error(args);
+        for w in words {
+            assert!(
+                out.stderr.contains(w),
+                "{args:?}: {w:?} not in {}",
+                out.stderr
+            );
+        }
+    }
+}
+
+#[test]
+fn runtime_failures_exit_1() {
+    // A UDP port already taken.
+    let taken = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let out = run(&["mavlink", "--sim", "--listen", &addr]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(out.stdout.is_empty());
+    assert!(out.stderr.contains("cannot listen on"));
+    // No serial server there.
+    let closed = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = closed.local_addr().unwrap().to_string();
+    drop(closed);
+    let out = run(&["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn a_timed_run_says_where_it_listens_and_exits_0() {
+    let out = run(&[
+        "mavlink",
+        "--sim",
+        "--listen",
+        "127.0.0.1:0",
+        "--exit-after-ms",
+        "300",
+    ]);
+    assert_eq!(out.code, 0, "{out:?}");
+    // Progress goes to stderr: the link coming up, the timed exit.
+    assert!(
+        out.stderr.contains("exiting after 300 ms"),
+        "{}",
+        out.stderr
+    );
+    let line = out.lines()[0].to_string();
+    assert!(
+        line.starts_with("gimbalctl mavlink: listening on 127.0.0.1:"),
+        "{line}"
+    );
+}
