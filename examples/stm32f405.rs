@@ -1,11 +1,7 @@
 //! Flight-controller firmware for an STM32F405RG driving an IDU gimbal over CAN.
 //!
-//! * CAN1 on **PB8 (RX) / PB9 (TX)**, alternate function 9, to a 3.3 V CAN transceiver
-//!   (e.g. SN65HVD230 or TJA1051T/3), 1 Mbit/s, 29-bit extended IDs. One 32-bit mask filter
-//!   bank passes exactly the postback ID (`interface::mask_filter(Role::FlightController)`),
-//!   data frames only, so the CPU never sees other traffic.
-//! * Clocks: 8 MHz HSE crystal, SYSCLK 168 MHz, APB1 (the CAN clock) 42 MHz.
-//! * SysTick interrupts at 1 kHz: the millisecond tick the driver runs on.
+//! * CAN1 on **PB8 (RX) / PB9 (TX)** at 1 Mbit/s with a filter passing only the postback,
+//!   the clocks and the 1 kHz SysTick tick: see `examples/common/board.rs`.
 //! * Logging through defmt-rtt, panics through panic-probe (over the debug probe).
 //!
 //! The main loop polls the driver, pushes vehicle data from a **stand-in source** (replace
@@ -19,56 +15,19 @@
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
-mod fw {
-    use core::sync::atomic::{AtomicU32, Ordering};
+#[path = "common/board.rs"]
+mod board;
 
-    use bxcan::filter::Mask32;
-    use bxcan::{ExtendedId, Fifo};
-    use cortex_m::peripheral::syst::SystClkSource;
-    use cortex_m_rt::{entry, exception};
+#[cfg(target_os = "none")]
+mod fw {
+    use cortex_m_rt::entry;
     use defmt_rtt as _;
     use panic_probe as _;
-    use stm32f4xx_hal::{pac, prelude::*, rcc::Config as RccConfig};
+    use stm32f4xx_hal::pac;
 
-    use idu_gimbal::interface::{mask_filter, Role, CAN_BITRATE};
+    use crate::board::{self, now};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     use idu_gimbal::{Config, Event, Gimbal, Instant};
-
-    const HSE_HZ: u32 = 8_000_000;
-    const SYSCLK_HZ: u32 = 168_000_000;
-    /// APB1 clocks bxcan. 42 MHz is its maximum on the F405 and divides 1 Mbit/s evenly.
-    const PCLK1_HZ: u32 = 42_000_000;
-
-    /// bxcan bit timing for `CAN_BITRATE`: 14 time quanta a bit (1 sync + 11 + 2, sample
-    /// point 85.7 %, SJW 1), prescaler 3 from 42 MHz.
-    const CAN_BTR: u32 = {
-        const TQ_PER_BIT: u32 = 14;
-        const BS1: u32 = 11;
-        const BS2: u32 = 2;
-        const SJW: u32 = 1;
-        assert!(1 + BS1 + BS2 == TQ_PER_BIT);
-        let prescaler = PCLK1_HZ / (CAN_BITRATE * TQ_PER_BIT);
-        assert!(
-            prescaler * CAN_BITRATE * TQ_PER_BIT == PCLK1_HZ,
-            "bit rate not exact"
-        );
-        ((SJW - 1) << 24) | ((BS2 - 1) << 20) | ((BS1 - 1) << 16) | (prescaler - 1)
-    };
-
-    /// Milliseconds since boot, advanced by the SysTick interrupt. Wraps after ~49.7 days,
-    /// which `Instant` handles.
-    static TICKS_MS: AtomicU32 = AtomicU32::new(0);
-
-    #[exception]
-    fn SysTick() {
-        TICKS_MS.fetch_add(1, Ordering::Relaxed);
-    }
-
-    fn now() -> Instant {
-        Instant::from_millis(TICKS_MS.load(Ordering::Relaxed))
-    }
-
-    defmt::timestamp!("{=u32:ms}", TICKS_MS.load(Ordering::Relaxed));
 
     /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
     /// `GLOBAL_POSITION_INT` and `ATTITUDE`, or your EKF outputs), each with the time it was
@@ -89,47 +48,9 @@ mod fw {
             panic!("peripherals taken twice");
         };
 
-        let mut rcc = dp.RCC.freeze(
-            RccConfig::hse(HSE_HZ.Hz())
-                .sysclk(SYSCLK_HZ.Hz())
-                .pclk1(PCLK1_HZ.Hz()),
-        );
-        assert_eq!(
-            rcc.clocks.pclk1().raw(),
-            PCLK1_HZ,
-            "CAN bit timing needs PCLK1 = 42 MHz"
-        );
-
-        // The millisecond tick.
-        let mut syst = cp.SYST;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(rcc.clocks.hclk().raw() / 1000 - 1);
-        syst.clear_current();
-        syst.enable_interrupt();
-        syst.enable_counter();
-
-        // CAN1 on PB8 (RX) / PB9 (TX).
-        let gpiob = dp.GPIOB.split(&mut rcc);
-        let can = dp.CAN1.can((gpiob.pb9, gpiob.pb8), &mut rcc);
-        let mut can = bxcan::Can::builder(can)
-            .set_bit_timing(CAN_BTR)
-            .set_automatic_retransmit(true)
-            .enable();
-        {
-            let (id, mask) = mask_filter(Role::FlightController);
-            let (Some(id), Some(mask)) = (ExtendedId::new(id), ExtendedId::new(mask)) else {
-                panic!("filter ids are 29-bit");
-            };
-            let mut filter = Mask32::frames_with_ext_id(id, mask);
-            filter.data_frames_only();
-            // Dropping the handle leaves filter initialisation mode.
-            can.modify_filters().enable_bank(0, Fifo::Fifo0, filter);
-        }
-        defmt::info!(
-            "CAN1 up: {=u32} bit/s, BTR {=u32:#010x}, filter passes postbacks only",
-            CAN_BITRATE,
-            CAN_BTR
-        );
+        let mut rcc = board::clocks(dp.RCC);
+        board::start_tick(cp.SYST, &rcc);
+        let can = board::can1(dp.CAN1, dp.GPIOB, &mut rcc);
 
         let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
         let mut next_vehicle = now();

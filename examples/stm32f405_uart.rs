@@ -3,16 +3,16 @@
 //! * USART2 at **115200 8N1**: **PA2 (TX)** to the gimbal's connector pin 5 (USART RX),
 //!   **PA3 (RX)** from pin 6 (USART TX), ground to pin 7. The document gives no logic level:
 //!   check it is 3.3 V before wiring (use a level shifter otherwise).
-//! * Receive is interrupt-driven: the USART2 interrupt (RXNE) moves every byte into a
-//!   256-byte ring the main loop drains, so no byte is lost while the main loop is busy (a
-//!   postback is 27 bytes every 500 ms; the ring holds over 9 of them). A full ring or a
-//!   line error (overrun, framing, parity, noise) is reported to the driver as a read
-//!   error, which counts it; the stream parser resynchronises on the next header.
+//! * Receive is interrupt-driven (`examples/common/usart2_ring.rs`): the USART2 interrupt
+//!   (RXNE) moves every byte into a 1024-byte ring the main loop drains, so no byte is lost
+//!   while the main loop is busy. A full ring or a line error (overrun, framing, parity,
+//!   noise) is reported to the driver as a read error, which counts it; the stream parser
+//!   resynchronises on the next header.
 //! * Transmit is polled without blocking: the driver writes while the data register is
 //!   empty and finishes a partly written frame at the next poll (a 24-byte frame takes
 //!   about 2.1 ms at 115200 baud).
-//! * Clocks: 8 MHz HSE crystal, SYSCLK 168 MHz. SysTick interrupts at 1 kHz: the
-//!   millisecond tick the driver runs on. Logging through defmt-rtt.
+//! * Clocks and the 1 kHz SysTick tick: `examples/common/board.rs`. Logging through
+//!   defmt-rtt.
 //!
 //! The serial link carries control commands and postbacks only: no vehicle frames, so the
 //! gimbal references headings to the nose; the vehicle state below is observed for
@@ -25,99 +25,29 @@
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
+#[path = "common/board.rs"]
+mod board;
+
+#[cfg(target_os = "none")]
+#[path = "common/usart2_ring.rs"]
+mod usart2_ring;
+
+#[cfg(target_os = "none")]
 mod fw {
-    use core::cell::RefCell;
-    use core::sync::atomic::{AtomicU32, Ordering};
-
-    use cortex_m::interrupt::Mutex;
-    use cortex_m::peripheral::syst::SystClkSource;
-    use cortex_m_rt::{entry, exception};
+    use cortex_m_rt::entry;
     use defmt_rtt as _;
-    use heapless::Deque;
     use panic_probe as _;
-    use stm32f4xx_hal::serial::{Config as SerialConfig, Error as LineError, Rx, RxListen, Serial};
-    use stm32f4xx_hal::{interrupt, pac, prelude::*, rcc::Config as RccConfig};
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Serial};
+    use stm32f4xx_hal::{pac, prelude::*};
 
+    use crate::board::{self, now};
+    use crate::usart2_ring::{self, RingRx};
     use idu_gimbal::driver::{Nb, PortError};
     use idu_gimbal::geo::Position;
     use idu_gimbal::interface::UART_BAUD;
     use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Config, Event, Instant, SerialGimbal};
-
-    const HSE_HZ: u32 = 8_000_000;
-    const SYSCLK_HZ: u32 = 168_000_000;
-
-    /// Milliseconds since boot, advanced by the SysTick interrupt. Wraps after ~49.7 days,
-    /// which `Instant` handles.
-    static TICKS_MS: AtomicU32 = AtomicU32::new(0);
-
-    #[exception]
-    fn SysTick() {
-        TICKS_MS.fetch_add(1, Ordering::Relaxed);
-    }
-
-    fn now() -> Instant {
-        Instant::from_millis(TICKS_MS.load(Ordering::Relaxed))
-    }
-
-    defmt::timestamp!("{=u32:ms}", TICKS_MS.load(Ordering::Relaxed));
-
-    /// Bytes received, from the interrupt to the main loop.
-    const RING: usize = 256;
-
-    /// The receive half, owned by the interrupt once set up.
-    static UART_RX: Mutex<RefCell<Option<Rx<pac::USART2>>>> = Mutex::new(RefCell::new(None));
-    /// Bytes the interrupt received and the main loop has not taken yet.
-    static RECEIVED: Mutex<RefCell<Deque<u8, RING>>> = Mutex::new(RefCell::new(Deque::new()));
-    /// The latest line error or ring overflow not yet reported to the driver.
-    static LINE_ERROR: Mutex<RefCell<Option<LineError>>> = Mutex::new(RefCell::new(None));
-
-    #[interrupt]
-    fn USART2() {
-        cortex_m::interrupt::free(|cs| {
-            let mut rx = UART_RX.borrow(cs).borrow_mut();
-            let Some(rx) = rx.as_mut() else { return };
-            let mut ring = RECEIVED.borrow(cs).borrow_mut();
-            loop {
-                match embedded_hal_nb::serial::Read::read(rx) {
-                    Ok(byte) => {
-                        if ring.push_back(byte).is_err() {
-                            // The main loop fell behind: the byte is lost, and said so.
-                            LINE_ERROR.borrow(cs).replace(Some(LineError::Overrun));
-                        }
-                    }
-                    Err(nb::Error::WouldBlock) => break,
-                    // The HAL read the data register to clear the error flag.
-                    Err(nb::Error::Other(e)) => {
-                        LINE_ERROR.borrow(cs).replace(Some(e));
-                    }
-                }
-            }
-        });
-    }
-
-    /// The main loop's end of the receive ring, as an `embedded-hal-nb` reader.
-    struct RingRx;
-
-    impl embedded_hal_nb::serial::ErrorType for RingRx {
-        type Error = LineError;
-    }
-
-    impl embedded_hal_nb::serial::Read<u8> for RingRx {
-        fn read(&mut self) -> nb::Result<u8, LineError> {
-            cortex_m::interrupt::free(|cs| {
-                if let Some(e) = LINE_ERROR.borrow(cs).take() {
-                    return Err(nb::Error::Other(e));
-                }
-                RECEIVED
-                    .borrow(cs)
-                    .borrow_mut()
-                    .pop_front()
-                    .ok_or(nb::Error::WouldBlock)
-            })
-        }
-    }
+    use idu_gimbal::{Config, Event, SerialGimbal};
 
     /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates, each with the time it
     /// was measured. Used for point-at only: the serial link carries no vehicle frames.
@@ -135,17 +65,8 @@ mod fw {
             panic!("peripherals taken twice");
         };
 
-        let mut rcc = dp
-            .RCC
-            .freeze(RccConfig::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz()));
-
-        // The millisecond tick.
-        let mut syst = cp.SYST;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(rcc.clocks.hclk().raw() / 1000 - 1);
-        syst.clear_current();
-        syst.enable_interrupt();
-        syst.enable_counter();
+        let mut rcc = board::clocks(dp.RCC);
+        board::start_tick(cp.SYST, &rcc);
 
         // USART2 on PA2 (TX) / PA3 (RX), 115200 8N1 (the HAL's default framing).
         let gpioa = dp.GPIOA.split(&mut rcc);
@@ -157,11 +78,8 @@ mod fw {
         ) else {
             panic!("USART2 configuration refused");
         };
-        let (tx, mut rx) = serial.split();
-        rx.listen();
-        cortex_m::interrupt::free(|cs| UART_RX.borrow(cs).replace(Some(rx)));
-        // SAFETY: the handler only touches state behind `cortex_m::interrupt::Mutex`.
-        unsafe { cortex_m::peripheral::NVIC::unmask(pac::Interrupt::USART2) };
+        let (tx, rx) = serial.split();
+        usart2_ring::start(rx);
         defmt::info!("USART2 up: {=u32} baud 8N1, PA2 TX, PA3 RX", UART_BAUD);
 
         let mut gimbal: SerialGimbal<_> = SerialGimbal::new(Nb::new(RingRx, tx), Config::default());

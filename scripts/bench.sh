@@ -15,6 +15,8 @@ ensure_binutils
 
 status=0
 cargo run --release --target "$TARGET" --example qemu_bench || status=$?
+echo
+cargo run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_bench_mavlink || status=$?
 
 echo
 echo "Flash cost of the CRC variants (bytes; arm-none-eabi-nm --size-sort, qemu_bench build):"

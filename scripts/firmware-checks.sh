@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The firmware part of the test suite (scripts/test.sh runs it when present):
-#   1. the QEMU demo session must pass (exit 0);
-#   2. the STM32F405 firmware, CAN and UART, builds in release mode (sizes printed);
+#   1. the QEMU demo sessions must pass (exit 0): the core's, and the MAVLink bridge's;
+#   2. the STM32F405 firmware, CAN, UART and MAVLink bridge, builds in release mode (sizes
+#      printed);
 #   3. the QEMU benchmarks and the size report must meet the budgets of issue 4.
 #
 # IDU_BUDGETS=report turns budget failures (step 3) into warnings; the default, enforce,
@@ -17,9 +18,13 @@ ensure_binutils
 echo "--- firmware: QEMU demo session"
 scripts/demo.sh
 
-echo "--- firmware: STM32F405 release builds (CAN, UART)"
+echo "--- firmware: the MAVLink bridge's QEMU session (scripted autopilot, bridge, CAN, simulated gimbal)"
+cargo run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_mavlink
+
+echo "--- firmware: STM32F405 release builds (CAN, UART, MAVLink bridge)"
 cargo build --release --target "$TARGET" --example stm32f405 --example stm32f405_uart
-arm-none-eabi-size "$(example_elf stm32f405)" "$(example_elf stm32f405_uart)"
+cargo build --release --target "$TARGET" -p idu-gimbal-mavlink --example stm32f405_mavlink
+arm-none-eabi-size "$(example_elf stm32f405)" "$(example_elf stm32f405_uart)" "$(example_elf stm32f405_mavlink)"
 
 echo "--- firmware: benchmarks and sizes (budgets)"
 if scripts/bench.sh; then

@@ -24,7 +24,7 @@ cargo build --target thumbv7em-none-eabihf --lib --features defmt
 cargo build --target thumbv7em-none-eabihf --lib --features mock
 
 step "MAVLink bridge (idu-gimbal-mavlink): clippy and build for thumbv7em-none-eabihf"
-cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib -- -D warnings
+cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --examples -- -D warnings
 cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib
 
 step "docs, warnings denied"

@@ -12,10 +12,11 @@
 //! - so `ψ/2 = atan2(z, w)` (for `cos(θ/2) > 0`, which holds for every |θ| < 180°), and
 //!   with `c = cos(ψ/2)`, `s = sin(ψ/2)`: `cos(θ/2) = w·c + z·s`, `sin(θ/2) = y·c − x·s`.
 //!
-//! That is exact over the whole range, −90° and −100° included, with no singularity. A
-//! quaternion with a roll component (which the gimbal cannot follow) is read as the nearest
-//! roll-free attitude in this parametrisation, and [`YawPitch::roll_residual_rad`] says how far
-//! it was.
+//! That is exact over the whole range, −90° and −100° included, with no singularity, and
+//! needs two arc tangents and no sine or cosine (cos(ψ/2) and sin(ψ/2) are `w` and `z` over
+//! their length). A quaternion with a roll component (which the gimbal cannot follow) is
+//! read as a roll-free attitude in this parametrisation, and [`YawPitch::roll_of`] says how
+//! much roll it had.
 //!
 //! Angles are in radians, MAVLink's unit, as `f32` (MAVLink's quaternions are `f32`).
 //! Positive pitch is up, positive yaw is to the right (clockwise seen from above), as in
@@ -51,31 +52,44 @@ impl YawPitch {
     }
 
     /// Reads yaw and pitch back from a quaternion `[w, x, y, z]` (see the module docs).
-    /// `None` when it is not finite or far from unit length (|q| outside [0.9, 1.1]: not a
-    /// rotation, whatever rounding the sender did).
+    /// `None` when it is not finite, far from unit length (|q| outside [0.9, 1.1]: not a
+    /// rotation, whatever rounding the sender did), or pitched by 180° (no yaw then).
     pub fn from_quaternion(q: [f32; 4]) -> Option<YawPitch> {
         let [w, x, y, z] = q;
         let norm = libm::sqrtf(w * w + x * x + y * y + z * z);
         if !norm.is_finite() || !(0.9..=1.1).contains(&norm) {
             return None;
         }
-        let [w, x, y, z] = [w / norm, x / norm, y / norm, z / norm];
-        let half_yaw = libm::atan2f(z, w);
-        let (s, c) = libm::sincosf(half_yaw);
+        // cos(ψ/2) and sin(ψ/2) are w and z over their length: no trigonometry needed.
+        let r = libm::sqrtf(w * w + z * z);
+        if r < 1e-6 {
+            return None;
+        }
+        let (c, s) = (w / r, z / r);
         let half_pitch = libm::atan2f(y * c - x * s, w * c + z * s);
-        Some(YawPitch {
-            yaw_rad: wrap_pi(2.0 * half_yaw),
-            pitch_rad: 2.0 * half_pitch,
-        })
+        Some(
+            YawPitch {
+                yaw_rad: 2.0 * libm::atan2f(z, w),
+                pitch_rad: 2.0 * half_pitch,
+            }
+            .normalised(),
+        )
     }
 
-    /// How far `q` is from the roll-free attitude this reads it as: the rotation angle between
-    /// the two, radians (0 for a quaternion built by [`YawPitch::to_quaternion`]).
-    pub fn roll_residual_rad(self, q: [f32; 4]) -> f32 {
-        let r = self.to_quaternion();
-        let norm = libm::sqrtf(q.iter().map(|v| v * v).sum());
-        let dot: f32 = q.iter().zip(r.iter()).map(|(a, b)| a * b).sum::<f32>() / norm;
-        2.0 * libm::acosf(libm::fabsf(dot).min(1.0))
+    fn normalised(self) -> YawPitch {
+        YawPitch {
+            yaw_rad: wrap_pi(self.yaw_rad),
+            ..self
+        }
+    }
+
+    /// How much roll `q` has, which the gimbal cannot follow: `2(w·x + y·z)`, exactly 0 for
+    /// every `q_yaw ⊗ q_pitch` (expand the product), and `sin(roll)·cos(pitch)` for an
+    /// attitude with roll. Looking straight down a roll is a yaw, and this reads 0.
+    pub fn roll_of(q: [f32; 4]) -> f32 {
+        let [w, x, y, z] = q;
+        let norm2 = w * w + x * x + y * y + z * z;
+        2.0 * (w * x + y * z) / norm2
     }
 }
 
@@ -172,7 +186,7 @@ mod tests {
                     wrap_pi(b.yaw_rad - a.yaw_rad).abs() < 1e-5,
                     "pitch {pitch} yaw {yaw}: {b:?}"
                 );
-                assert!(b.roll_residual_rad(q) < 1e-3);
+                assert!(YawPitch::roll_of(q).abs() < 1e-6);
             }
         }
     }
@@ -230,8 +244,14 @@ mod tests {
             a1 * c2 - b1 * d2 + c1 * a2 + d1 * b2,
             a1 * d2 + b1 * c2 - c1 * b2 + d1 * a2,
         ];
-        let read = YawPitch::from_quaternion(q).unwrap();
-        assert!(read.roll_residual_rad(q) > deg(5.0));
+        assert!(YawPitch::from_quaternion(q).is_some());
+        // sin(15°)·cos(−20°) = 0.2432, to f32 rounding.
+        let expected = deg(15.0).sin() * deg(-20.0).cos();
+        assert!(
+            (YawPitch::roll_of(q) - expected).abs() < 1e-5,
+            "{}",
+            YawPitch::roll_of(q)
+        );
     }
 
     proptest! {

@@ -563,8 +563,9 @@ impl State {
             bump(&mut self.stats.refused_setpoints);
             return;
         };
-        // The gimbal has no roll: a setpoint rolled by more than a degree cannot be followed.
-        if a.roll_residual_rad(set.q) > 1f32.to_radians() {
+        // The gimbal has no roll: a setpoint rolled by more than about a degree
+        // (sin(roll)·cos(pitch) over sin 1° = 0.01745) cannot be followed.
+        if libm::fabsf(YawPitch::roll_of(set.q)) > 0.017_45 {
             bump(&mut self.stats.refused_setpoints);
             return;
         }

@@ -328,7 +328,8 @@ impl Camera {
                     *slot = Some(GimbalCommand::Zoom(z));
                 }
                 let factor = libm::powf(2.0, v);
-                (c, (self.zoom * factor).clamp(1.0, self.config.zoom_max))
+                // max/min, not clamp: clamp panics on a NaN or inverted bound.
+                (c, (self.zoom * factor).max(1.0).min(self.config.zoom_max))
             } else {
                 return MavResult::Unsupported;
             };

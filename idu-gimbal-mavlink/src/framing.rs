@@ -107,17 +107,48 @@ impl FrameReader {
     }
 
     /// Takes bytes in any split; calls `check` with each complete frame, in order.
-    pub fn feed(&mut self, bytes: &[u8], mut check: impl FnMut(&Frame<V2>) -> Check) {
-        for &b in bytes {
-            if self.len == 0 && b != STX_V2 {
-                self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(1);
-                continue;
+    pub fn feed(&mut self, mut bytes: &[u8], mut check: impl FnMut(&Frame<V2>) -> Check) {
+        while !bytes.is_empty() {
+            if self.len == 0 {
+                // Look for a start byte; everything before it is skipped.
+                let start = bytes
+                    .iter()
+                    .position(|&b| b == STX_V2)
+                    .unwrap_or(bytes.len());
+                // A slice is shorter than 2^32 bytes here (it came through a UART buffer);
+                // were it not, the counter wraps as every counter does.
+                self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(start as u32);
+                bytes = bytes.get(start..).unwrap_or(&[]);
+                if bytes.is_empty() {
+                    return;
+                }
             }
-            if let Some(slot) = self.buf.get_mut(self.len) {
-                *slot = b;
-                self.len += 1;
+            // Copy what the frame in hand still needs (the header first), in one go.
+            let want = self.needed().saturating_sub(self.len).max(1);
+            let n = want.min(bytes.len()).min(MAX_FRAME_LEN - self.len);
+            let (now, rest) = bytes.split_at(n);
+            if let Some(dst) = self.buf.get_mut(self.len..self.len + n) {
+                dst.copy_from_slice(now);
             }
+            self.len += n;
+            bytes = rest;
             self.complete(&mut check);
+        }
+    }
+
+    /// How long the frame in hand is, as far as its header says (the header's length until
+    /// it is all here).
+    fn needed(&self) -> usize {
+        match (self.buf.get(1), self.buf.get(2)) {
+            (Some(&payload_len), Some(&iflags)) if self.len >= 3 => {
+                let signature = if iflags & IFLAG_SIGNED != 0 {
+                    SIGNATURE_LEN
+                } else {
+                    0
+                };
+                HEADER_LEN + usize::from(payload_len) + CHECKSUM_LEN + signature
+            }
+            _ => HEADER_LEN,
         }
     }
 
