@@ -47,7 +47,7 @@ mod fw {
     use idu_gimbal::interface::UART_BAUD;
     use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Config, Event, SerialGimbal};
+    use idu_gimbal::{Config, SerialGimbal};
 
     /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates, each with the time it
     /// was measured. Used for point-at only: the serial link carries no vehicle frames.
@@ -116,26 +116,7 @@ mod fw {
             }
 
             while let Some(event) = gimbal.next_event() {
-                match event {
-                    Event::Postback => {
-                        if let Some((p, _age_ms)) = gimbal.latest_postback(now) {
-                            defmt::info!(
-                                "postback: pitch {=f32} deg, heading {=f32} deg (nose), motor {=f32} deg, {}",
-                                p.pitch_deg(),
-                                p.heading_deg(),
-                                p.motor_heading_deg(),
-                                p.mode,
-                            )
-                        }
-                    }
-                    Event::LinkUp => defmt::info!("gimbal link up"),
-                    Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
-                    Event::RateHoldExpired => defmt::info!("rate hold expired: gimbal stopped"),
-                    Event::TargetUnreachable { elevation_cdeg } => defmt::warn!(
-                        "look-at target out of the gimbal's pitch range (needs {=i16} cdeg)",
-                        elevation_cdeg
-                    ),
-                }
+                board::log_event(event, gimbal.latest_postback(now).map(|(p, _)| p));
             }
 
             if now.is_at_or_after(next_stats) {

@@ -22,7 +22,8 @@ use cortex_m_rt::exception;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config as RccConfig, rcc::Rcc};
 
 use idu_gimbal::interface::{mask_filter, Role, CAN_BITRATE};
-use idu_gimbal::Instant;
+use idu_gimbal::wire::postback::Postback;
+use idu_gimbal::{Event, Instant};
 
 pub const HSE_HZ: u32 = 8_000_000;
 pub const SYSCLK_HZ: u32 = 168_000_000;
@@ -113,4 +114,30 @@ pub fn can1(
         CAN_BTR
     );
     can
+}
+
+/// Logs a driver event; `latest` is the newest postback, for `Event::Postback`.
+pub fn log_event(event: Event, latest: Option<Postback>) {
+    match event {
+        Event::Postback => {
+            if let Some(p) = latest {
+                defmt::info!(
+                    "postback: pitch {=f32} deg, heading {=f32} deg, motor {=f32} deg, {}, {}, tracking {=bool}",
+                    p.pitch_deg(),
+                    p.heading_deg(),
+                    p.motor_heading_deg(),
+                    p.mode,
+                    p.gimbal_type,
+                    p.tracking
+                )
+            }
+        }
+        Event::LinkUp => defmt::info!("gimbal link up"),
+        Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
+        Event::RateHoldExpired => defmt::info!("rate hold expired: gimbal stopped"),
+        Event::TargetUnreachable { elevation_cdeg } => defmt::warn!(
+            "look-at target out of the gimbal's pitch range (needs {=i16} cdeg)",
+            elevation_cdeg
+        ),
+    }
 }

@@ -20,7 +20,7 @@ use mavio::Message;
 use crate::attitude::{is_nan_quaternion, wrap_pi, YawPitch};
 use crate::camera::{self, Camera, CameraConfig, Tx};
 
-use crate::framing::{Check, FrameReader, Outbox, OutboxError, ReaderStats};
+use crate::framing::{Check, FrameReader, Outbox, ReaderStats};
 use crate::gimbal::GimbalControl;
 
 /// The autopilot's component id (`MAV_COMP_ID_AUTOPILOT1`).
@@ -93,7 +93,7 @@ pub struct BridgeStats {
     pub refused_setpoints: u32,
     /// Commands the gimbal's queue had no room for.
     pub queue_full: u32,
-    /// Frames not sent: the outbox was full.
+    /// Frames not sent: the outbox was full (or, a bug, `mavio` could not encode one).
     pub outbox_full: u32,
     /// Vehicle attitude and position updates passed to the core.
     pub vehicle_updates: u32,
@@ -267,9 +267,7 @@ fn model_name(t: Option<GimbalType>) -> &'static str {
 
 impl State {
     fn send(&mut self, component: u8, message: &dyn Message) {
-        if let Err(OutboxError::Full | OutboxError::Encode) =
-            self.out.push(self.system_id, component, message)
-        {
+        if self.out.push(self.system_id, component, message).is_err() {
             bump(&mut self.stats.outbox_full);
         }
     }
@@ -300,19 +298,18 @@ impl State {
         now: Instant,
     ) -> Check {
         let id = frame.message_id();
-        let handled = |ok: bool| if ok { Check::Handled } else { Check::Bad };
         if id == id_of::<Heartbeat>() {
             let Some(hb) = decode::<Heartbeat>(frame) else {
                 return Check::Bad;
             };
             self.heartbeat(frame.system_id(), frame.component_id(), &hb, now);
-            handled(true)
+            Check::Handled
         } else if id == id_of::<CommandLong>() {
             let Some(cmd) = decode::<CommandLong>(frame) else {
                 return Check::Bad;
             };
             self.command(gimbal, frame.system_id(), frame.component_id(), &cmd, now);
-            handled(true)
+            Check::Handled
         } else if id == id_of::<GimbalDeviceSetAttitude>() {
             let Some(set) = decode::<GimbalDeviceSetAttitude>(frame) else {
                 return Check::Bad;
@@ -322,7 +319,7 @@ impl State {
             } else {
                 bump(&mut self.stats.not_for_us);
             }
-            handled(true)
+            Check::Handled
         } else if id == id_of::<AutopilotStateForGimbalDevice>() {
             let Some(state) = decode::<AutopilotStateForGimbalDevice>(frame) else {
                 return Check::Bad;
@@ -332,7 +329,7 @@ impl State {
             } else {
                 bump(&mut self.stats.not_for_us);
             }
-            handled(true)
+            Check::Handled
         } else if id == id_of::<GlobalPositionInt>() {
             let Some(pos) = decode::<GlobalPositionInt>(frame) else {
                 return Check::Bad;
@@ -340,7 +337,7 @@ impl State {
             if frame.component_id() == AUTOPILOT_COMPONENT {
                 self.position(gimbal, &pos, now);
             }
-            handled(true)
+            Check::Handled
         } else {
             Check::Unhandled
         }
@@ -419,40 +416,47 @@ impl State {
                 }
             }
         } else {
-            let State {
-                camera,
-                out,
-                system_id,
-                stats,
-                position,
-                ..
-            } = self;
-            let Some(camera) = camera.as_mut() else {
-                return;
-            };
-            let (result, reply) = camera.command(gimbal, cmd, now);
-            // The ACK first, then what the command produced.
-            bump(&mut stats.acks);
-            let ack = CommandAck {
-                command: cmd.command,
-                result,
-                progress: 0,
-                result_param2: 0,
-                target_system: from.0,
-                target_component: from.1,
-            };
-            let mut send = |c: u8, m: &dyn Message| {
-                if out.push(*system_id, c, m).is_err() {
-                    bump(&mut stats.outbox_full);
-                }
-            };
-            send(me, &ack);
-            let mut tx = Tx {
-                send: &mut send,
-                position: *position,
-            };
-            camera.reply(reply, now, &mut tx);
+            let acked = self.with_camera(|camera, tx| {
+                let (result, reply) = camera.command(gimbal, cmd, now);
+                // The ACK first, then what the command produced.
+                let ack = CommandAck {
+                    command: cmd.command,
+                    result,
+                    progress: 0,
+                    result_param2: 0,
+                    target_system: from.0,
+                    target_component: from.1,
+                };
+                (tx.send)(me, &ack);
+                camera.reply(reply, now, tx);
+            });
+            if acked.is_some() {
+                bump(&mut self.stats.acks);
+            }
         }
+    }
+
+    /// Runs `f` with the camera and a sender into the outbox; `None` without a camera.
+    fn with_camera<R>(&mut self, f: impl FnOnce(&mut Camera, &mut Tx<'_>) -> R) -> Option<R> {
+        let State {
+            camera,
+            out,
+            system_id,
+            stats,
+            position,
+            ..
+        } = self;
+        let camera = camera.as_mut()?;
+        let mut send = |c: u8, m: &dyn Message| {
+            if out.push(*system_id, c, m).is_err() {
+                bump(&mut stats.outbox_full);
+            }
+        };
+        let mut tx = Tx {
+            send: &mut send,
+            position: *position,
+        };
+        Some(f(camera, &mut tx))
     }
 
     fn gimbal_owns(cmd: &CommandLong) -> bool {
@@ -710,26 +714,7 @@ impl State {
                 );
             }
         }
-        let State {
-            camera,
-            out,
-            system_id,
-            stats,
-            position,
-            ..
-        } = self;
-        if let Some(camera) = camera.as_mut() {
-            let mut send = |c: u8, m: &dyn Message| {
-                if out.push(*system_id, c, m).is_err() {
-                    bump(&mut stats.outbox_full);
-                }
-            };
-            let mut tx = Tx {
-                send: &mut send,
-                position: *position,
-            };
-            camera.poll(now, &mut tx);
-        }
+        self.with_camera(|camera, tx| camera.poll(now, tx));
         if self.status_ms > 0 && self.next_status.is_none_or(|t| now.is_at_or_after(t)) {
             self.next_status = Some(now.add_millis(self.status_ms));
             self.status(gimbal, now);
