@@ -9,6 +9,20 @@ const VECTORS: &str = include_str!("data/geo_vectors.csv");
 
 const ANGLE_TOL_DEG: f64 = 0.01;
 
+/// The error of a point's f64 ECEF coordinates, metres. Near the Earth's surface they reach
+/// 6.4e6 m, where one unit in the last place is 2^-30 m (9.3e-10 m); the geodetic to ECEF
+/// conversion (a few products and sums) leaves each coordinate within a few of those, and
+/// so does the difference of two points rotated into east-north-up. 8 ulps bound it with a
+/// margin over the largest seen (about 0.4 ulp of horizontal error for a vertical offset).
+const ECEF_ERR_M: f64 = 8.0 * 9.313e-10;
+
+/// A vertical offset `d` reads with up to [`ECEF_ERR_M`] of horizontal error, so its
+/// elevation is off by up to `atan(ECEF_ERR_M / |d|)`: 4.3e-5° at 1 cm, 4.3e-7° at 1 m.
+/// (The fixed 1e-6° this replaces failed about one run in 300, at offsets under 4 cm.)
+fn vertical_elevation_tol_deg(d: f64) -> f64 {
+    (ECEF_ERR_M / d.abs()).atan().to_degrees()
+}
+
 fn range_tol(range_m: f64) -> f64 {
     0.1 + 1e-5 * range_m
 }
@@ -270,7 +284,8 @@ proptest! {
         prop_assert_eq!(look_at(&v, &t), Err(GeoError::SamePosition));
     }
 
-    /// Straight above or below: elevation ±90, range the height difference, bearing 0.
+    /// Straight above or below: elevation ±90 (to the precision of f64 ECEF coordinates at
+    /// that offset, see [`ECEF_ERR_M`]), range the height difference, bearing 0.
     #[test]
     fn vertical_has_bearing_zero(v in position(), dalt in prop_oneof![-900.0..-0.01_f64, 0.01..5000.0_f64]) {
         let Ok(t) = Position::new(v.lat_deg(), v.lon_deg(), v.alt_m() + dalt) else {
@@ -278,7 +293,8 @@ proptest! {
         };
         let l = look_at(&v, &t).unwrap();
         prop_assert_eq!(l.bearing_deg, 0.0);
-        prop_assert!((l.elevation_deg - 90.0_f64.copysign(dalt)).abs() <= 1e-6, "{l:?}");
+        let tol = vertical_elevation_tol_deg(dalt);
+        prop_assert!((l.elevation_deg - 90.0_f64.copysign(dalt)).abs() <= tol, "{l:?}, tolerance {tol:e}");
         prop_assert!((l.range_m - dalt.abs()).abs() <= 1e-6, "{l:?}");
     }
 
@@ -326,4 +342,18 @@ fn across_the_antimeridian_both_ways() {
     assert!(bearing_diff(b.bearing_deg, 270.0) < 0.01, "{b:?}");
     assert!(a.range_m > 1800.0 && a.range_m < 1900.0, "{a:?}");
     assert!((a.range_m - b.range_m).abs() < 1e-6);
+}
+
+/// The input that failed the old fixed tolerance (issue 12): 1 cm straight down read
+/// -89.99999782882904°, 2.2e-6° off, within the ECEF precision at that offset (4.3e-5°).
+#[test]
+fn one_centimetre_straight_down() {
+    let v = pos(-48.177952215607604, 0.0, 4252.344045390514);
+    let t = pos(v.lat_deg(), v.lon_deg(), v.alt_m() - 0.01);
+    let l = look_at(&v, &t).unwrap();
+    assert_eq!(l.bearing_deg, 0.0);
+    let err = (l.elevation_deg + 90.0).abs();
+    assert!(err > 1e-6, "the case the old tolerance failed on: {err:e}");
+    assert!(err <= vertical_elevation_tol_deg(-0.01), "{l:?}");
+    assert!((l.range_m - 0.01).abs() <= 1e-6, "{l:?}");
 }
