@@ -213,6 +213,11 @@ impl<G: GimbalControl> Bridge<G> {
         &mut self.gimbal
     }
 
+    /// The frame reader, for its state ([`FrameReader::pending`]).
+    pub fn reader(&self) -> &FrameReader {
+        &self.reader
+    }
+
     /// All counters.
     pub fn stats(&self) -> BridgeStats {
         BridgeStats {

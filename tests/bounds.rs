@@ -1,0 +1,73 @@
+//! Resource bounds of the inputs the crate takes from outside (the table in TESTING.md):
+//! whatever arrives, memory stays fixed and a call's work is bounded, and what is dropped
+//! is counted.
+#![cfg(feature = "mock")]
+
+use embedded_can::{nb::Can, ExtendedId, Frame as _};
+use idu_gimbal::link::Config;
+use idu_gimbal::mock::{Bus, MockFrame};
+use idu_gimbal::wire::serial::{StreamParser, MAX_FRAME_LEN};
+use idu_gimbal::{Gimbal, Instant};
+
+/// 10^6 garbage bytes, heavy in the stream's own vocabulary (`EB 90 0A/0C`): the parser
+/// holds less than one frame at all times, yields nothing, and every byte is skipped or
+/// pending.
+#[test]
+fn a_million_garbage_bytes_into_the_stream_parser() {
+    let mut rng = fastrand::Rng::with_seed(12);
+    let vocabulary = [0xEB, 0x90, 0x0A, 0x0C, 0x00, 0x40, 0x88];
+    let mut p = StreamParser::new();
+    let mut items = 0;
+    let mut fed = 0u32;
+    for _ in 0..1_000 {
+        let chunk: Vec<u8> = (0..1_000)
+            .map(|_| {
+                if rng.bool() {
+                    vocabulary[rng.usize(..vocabulary.len())]
+                } else {
+                    rng.u8(..)
+                }
+            })
+            .collect();
+        items += p.feed(&chunk).count();
+        fed += chunk.len() as u32;
+        assert!(p.pending() < MAX_FRAME_LEN);
+    }
+    let s = p.stats();
+    // A 24-byte frame whose CRC and fixed bytes all hold by chance is possible in principle
+    // (2^-16 for the CRC alone, times the 11 fixed bytes); with this seed none does.
+    assert_eq!(items, 0);
+    assert_eq!((s.control_frames, s.postbacks), (0, 0));
+    assert_eq!(s.skipped_bytes + p.pending() as u32, fed);
+    assert!(s.crc_errors + s.invalid_frames > 0, "the vocabulary made candidates");
+}
+
+/// A flood of frames on the bus: one poll takes at most `max_rx_per_poll` of them, so a
+/// babbling node cannot stall the main loop; the rest wait in the controller's FIFO (or are
+/// lost to its overrun, which the driver counts), and later polls take them.
+#[test]
+fn one_poll_takes_at_most_max_rx_per_poll_frames() {
+    let bus: Bus<2, 256> = Bus::new(3);
+    let config = Config {
+        max_rx_per_poll: core::num::NonZeroU16::new(8).unwrap(),
+        ..Config::default()
+    };
+    let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), config);
+    let mut babbler = bus.endpoint(1).unwrap();
+    let id = ExtendedId::new(0x1234).unwrap();
+    for i in 0..300u32 {
+        let _ = babbler.transmit(&MockFrame::new(id, &i.to_le_bytes()).unwrap());
+    }
+    let _ = gimbal.poll(Instant::from_millis(0));
+    // Eight receive calls: the FIFO's overrun (reported once, by the first) and 7 frames.
+    let s = gimbal.stats();
+    assert_eq!(s.link.frames_received + s.driver_errors.total(), 8);
+    assert_eq!(s.driver_errors.overrun, 1);
+    for ms in 1..40 {
+        let _ = gimbal.poll(Instant::from_millis(ms));
+    }
+    // 256 fit the receive FIFO; the other 44 overran it, counted once as an overrun error.
+    assert_eq!(gimbal.stats().link.frames_received, 256);
+    assert_eq!(gimbal.stats().link.ignored_frames, 256);
+    assert_eq!(gimbal.stats().driver_errors.overrun, 1);
+}
