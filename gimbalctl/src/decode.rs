@@ -6,7 +6,10 @@
 //! `memchr`), the canonical `candump -L` line takes a one-pass fast path that falls back to
 //! the general three-form parser for anything else, hex is parsed through a table, and
 //! JSON is appended to a reused output buffer that goes to a locked stdout in large writes.
-//! `benches/host/compare.sh` measures it against cantools. Memory stays constant whatever the input size: a line longer than
+//! The output is also handed over whenever a read returns less than a full block: on a file
+//! that happens only at its end, so long logs keep their large writes, while a pipe or a
+//! terminal fed a line at a time (`candump -L can0 | gimbalctl decode`) sees each result as
+//! soon as its line is complete. `benches/host/compare.sh` measures it against cantools. Memory stays constant whatever the input size: a line longer than
 //! [`MAX_LINE`] is counted as malformed without being buffered.
 //!
 //! Every byte is interpreted by the library: control frames by `Command::decode`, vehicle
@@ -640,10 +643,12 @@ impl StreamDecoder {
 
 /// Calls `f` with each line of `input` (without the newline), in constant memory: lines
 /// that fit in one read are passed in place; a line longer than [`MAX_LINE`] is passed as
-/// `None`.
+/// `None`. `block_done` is called after the lines of each block read are passed, before
+/// the next read.
 pub fn for_each_line<R: BufRead>(
     mut input: R,
     mut f: impl FnMut(Option<&[u8]>) -> Result<(), Failure>,
+    mut block_done: impl FnMut() -> Result<(), Failure>,
 ) -> Result<(), Failure> {
     let mut carry: Vec<u8> = Vec::with_capacity(MAX_LINE);
     let mut overlong = false;
@@ -695,6 +700,23 @@ pub fn for_each_line<R: BufRead>(
         }
         consumed += rest.len();
         input.consume(consumed);
+        block_done()?;
+    }
+}
+
+/// A reader that notes whether its last read returned less than was asked for: on a pipe
+/// or a terminal, the writer has nothing more for now (the next read may block), so what
+/// was decoded so far should be handed over.
+struct NoteShortReads<R> {
+    inner: R,
+    short: std::rc::Rc<std::cell::Cell<bool>>,
+}
+
+impl<R: Read> Read for NoteShortReads<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.short.set(n < buf.len());
+        Ok(n)
     }
 }
 
@@ -711,6 +733,17 @@ fn flush_if_full(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
     if out.len() >= FLUSH_AT {
         w.write_all(out).map_err(Failure::stdout)?;
         out.clear();
+    }
+    Ok(())
+}
+
+/// Hands everything decoded so far to stdout (after a short read: the input has no more
+/// for now).
+fn flush_now(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
+    if !out.is_empty() {
+        w.write_all(out).map_err(Failure::stdout)?;
+        out.clear();
+        w.flush().map_err(Failure::stdout)?;
     }
     Ok(())
 }
@@ -733,23 +766,45 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
                 Err(e) => return Err(Failure::io("cannot read input", e)),
             };
             dec.bytes(&block[..n], &mut out);
-            flush_if_full(&mut out, &mut w)?;
+            if n < block.len() {
+                flush_now(&mut out, &mut w)?;
+            } else {
+                flush_if_full(&mut out, &mut w)?;
+            }
         }
         dec.finish();
         dec.stats()
     } else {
+        let short = std::rc::Rc::new(std::cell::Cell::new(false));
+        let input = NoteShortReads {
+            inner: input,
+            short: short.clone(),
+        };
         let reader = std::io::BufReader::with_capacity(READ_BLOCK, input);
         let mut dec = LogDecoder::new();
-        for_each_line(reader, |line| {
-            match line {
-                Some(line) => dec.line(line, &mut out),
-                None => {
-                    dec.stats.lines += 1;
-                    dec.stats.malformed_lines += 1;
+        let out = std::cell::RefCell::new(&mut out);
+        let w = std::cell::RefCell::new(&mut w);
+        for_each_line(
+            reader,
+            |line| {
+                let mut out = out.borrow_mut();
+                match line {
+                    Some(line) => dec.line(line, &mut out),
+                    None => {
+                        dec.stats.lines += 1;
+                        dec.stats.malformed_lines += 1;
+                    }
                 }
-            }
-            flush_if_full(&mut out, &mut w)
-        })?;
+                flush_if_full(&mut out, &mut *w.borrow_mut())
+            },
+            || {
+                if short.get() {
+                    flush_now(&mut out.borrow_mut(), &mut *w.borrow_mut())
+                } else {
+                    Ok(())
+                }
+            },
+        )?;
         dec.finish();
         dec.stats()
     };
@@ -918,10 +973,14 @@ mod tests {
         input.extend_from_slice(b"\n00000F01#0F07000000000000");
         let reader = std::io::BufReader::with_capacity(64, &input[..]);
         let mut seen = Vec::new();
-        for_each_line(reader, |l| {
-            seen.push(l.map(|l| l.to_vec()));
-            Ok(())
-        })
+        for_each_line(
+            reader,
+            |l| {
+                seen.push(l.map(|l| l.to_vec()));
+                Ok(())
+            },
+            || Ok(()),
+        )
         .unwrap();
         assert_eq!(seen.len(), 3);
         assert_eq!(seen[0].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));
