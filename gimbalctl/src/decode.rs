@@ -720,7 +720,7 @@ impl<R: Read> Read for NoteShortReads<R> {
     }
 }
 
-fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
+pub fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
     match file {
         None | Some("-") => Ok(Box::new(std::io::stdin().lock())),
         Some(path) => std::fs::File::open(path)

@@ -15,6 +15,7 @@ mod decode;
 mod error;
 mod json;
 mod net;
+mod plot;
 mod rtsp;
 mod sim;
 
@@ -50,6 +51,18 @@ enum Top {
         stats: bool,
         /// The log; stdin when absent or "-"
         #[arg(value_name = "FILE|-")]
+        file: Option<String>,
+    },
+    /// Draw one picture of a log: angles, commands, rates, mode, tracking, link gaps, CRC errors, lost frames
+    Plot {
+        /// Read raw bytes of a serial/TCP capture instead of a CAN log
+        #[arg(long)]
+        stream: bool,
+        /// The picture to write; .svg (PNG would need system fonts)
+        #[arg(short = 'o', long = "output", value_name = "FILE.svg")]
+        output: String,
+        /// The log; stdin when absent or "-"
+        #[arg(value_name = "LOG|-")]
         file: Option<String>,
     },
     /// Send a control command's frame to the serial server (or gimbalctl sim)
@@ -150,6 +163,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             stats,
             file,
         } => decode::run(file.as_deref(), stream, stats),
+        Top::Plot {
+            stream,
+            output,
+            file,
+        } => plot::run(file.as_deref(), stream, &output),
         Top::Send {
             tcp,
             repeat_ms,
