@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand};
 use idu_gimbal::wire::serial;
 
 mod command;
+mod control;
 mod decode;
 mod error;
 mod json;
@@ -97,6 +98,20 @@ enum Top {
         #[arg(long, value_name = "N")]
         count: Option<u64>,
     },
+    /// Interactive terminal panel: the latest postback, link state and counters; keys move the gimbal
+    Control {
+        /// The serial server, HOST:PORT (port 2000 when omitted), or gimbalctl sim
+        #[arg(long, value_name = "HOST:PORT")]
+        tcp: String,
+        /// Rate of the arrow keys' rate hold, deg/s, 1..=100
+        #[arg(
+            long,
+            value_name = "DEG_S",
+            default_value_t = 20.0,
+            allow_negative_numbers = true
+        )]
+        speed: f32,
+    },
     /// Run a simulated gimbal on TCP, speaking the serial server's byte stream
     Sim {
         /// Address to listen on (port 0: any free port; the first stdout line says which)
@@ -175,6 +190,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             command,
         } => net::send(&tcp, &command, repeat_ms.zip(for_ms)),
         Top::Monitor { tcp, json, count } => net::monitor(&tcp, json, count),
+        Top::Control { tcp, speed } => control::run(&tcp, speed),
         Top::Sim {
             listen,
             exit_after_ms,
