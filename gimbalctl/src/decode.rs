@@ -644,11 +644,12 @@ impl StreamDecoder {
 /// Calls `f` with each line of `input` (without the newline), in constant memory: lines
 /// that fit in one read are passed in place; a line longer than [`MAX_LINE`] is passed as
 /// `None`. `block_done` is called after the lines of each block read are passed, before
-/// the next read.
-pub fn for_each_line<R: BufRead>(
+/// the next read. Both get `state`, so that both can change it.
+pub fn for_each_line<R: BufRead, S>(
     mut input: R,
-    mut f: impl FnMut(Option<&[u8]>) -> Result<(), Failure>,
-    mut block_done: impl FnMut() -> Result<(), Failure>,
+    state: &mut S,
+    mut f: impl FnMut(&mut S, Option<&[u8]>) -> Result<(), Failure>,
+    mut block_done: impl FnMut(&mut S) -> Result<(), Failure>,
 ) -> Result<(), Failure> {
     let mut carry: Vec<u8> = Vec::with_capacity(MAX_LINE);
     let mut overlong = false;
@@ -660,9 +661,9 @@ pub fn for_each_line<R: BufRead>(
         };
         if block.is_empty() {
             if overlong {
-                f(None)?;
+                f(state, None)?;
             } else if !carry.is_empty() {
-                f(Some(&carry))?;
+                f(state, Some(&carry))?;
             }
             return Ok(());
         }
@@ -671,18 +672,18 @@ pub fn for_each_line<R: BufRead>(
         while let Some(nl) = memchr::memchr(b'\n', rest) {
             let line = &rest[..nl];
             if overlong {
-                f(None)?;
+                f(state, None)?;
             } else if carry.is_empty() {
                 if line.len() > MAX_LINE {
-                    f(None)?;
+                    f(state, None)?;
                 } else {
-                    f(Some(line))?;
+                    f(state, Some(line))?;
                 }
             } else if carry.len() + line.len() > MAX_LINE {
-                f(None)?;
+                f(state, None)?;
             } else {
                 carry.extend_from_slice(line);
-                f(Some(&carry))?;
+                f(state, Some(&carry))?;
             }
             carry.clear();
             overlong = false;
@@ -700,7 +701,7 @@ pub fn for_each_line<R: BufRead>(
         }
         consumed += rest.len();
         input.consume(consumed);
-        block_done()?;
+        block_done(state)?;
     }
 }
 
@@ -782,24 +783,22 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
         };
         let reader = std::io::BufReader::with_capacity(READ_BLOCK, input);
         let mut dec = LogDecoder::new();
-        let out = std::cell::RefCell::new(&mut out);
-        let w = std::cell::RefCell::new(&mut w);
         for_each_line(
             reader,
-            |line| {
-                let mut out = out.borrow_mut();
+            &mut (&mut dec, &mut out, &mut w),
+            |(dec, out, w), line| {
                 match line {
-                    Some(line) => dec.line(line, &mut out),
+                    Some(line) => dec.line(line, out),
                     None => {
                         dec.stats.lines += 1;
                         dec.stats.malformed_lines += 1;
                     }
                 }
-                flush_if_full(&mut out, &mut *w.borrow_mut())
+                flush_if_full(out, w)
             },
-            || {
+            |(_, out, w)| {
                 if short.get() {
-                    flush_now(&mut out.borrow_mut(), &mut *w.borrow_mut())
+                    flush_now(out, w)
                 } else {
                     Ok(())
                 }
@@ -975,11 +974,12 @@ mod tests {
         let mut seen = Vec::new();
         for_each_line(
             reader,
-            |l| {
+            &mut seen,
+            |seen, l| {
                 seen.push(l.map(|l| l.to_vec()));
                 Ok(())
             },
-            || Ok(()),
+            |_| Ok(()),
         )
         .unwrap();
         assert_eq!(seen.len(), 3);

@@ -405,7 +405,8 @@ fn read_log(input: Box<dyn Read>) -> Result<Trace, Failure> {
     };
     decode::for_each_line(
         reader,
-        |line| {
+        &mut (),
+        |(), line| {
             let Some(line) = line else { return Ok(()) };
             let Line::Frame { ts, id, data, len } = decode::parse_line(line) else {
                 return Ok(());
@@ -437,7 +438,7 @@ fn read_log(input: Box<dyn Read>) -> Result<Trace, Failure> {
             }
             Ok(())
         },
-        || Ok(()),
+        |()| Ok(()),
     )?;
     if let Some(late) = postbacks.expiry() {
         postbacks.expire(late);
