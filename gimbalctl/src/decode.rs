@@ -6,8 +6,9 @@
 //! `memchr`), the canonical `candump -L` line takes a one-pass fast path that falls back to
 //! the general three-form parser for anything else, hex is parsed through a table, and
 //! JSON is appended to a reused output buffer that goes to a locked stdout in large writes.
-//! The output is also handed over whenever a read returns less than a full block: on a file
-//! that happens only at its end, so long logs keep their large writes, while a pipe or a
+//! The output is also handed over whenever a read returns less than a full block, or
+//! returned a full one but the next would block (`poll(2)` with no wait): on a file that
+//! happens only at its end, so long logs keep their large writes, while a pipe or a
 //! terminal fed a line at a time (`candump -L can0 | gimbalctl decode`) sees each result as
 //! soon as its line is complete. `benches/host/compare.sh` measures it against cantools. Memory stays constant whatever the input size: a line longer than
 //! [`MAX_LINE`] is counted as malformed without being buffered.
@@ -722,11 +723,59 @@ impl<R: Read> Read for NoteShortReads<R> {
 }
 
 pub fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
+    open_polled(file).map(|(input, _)| input)
+}
+
+/// An input that can be asked whether a read would block now.
+#[derive(Clone, Copy)]
+struct Poll {
+    #[cfg(unix)]
+    fd: std::os::fd::RawFd,
+}
+
+impl Poll {
+    /// Whether a read would block now: true only for a pipe, terminal or socket with
+    /// nothing waiting (a regular file is always ready).
+    fn would_block(self) -> bool {
+        #[cfg(unix)]
+        {
+            let mut p = libc::pollfd {
+                fd: self.fd,
+                events: libc::POLLIN,
+                revents: 0,
+            };
+            // SAFETY: one valid pollfd, timeout 0: poll only reads and writes `p`.
+            let ready = unsafe { libc::poll(&mut p, 1, 0) };
+            ready == 0
+        }
+        #[cfg(not(unix))]
+        {
+            false
+        }
+    }
+}
+
+fn open_polled(file: Option<&str>) -> Result<(Box<dyn Read>, Poll), Failure> {
+    #[cfg(unix)]
+    use std::os::fd::AsRawFd;
     match file {
-        None | Some("-") => Ok(Box::new(std::io::stdin().lock())),
-        Some(path) => std::fs::File::open(path)
-            .map(|f| Box::new(f) as Box<dyn Read>)
-            .map_err(|e| Failure::io(format!("cannot open {path}"), e)),
+        None | Some("-") => {
+            let stdin = std::io::stdin();
+            let poll = Poll {
+                #[cfg(unix)]
+                fd: stdin.as_raw_fd(),
+            };
+            Ok((Box::new(stdin.lock()), poll))
+        }
+        Some(path) => {
+            let f = std::fs::File::open(path)
+                .map_err(|e| Failure::io(format!("cannot open {path}"), e))?;
+            let poll = Poll {
+                #[cfg(unix)]
+                fd: f.as_raw_fd(),
+            };
+            Ok((Box::new(f), poll))
+        }
     }
 }
 
@@ -751,7 +800,7 @@ fn flush_now(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
 
 /// `gimbalctl decode [--stream] [--stats] [FILE|-]`.
 pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Failure> {
-    let input = open(file)?;
+    let (input, poll) = open_polled(file)?;
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     let mut out: Vec<u8> = Vec::with_capacity(FLUSH_AT + 4096);
@@ -767,7 +816,7 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
                 Err(e) => return Err(Failure::io("cannot read input", e)),
             };
             dec.bytes(&block[..n], &mut out);
-            if n < block.len() {
+            if n < block.len() || poll.would_block() {
                 flush_now(&mut out, &mut w)?;
             } else {
                 flush_if_full(&mut out, &mut w)?;
@@ -797,7 +846,7 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
                 flush_if_full(out, w)
             },
             |(_, out, w)| {
-                if short.get() {
+                if short.get() || poll.would_block() {
                     flush_now(out, w)
                 } else {
                     Ok(())
@@ -962,6 +1011,37 @@ mod tests {
         assert!(!is_number(b"5."));
         assert!(!is_number(b".5"));
         assert!(!is_number(b"2023-11-14 22:13:20.1"));
+    }
+
+    /// `would_block` on a pipe: true while empty, false once a byte waits, true again once
+    /// it is read; a regular file is always ready.
+    #[cfg(unix)]
+    #[test]
+    fn would_block_on_pipes_not_files() {
+        use std::io::Write;
+        use std::os::fd::{AsRawFd, FromRawFd};
+        let mut fds = [0; 2];
+        // SAFETY: a valid array of two descriptors for pipe(2) to fill.
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        // SAFETY: both descriptors are new and owned here.
+        let (mut r, mut w) = unsafe {
+            (
+                std::fs::File::from_raw_fd(fds[0]),
+                std::fs::File::from_raw_fd(fds[1]),
+            )
+        };
+        let poll = Poll { fd: r.as_raw_fd() };
+        assert!(poll.would_block());
+        w.write_all(b"x").unwrap();
+        assert!(!poll.would_block());
+        let mut b = [0u8; 1];
+        r.read_exact(&mut b).unwrap();
+        assert!(poll.would_block());
+        let file = std::fs::File::open(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml")).unwrap();
+        assert!(!Poll {
+            fd: file.as_raw_fd()
+        }
+        .would_block());
     }
 
     #[test]
