@@ -13,6 +13,7 @@ use common::*;
 use std::io::{BufRead, BufReader, Read};
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -32,8 +33,11 @@ impl Tmux {
             ok,
             "tmux is needed for this test (scripts/test.sh installs it)"
         );
+        // One server per test: tests run in parallel threads of one process.
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
         Tmux {
-            socket: format!("gimbalctl-test-{}", std::process::id()),
+            socket: format!("gimbalctl-test-{}-{n}", std::process::id()),
         }
     }
 
@@ -295,4 +299,56 @@ fn control_needs_a_terminal_and_valid_arguments() {
     assert!(out.stderr.contains("--tcp"), "{}", out.stderr);
     let out = usage_error(&["control"]);
     assert!(out.stderr.contains("--tcp"), "{}", out.stderr);
+}
+
+/// A server that is not there: exit 1 before the panel is drawn, stderr naming it.
+#[test]
+fn control_without_a_server_is_a_runtime_failure() {
+    let port = {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let tmux = Tmux::new();
+    let dir = std::env::temp_dir();
+    let rc = dir.join(format!(
+        "gimbalctl-control-refused-{}.rc",
+        std::process::id()
+    ));
+    let err = dir.join(format!(
+        "gimbalctl-control-refused-{}.err",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_file(&rc);
+    let cmd = format!(
+        "'{BIN}' control --tcp 127.0.0.1:{port} 2> '{}'; echo $? > '{}'",
+        err.display(),
+        rc.display()
+    );
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-x",
+        "80",
+        "-y",
+        "24",
+        "-s",
+        "ctl",
+        &cmd,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !rc.exists() || std::fs::read_to_string(&rc).unwrap_or_default().is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "control did not exit: {}",
+            tmux.pane()
+        );
+        thread::sleep(Duration::from_millis(20));
+    }
+    let code = std::fs::read_to_string(&rc).unwrap();
+    let stderr = std::fs::read_to_string(&err).unwrap_or_default();
+    let _ = std::fs::remove_file(&rc);
+    let _ = std::fs::remove_file(&err);
+    assert_eq!(code.trim(), "1", "{stderr}");
+    assert!(stderr.contains(&format!("127.0.0.1:{port}")), "{stderr}");
 }
