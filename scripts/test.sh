@@ -36,6 +36,14 @@ if [ -x scripts/firmware-checks.sh ]; then
   scripts/firmware-checks.sh
 fi
 
+step "tmux (gimbalctl control's terminal test)"
+if ! command -v tmux >/dev/null 2>&1; then
+  as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
+  as_root apt-get update -qq
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends tmux
+fi
+tmux -V
+
 step "cargo test --workspace --all-features"
 cargo test --workspace --all-features
 

@@ -6,7 +6,11 @@
 //! `memchr`), the canonical `candump -L` line takes a one-pass fast path that falls back to
 //! the general three-form parser for anything else, hex is parsed through a table, and
 //! JSON is appended to a reused output buffer that goes to a locked stdout in large writes.
-//! `benches/host/compare.sh` measures it against cantools. Memory stays constant whatever the input size: a line longer than
+//! The output is also handed over whenever a read returns less than a full block, or
+//! returned a full one but the next would block (`poll(2)` with no wait): on a file that
+//! happens only at its end, so long logs keep their large writes, while a pipe or a
+//! terminal fed a line at a time (`candump -L can0 | gimbalctl decode`) sees each result as
+//! soon as its line is complete. `benches/host/compare.sh` measures it against cantools. Memory stays constant whatever the input size: a line longer than
 //! [`MAX_LINE`] is counted as malformed without being buffered.
 //!
 //! Every byte is interpreted by the library: control frames by `Command::decode`, vehicle
@@ -640,10 +644,13 @@ impl StreamDecoder {
 
 /// Calls `f` with each line of `input` (without the newline), in constant memory: lines
 /// that fit in one read are passed in place; a line longer than [`MAX_LINE`] is passed as
-/// `None`.
-pub fn for_each_line<R: BufRead>(
+/// `None`. `block_done` is called after the lines of each block read are passed, before
+/// the next read. Both get `state`, so that both can change it.
+pub fn for_each_line<R: BufRead, S>(
     mut input: R,
-    mut f: impl FnMut(Option<&[u8]>) -> Result<(), Failure>,
+    state: &mut S,
+    mut f: impl FnMut(&mut S, Option<&[u8]>) -> Result<(), Failure>,
+    mut block_done: impl FnMut(&mut S) -> Result<(), Failure>,
 ) -> Result<(), Failure> {
     let mut carry: Vec<u8> = Vec::with_capacity(MAX_LINE);
     let mut overlong = false;
@@ -655,9 +662,9 @@ pub fn for_each_line<R: BufRead>(
         };
         if block.is_empty() {
             if overlong {
-                f(None)?;
+                f(state, None)?;
             } else if !carry.is_empty() {
-                f(Some(&carry))?;
+                f(state, Some(&carry))?;
             }
             return Ok(());
         }
@@ -666,18 +673,18 @@ pub fn for_each_line<R: BufRead>(
         while let Some(nl) = memchr::memchr(b'\n', rest) {
             let line = &rest[..nl];
             if overlong {
-                f(None)?;
+                f(state, None)?;
             } else if carry.is_empty() {
                 if line.len() > MAX_LINE {
-                    f(None)?;
+                    f(state, None)?;
                 } else {
-                    f(Some(line))?;
+                    f(state, Some(line))?;
                 }
             } else if carry.len() + line.len() > MAX_LINE {
-                f(None)?;
+                f(state, None)?;
             } else {
                 carry.extend_from_slice(line);
-                f(Some(&carry))?;
+                f(state, Some(&carry))?;
             }
             carry.clear();
             overlong = false;
@@ -695,15 +702,80 @@ pub fn for_each_line<R: BufRead>(
         }
         consumed += rest.len();
         input.consume(consumed);
+        block_done(state)?;
     }
 }
 
-fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
+/// A reader that notes whether its last read returned less than was asked for: on a pipe
+/// or a terminal, the writer has nothing more for now (the next read may block), so what
+/// was decoded so far should be handed over.
+struct NoteShortReads<R> {
+    inner: R,
+    short: std::rc::Rc<std::cell::Cell<bool>>,
+}
+
+impl<R: Read> Read for NoteShortReads<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.short.set(n < buf.len());
+        Ok(n)
+    }
+}
+
+pub fn open(file: Option<&str>) -> Result<Box<dyn Read>, Failure> {
+    open_polled(file).map(|(input, _)| input)
+}
+
+/// An input that can be asked whether a read would block now.
+#[derive(Clone, Copy)]
+struct Poll {
+    #[cfg(unix)]
+    fd: std::os::fd::RawFd,
+}
+
+impl Poll {
+    /// Whether a read would block now: true only for a pipe, terminal or socket with
+    /// nothing waiting (a regular file is always ready).
+    fn would_block(self) -> bool {
+        #[cfg(unix)]
+        {
+            let mut p = libc::pollfd {
+                fd: self.fd,
+                events: libc::POLLIN,
+                revents: 0,
+            };
+            // SAFETY: one valid pollfd, timeout 0: poll only reads and writes `p`.
+            let ready = unsafe { libc::poll(&mut p, 1, 0) };
+            ready == 0
+        }
+        #[cfg(not(unix))]
+        {
+            false
+        }
+    }
+}
+
+fn open_polled(file: Option<&str>) -> Result<(Box<dyn Read>, Poll), Failure> {
+    #[cfg(unix)]
+    use std::os::fd::AsRawFd;
     match file {
-        None | Some("-") => Ok(Box::new(std::io::stdin().lock())),
-        Some(path) => std::fs::File::open(path)
-            .map(|f| Box::new(f) as Box<dyn Read>)
-            .map_err(|e| Failure::io(format!("cannot open {path}"), e)),
+        None | Some("-") => {
+            let stdin = std::io::stdin();
+            let poll = Poll {
+                #[cfg(unix)]
+                fd: stdin.as_raw_fd(),
+            };
+            Ok((Box::new(stdin.lock()), poll))
+        }
+        Some(path) => {
+            let f = std::fs::File::open(path)
+                .map_err(|e| Failure::io(format!("cannot open {path}"), e))?;
+            let poll = Poll {
+                #[cfg(unix)]
+                fd: f.as_raw_fd(),
+            };
+            Ok((Box::new(f), poll))
+        }
     }
 }
 
@@ -715,9 +787,20 @@ fn flush_if_full(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Hands everything decoded so far to stdout (after a short read: the input has no more
+/// for now).
+fn flush_now(out: &mut Vec<u8>, w: &mut impl Write) -> Result<(), Failure> {
+    if !out.is_empty() {
+        w.write_all(out).map_err(Failure::stdout)?;
+        out.clear();
+        w.flush().map_err(Failure::stdout)?;
+    }
+    Ok(())
+}
+
 /// `gimbalctl decode [--stream] [--stats] [FILE|-]`.
 pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Failure> {
-    let input = open(file)?;
+    let (input, poll) = open_polled(file)?;
     let stdout = std::io::stdout();
     let mut w = stdout.lock();
     let mut out: Vec<u8> = Vec::with_capacity(FLUSH_AT + 4096);
@@ -733,23 +816,43 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
                 Err(e) => return Err(Failure::io("cannot read input", e)),
             };
             dec.bytes(&block[..n], &mut out);
-            flush_if_full(&mut out, &mut w)?;
+            if n < block.len() || poll.would_block() {
+                flush_now(&mut out, &mut w)?;
+            } else {
+                flush_if_full(&mut out, &mut w)?;
+            }
         }
         dec.finish();
         dec.stats()
     } else {
+        let short = std::rc::Rc::new(std::cell::Cell::new(false));
+        let input = NoteShortReads {
+            inner: input,
+            short: short.clone(),
+        };
         let reader = std::io::BufReader::with_capacity(READ_BLOCK, input);
         let mut dec = LogDecoder::new();
-        for_each_line(reader, |line| {
-            match line {
-                Some(line) => dec.line(line, &mut out),
-                None => {
-                    dec.stats.lines += 1;
-                    dec.stats.malformed_lines += 1;
+        for_each_line(
+            reader,
+            &mut (&mut dec, &mut out, &mut w),
+            |(dec, out, w), line| {
+                match line {
+                    Some(line) => dec.line(line, out),
+                    None => {
+                        dec.stats.lines += 1;
+                        dec.stats.malformed_lines += 1;
+                    }
                 }
-            }
-            flush_if_full(&mut out, &mut w)
-        })?;
+                flush_if_full(out, w)
+            },
+            |(_, out, w)| {
+                if short.get() || poll.would_block() {
+                    flush_now(out, w)
+                } else {
+                    Ok(())
+                }
+            },
+        )?;
         dec.finish();
         dec.stats()
     };
@@ -910,6 +1013,37 @@ mod tests {
         assert!(!is_number(b"2023-11-14 22:13:20.1"));
     }
 
+    /// `would_block` on a pipe: true while empty, false once a byte waits, true again once
+    /// it is read; a regular file is always ready.
+    #[cfg(unix)]
+    #[test]
+    fn would_block_on_pipes_not_files() {
+        use std::io::Write;
+        use std::os::fd::{AsRawFd, FromRawFd};
+        let mut fds = [0; 2];
+        // SAFETY: a valid array of two descriptors for pipe(2) to fill.
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        // SAFETY: both descriptors are new and owned here.
+        let (mut r, mut w) = unsafe {
+            (
+                std::fs::File::from_raw_fd(fds[0]),
+                std::fs::File::from_raw_fd(fds[1]),
+            )
+        };
+        let poll = Poll { fd: r.as_raw_fd() };
+        assert!(poll.would_block());
+        w.write_all(b"x").unwrap();
+        assert!(!poll.would_block());
+        let mut b = [0u8; 1];
+        r.read_exact(&mut b).unwrap();
+        assert!(poll.would_block());
+        let file = std::fs::File::open(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml")).unwrap();
+        assert!(!Poll {
+            fd: file.as_raw_fd()
+        }
+        .would_block());
+    }
+
     #[test]
     fn long_lines_do_not_grow_memory() {
         let mut input = Vec::new();
@@ -918,10 +1052,15 @@ mod tests {
         input.extend_from_slice(b"\n00000F01#0F07000000000000");
         let reader = std::io::BufReader::with_capacity(64, &input[..]);
         let mut seen = Vec::new();
-        for_each_line(reader, |l| {
-            seen.push(l.map(|l| l.to_vec()));
-            Ok(())
-        })
+        for_each_line(
+            reader,
+            &mut seen,
+            |seen, l| {
+                seen.push(l.map(|l| l.to_vec()));
+                Ok(())
+            },
+            |_| Ok(()),
+        )
         .unwrap();
         assert_eq!(seen.len(), 3);
         assert_eq!(seen[0].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));

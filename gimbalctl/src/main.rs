@@ -11,11 +11,13 @@ use clap::{Parser, Subcommand};
 use idu_gimbal::wire::serial;
 
 mod command;
+mod control;
 mod decode;
 mod error;
 mod json;
 mod mavlink;
 mod net;
+mod plot;
 mod rtsp;
 mod sim;
 
@@ -53,6 +55,18 @@ enum Top {
         #[arg(value_name = "FILE|-")]
         file: Option<String>,
     },
+    /// Draw one picture of a log: angles, commands, rates, mode, tracking, link gaps, CRC errors, lost frames
+    Plot {
+        /// Read raw bytes of a serial/TCP capture instead of a CAN log
+        #[arg(long)]
+        stream: bool,
+        /// The picture to write; .svg (PNG would need system fonts)
+        #[arg(short = 'o', long = "output", value_name = "FILE.svg")]
+        output: String,
+        /// The log; stdin when absent or "-"
+        #[arg(value_name = "LOG|-")]
+        file: Option<String>,
+    },
     /// Send a control command's frame to the serial server (or gimbalctl sim)
     Send {
         /// The serial server, HOST:PORT (port 2000 when omitted)
@@ -84,6 +98,20 @@ enum Top {
         /// Exit after N postbacks
         #[arg(long, value_name = "N")]
         count: Option<u64>,
+    },
+    /// Interactive terminal panel: the latest postback, link state and counters; keys move the gimbal
+    Control {
+        /// The serial server, HOST:PORT (port 2000 when omitted), or gimbalctl sim
+        #[arg(long, value_name = "HOST:PORT")]
+        tcp: String,
+        /// Rate of the arrow keys' rate hold, deg/s, 1..=100
+        #[arg(
+            long,
+            value_name = "DEG_S",
+            default_value_t = 20.0,
+            allow_negative_numbers = true
+        )]
+        speed: f32,
     },
     /// Run a simulated gimbal on TCP, speaking the serial server's byte stream
     Sim {
@@ -176,6 +204,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             stats,
             file,
         } => decode::run(file.as_deref(), stream, stats),
+        Top::Plot {
+            stream,
+            output,
+            file,
+        } => plot::run(file.as_deref(), stream, &output),
         Top::Send {
             tcp,
             repeat_ms,
@@ -183,6 +216,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             command,
         } => net::send(&tcp, &command, repeat_ms.zip(for_ms)),
         Top::Monitor { tcp, json, count } => net::monitor(&tcp, json, count),
+        Top::Control { tcp, speed } => control::run(&tcp, speed),
         Top::Sim {
             listen,
             exit_after_ms,

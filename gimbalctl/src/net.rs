@@ -148,7 +148,7 @@ const CLOSE_GRACE: Duration = Duration::from_millis(250);
 /// every client, and closing a socket with unread data sends a reset, which can make the
 /// server drop what it has not read yet. So: send FIN after the data, read (and discard)
 /// until the server closes or a short grace period ends, then close.
-fn close_gently(mut stream: TcpStream) {
+pub fn close_gently(mut stream: TcpStream) {
     if stream.shutdown(std::net::Shutdown::Write).is_err() {
         return;
     }

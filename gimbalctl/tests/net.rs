@@ -4,40 +4,11 @@
 mod common;
 
 use common::*;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::process::{Command, Stdio};
-use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-
-/// Starts `gimbalctl sim` on an ephemeral port; returns the guard and its address.
-fn start_sim(extra: &[&str]) -> (Guard, String) {
-    let mut args = vec!["sim", "--listen", "127.0.0.1:0"];
-    args.extend_from_slice(extra);
-    let mut child = Command::new(BIN)
-        .args(&args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn sim");
-    let stdout = child.stdout.take().unwrap();
-    let guard = Guard(child);
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            let _ = tx.send(line);
-        }
-    });
-    let first = rx
-        .recv_timeout(Duration::from_secs(10))
-        .expect("sim said where it listens");
-    let addr = first.rsplit(' ').next().expect("an address").to_owned();
-    assert!(first.contains("listening on 127.0.0.1:"), "{first}");
-    (guard, addr)
-}
 
 fn connect(addr: &str) -> TcpStream {
     let s = TcpStream::connect_timeout(&addr.parse().unwrap(), Duration::from_secs(3)).unwrap();

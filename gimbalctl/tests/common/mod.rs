@@ -3,8 +3,9 @@
 
 #![allow(dead_code)]
 
-use std::io::{Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -212,4 +213,32 @@ pub fn norm(v: &serde_json::Value) -> serde_json::Value {
 #[track_caller]
 pub fn assert_json_eq(got: &serde_json::Value, expected: &serde_json::Value) {
     assert_eq!(norm(got), norm(expected));
+}
+
+/// Starts `gimbalctl sim` on an ephemeral port; returns the guard and its address.
+pub fn start_sim(extra: &[&str]) -> (Guard, String) {
+    let mut args = vec!["sim", "--listen", "127.0.0.1:0"];
+    args.extend_from_slice(extra);
+    let mut child = Command::new(BIN)
+        .args(&args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn sim");
+    let stdout = child.stdout.take().unwrap();
+    let guard = Guard(child);
+    let (tx, rx) = mpsc::channel();
+    thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            let _ = tx.send(line);
+        }
+    });
+    let first = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("sim said where it listens");
+    let addr = first.rsplit(' ').next().expect("an address").to_owned();
+    assert!(first.contains("listening on 127.0.0.1:"), "{first}");
+    (guard, addr)
 }

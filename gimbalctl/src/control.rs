@@ -1,0 +1,433 @@
+//! `gimbalctl control --tcp HOST:PORT`: an interactive terminal panel.
+//!
+//! Every byte goes through the library's sans-IO [`SerialLink`]: commands are queued on its
+//! [`Link`](idu_gimbal::link::Link), the arrow keys drive its rate hold, and the bytes it
+//! hands out are written to the socket; received bytes go back into it, and the panel
+//! shows its latest postback, state and counters.
+//!
+//! # How an arrow key holds a rate
+//!
+//! Terminals report key presses (and the key-repeat of a held key) but never a release.
+//! Each arrow event calls [`Link::set_rate`](idu_gimbal::link::Link::set_rate): the first
+//! starts a rate hold (the link sends the rate command at once and repeats it every 50 ms),
+//! each key-repeat event refreshes it. When the key is released the repeat events stop,
+//! and the core's dead-man ends the hold 250 ms after the last one with a single zero-rate
+//! command. So the gimbal moves while the key is held and stops within 250 ms of its
+//! release, with no release event needed. (A terminal's first repeat comes after its
+//! repeat delay, often 250-600 ms, during which the hold may lapse once: the gimbal stops
+//! briefly at the start of a long press unless the repeat delay is shorter than 250 ms.)
+
+use std::io::{ErrorKind, IsTerminal, Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant as StdInstant};
+
+use idu_gimbal::link::serial::SerialLink;
+use idu_gimbal::link::{Config, Event};
+use idu_gimbal::wire::control::{Command, GimbalCommand, Photo, Rate, Video, Zoom};
+use idu_gimbal::Instant;
+use ratatui::crossterm::event::{self, Event as TermEvent, KeyCode, KeyEventKind, KeyModifiers};
+use ratatui::crossterm::{cursor, execute, terminal};
+use ratatui::layout::{Constraint, Layout};
+use ratatui::text::Line;
+use ratatui::widgets::{Block, Paragraph};
+use ratatui::Terminal;
+
+use crate::command;
+use crate::error::Failure;
+use crate::net;
+
+/// How long the loop waits for a key before looking at the socket and the link again.
+const TICK: Duration = Duration::from_millis(10);
+/// How often the panel is redrawn when nothing happens (the postback's age moves).
+const REDRAW: Duration = Duration::from_millis(100);
+/// How long `q` waits for its zero rate (and anything queued before it) to be written.
+const QUIT_FLUSH: Duration = Duration::from_secs(1);
+
+/// Puts the terminal back however the panel ends.
+struct TerminalGuard;
+
+impl TerminalGuard {
+    fn enter() -> Result<Self, Failure> {
+        terminal::enable_raw_mode().map_err(|e| Failure::io("cannot set up the terminal", e))?;
+        let guard = TerminalGuard;
+        execute!(
+            std::io::stdout(),
+            terminal::EnterAlternateScreen,
+            cursor::Hide
+        )
+        .map_err(|e| Failure::io("cannot set up the terminal", e))?;
+        Ok(guard)
+    }
+}
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        let _ = execute!(
+            std::io::stdout(),
+            cursor::Show,
+            terminal::LeaveAlternateScreen
+        );
+        let _ = terminal::disable_raw_mode();
+    }
+}
+
+/// What the panel shows besides the link's own state.
+struct Panel {
+    target: String,
+    speed: f32,
+    /// The rate held (for the panel; the link owns the hold).
+    held: Option<Rate>,
+    recording: bool,
+    last_sent: String,
+    last_event: String,
+    key_events: u64,
+}
+
+fn centi(v: i64) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    let a = v.unsigned_abs();
+    format!("{sign}{}.{:02}", a / 100, a % 100)
+}
+
+fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: Instant) {
+    let l = link.link();
+    let stats = link.stats();
+    let link_state = match (l.is_up(), stats.link.postbacks) {
+        (true, _) => "up",
+        (false, 0) => "waiting for the first postback",
+        (false, _) => "DOWN (no postback for 1.5 s)",
+    };
+    let mut gimbal = Vec::new();
+    match l.latest_postback(now) {
+        Some((pb, age)) => {
+            let mode = match pb.mode.name() {
+                Some(name) => name.to_owned(),
+                None => format!("unknown({})", pb.mode.code()),
+            };
+            let model = pb.gimbal_type.model_name().unwrap_or("unknown");
+            gimbal.push(Line::raw(format!(
+                "pitch   {:>8} deg   heading {:>7} deg   motor {:>8} deg",
+                centi(pb.pitch.into()),
+                centi(pb.heading.into()),
+                centi(pb.motor_heading.into())
+            )));
+            gimbal.push(Line::raw(format!(
+                "mode    {mode:<16} tracking {:<3}   gimbal {} ({model})",
+                if pb.tracking { "yes" } else { "no" },
+                pb.gimbal_type.code()
+            )));
+            gimbal.push(Line::raw(format!(
+                "age     {age:>5} ms         link {link_state}"
+            )));
+        }
+        None => {
+            gimbal.push(Line::raw("no postback yet"));
+            gimbal.push(Line::raw(""));
+            gimbal.push(Line::raw(format!("link {link_state}")));
+        }
+    }
+    let hold = match panel.held {
+        Some(r) if l.is_rate_holding() => format!(
+            "yaw {} pitch {} deg/s (held while the key repeats)",
+            r.yaw_dps(),
+            r.pitch_dps()
+        ),
+        _ => "none".to_owned(),
+    };
+    let commands = vec![
+        Line::raw(format!("rate hold  {hold}")),
+        Line::raw(format!(
+            "recording  {}   speed {} deg/s   key events {}",
+            if panel.recording { "yes" } else { "no" },
+            panel.speed,
+            panel.key_events
+        )),
+        Line::raw(format!("last sent  {}", panel.last_sent)),
+        Line::raw(format!("last event {}", panel.last_event)),
+    ];
+    let counters = vec![
+        Line::raw(format!(
+            "postbacks {}  crc errors {}  skipped bytes {}",
+            stats.link.postbacks, stats.stream.crc_errors, stats.stream.skipped_bytes
+        )),
+        Line::raw(format!(
+            "frames sent {}  bytes sent {}  bytes received {}  queue full {}",
+            stats.bytes_sent / 24,
+            stats.bytes_sent,
+            stats.bytes_received,
+            stats.link.queue_full
+        )),
+    ];
+    let keys = vec![
+        Line::raw("arrows rate hold (stops 250 ms after the last key event)"),
+        Line::raw("c centre  d look down  +/- zoom  p photo  r record  f follow  q quit"),
+    ];
+    let [a, b, c, d] = Layout::vertical([
+        Constraint::Length(5),
+        Constraint::Length(6),
+        Constraint::Length(4),
+        Constraint::Length(4),
+    ])
+    .areas(frame.area());
+    let title = format!(" gimbalctl control {} ", panel.target);
+    frame.render_widget(
+        Paragraph::new(gimbal).block(Block::bordered().title(title)),
+        a,
+    );
+    frame.render_widget(
+        Paragraph::new(commands).block(Block::bordered().title(" commands ")),
+        b,
+    );
+    frame.render_widget(
+        Paragraph::new(counters).block(Block::bordered().title(" counters ")),
+        c,
+    );
+    frame.render_widget(
+        Paragraph::new(keys).block(Block::bordered().title(" keys ")),
+        d,
+    );
+}
+
+/// Writes what the link hands out until the socket would block.
+fn pump_out(link: &mut SerialLink, stream: &mut TcpStream, target: &str) -> Result<(), Failure> {
+    loop {
+        let bytes = link.transmit_bytes();
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        match stream.write(bytes) {
+            Ok(0) => {
+                return Err(Failure::Runtime(format!("{target} closed the connection")));
+            }
+            Ok(n) => link.transmit_written(n),
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {
+                link.transmit_written(0);
+                return Ok(());
+            }
+            Err(e) => {
+                link.transmit_written(0);
+                return Err(Failure::Runtime(format!("cannot send to {target}: {e}")));
+            }
+        }
+    }
+}
+
+/// Reads what arrived, into the link.
+fn pump_in(
+    link: &mut SerialLink,
+    stream: &mut TcpStream,
+    target: &str,
+    now: Instant,
+) -> Result<(), Failure> {
+    let mut buf = [0u8; 4096];
+    loop {
+        match stream.read(&mut buf) {
+            Ok(0) => {
+                return Err(Failure::Runtime(format!("{target} closed the connection")));
+            }
+            Ok(n) => link.receive(&buf[..n], now),
+            Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(()),
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(Failure::Runtime(format!("cannot read from {target}: {e}"))),
+        }
+    }
+}
+
+/// `gimbalctl control --tcp HOST:PORT [--speed DEG_S]`.
+pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
+    if !(1.0..=100.0).contains(&speed) {
+        return Err(Failure::Usage(format!(
+            "--speed {speed}: out of range [1, 100] deg/s"
+        )));
+    }
+    net::resolve(target)?;
+    if !std::io::stdin().is_terminal() {
+        return Err(Failure::Usage(
+            "control: stdin is not a terminal; control is interactive (in scripts use send and monitor)"
+                .into(),
+        ));
+    }
+    if !std::io::stdout().is_terminal() {
+        return Err(Failure::Usage(
+            "control: stdout is not a terminal; control is interactive (in scripts use send and monitor)"
+                .into(),
+        ));
+    }
+    let mut stream = net::connect(target)?;
+    stream
+        .set_nonblocking(true)
+        .map_err(|e| Failure::io(target, e))?;
+    let start = StdInstant::now();
+    let now = || Instant::from_millis(start.elapsed().as_millis() as u32);
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut panel = Panel {
+        target: target.to_owned(),
+        speed,
+        held: None,
+        recording: false,
+        last_sent: "nothing yet".into(),
+        last_event: "none".into(),
+        key_events: 0,
+    };
+
+    let guard = TerminalGuard::enter()?;
+    let backend = ratatui::backend::CrosstermBackend::new(std::io::stdout());
+    let mut term = Terminal::new(backend).map_err(|e| Failure::io("terminal", e))?;
+    let mut drawn = StdInstant::now() - REDRAW;
+    let result = (|| -> Result<(), Failure> {
+        loop {
+            let t = now();
+            pump_in(&mut link, &mut stream, target, t)?;
+            link.poll(t);
+            let mut changed = false;
+            while let Some(ev) = link.link_mut().next_event() {
+                match ev {
+                    Event::Postback => {}
+                    Event::LinkUp => panel.last_event = "link up".into(),
+                    Event::LinkDown => panel.last_event = "link down".into(),
+                    Event::RateHoldExpired => {
+                        panel.held = None;
+                        panel.last_event = "rate hold ended (dead-man): zero rate sent".into();
+                        panel.last_sent = "rate 0 0".into();
+                    }
+                    Event::TargetUnreachable { .. } => {}
+                }
+                changed = true;
+            }
+            pump_out(&mut link, &mut stream, target)?;
+            if changed || drawn.elapsed() >= REDRAW {
+                term.draw(|f| draw(f, &link, &panel, now()))
+                    .map_err(|e| Failure::io("terminal", e))?;
+                drawn = StdInstant::now();
+            }
+            if !event::poll(TICK).map_err(|e| Failure::io("terminal", e))? {
+                continue;
+            }
+            // Every key waiting, before the next write.
+            loop {
+                let TermEvent::Key(key) = event::read().map_err(|e| Failure::io("terminal", e))?
+                else {
+                    if !event::poll(Duration::ZERO).map_err(|e| Failure::io("terminal", e))? {
+                        break;
+                    }
+                    continue;
+                };
+                if key.kind != KeyEventKind::Release {
+                    panel.key_events += 1;
+                    let t = now();
+                    let ctrl_c = key.code == KeyCode::Char('c')
+                        && key.modifiers.contains(KeyModifiers::CONTROL);
+                    let rate = |yaw: f32, pitch: f32| Rate::new(yaw, pitch).ok();
+                    let mut send: Option<Command> = None;
+                    let mut hold: Option<Rate> = None;
+                    match key.code {
+                        _ if ctrl_c => return quit(&mut link, &mut stream, target, now),
+                        KeyCode::Char('q') => return quit(&mut link, &mut stream, target, now),
+                        KeyCode::Up => hold = rate(0.0, speed),
+                        KeyCode::Down => hold = rate(0.0, -speed),
+                        KeyCode::Left => hold = rate(-speed, 0.0),
+                        KeyCode::Right => hold = rate(speed, 0.0),
+                        KeyCode::Char('c') => send = Some(GimbalCommand::Recenter.into()),
+                        KeyCode::Char('d') => send = Some(GimbalCommand::LookDown.into()),
+                        KeyCode::Char('+') | KeyCode::Char('=') => {
+                            send = Some(GimbalCommand::Zoom(Zoom::Double).into())
+                        }
+                        KeyCode::Char('-') => send = Some(GimbalCommand::Zoom(Zoom::Half).into()),
+                        KeyCode::Char('p') => {
+                            send = Some(GimbalCommand::Photo(Photo::Single).into())
+                        }
+                        KeyCode::Char('r') => {
+                            let v = if panel.recording {
+                                Video::Stop
+                            } else {
+                                Video::Start
+                            };
+                            send = Some(GimbalCommand::Video(v).into());
+                        }
+                        KeyCode::Char('f') => send = Some(GimbalCommand::NoseFollowing.into()),
+                        _ => {}
+                    }
+                    if let Some(r) = hold {
+                        match link.link_mut().set_rate(r, t) {
+                            Ok(()) => {
+                                if panel.held != Some(r) {
+                                    panel.last_sent =
+                                        command::command_line(&GimbalCommand::Rate(r).into());
+                                }
+                                panel.held = Some(r);
+                            }
+                            Err(_) => panel.last_event = "queue full: rate not taken".into(),
+                        }
+                    }
+                    if let Some(cmd) = send {
+                        match link.link_mut().send(cmd) {
+                            Ok(()) => {
+                                if cmd == Command::from(GimbalCommand::Video(Video::Start)) {
+                                    panel.recording = true;
+                                } else if cmd == Command::from(GimbalCommand::Video(Video::Stop)) {
+                                    panel.recording = false;
+                                }
+                                if cmd.is_pointing() {
+                                    panel.held = None;
+                                }
+                                panel.last_sent = command::command_line(&cmd);
+                            }
+                            Err(_) => panel.last_event = "queue full: command not sent".into(),
+                        }
+                    }
+                    link.poll(t);
+                    pump_out(&mut link, &mut stream, target)?;
+                }
+                if !event::poll(Duration::ZERO).map_err(|e| Failure::io("terminal", e))? {
+                    break;
+                }
+            }
+            term.draw(|f| draw(f, &link, &panel, now()))
+                .map_err(|e| Failure::io("terminal", e))?;
+            drawn = StdInstant::now();
+        }
+    })();
+    drop(term);
+    drop(guard);
+    result
+}
+
+/// `q`: a zero rate (through the link: the end of the hold, or a zero-rate command when
+/// none is held), written before leaving.
+fn quit(
+    link: &mut SerialLink,
+    stream: &mut TcpStream,
+    target: &str,
+    now: impl Fn() -> Instant,
+) -> Result<(), Failure> {
+    if link.link().is_rate_holding() {
+        link.link_mut().stop_rate();
+    } else if link
+        .link_mut()
+        .send(GimbalCommand::Rate(Rate::ZERO))
+        .is_err()
+    {
+        // A full queue: end any hold the link would restart, and let the queue drain.
+        link.link_mut().stop_rate();
+    }
+    let deadline = StdInstant::now() + QUIT_FLUSH;
+    loop {
+        link.poll(now());
+        pump_out(link, stream, target)?;
+        if !link.has_transmit() {
+            break;
+        }
+        if StdInstant::now() >= deadline {
+            return Err(Failure::Runtime(format!(
+                "cannot send the zero rate to {target} within {} ms",
+                QUIT_FLUSH.as_millis()
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let _ = stream.set_nonblocking(false);
+    if let Ok(s) = stream.try_clone() {
+        net::close_gently(s);
+    }
+    Ok(())
+}
