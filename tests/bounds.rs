@@ -39,7 +39,10 @@ fn a_million_garbage_bytes_into_the_stream_parser() {
     assert_eq!(items, 0);
     assert_eq!((s.control_frames, s.postbacks), (0, 0));
     assert_eq!(s.skipped_bytes + p.pending() as u32, fed);
-    assert!(s.crc_errors + s.invalid_frames > 0, "the vocabulary made candidates");
+    assert!(
+        s.crc_errors + s.invalid_frames > 0,
+        "the vocabulary made candidates"
+    );
 }
 
 /// A flood of frames on the bus: one poll takes at most `max_rx_per_poll` of them, so a

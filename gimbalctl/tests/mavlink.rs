@@ -92,7 +92,14 @@ fn peers_beyond_the_bound_are_ignored_and_said_so() {
     use std::time::{Duration, Instant};
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_gimbalctl"))
-        .args(["mavlink", "--sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "6000"])
+        .args([
+            "mavlink",
+            "--sim",
+            "--listen",
+            "127.0.0.1:0",
+            "--exit-after-ms",
+            "6000",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -111,9 +118,12 @@ fn peers_beyond_the_bound_are_ignored_and_said_so() {
     let heartbeat: [u8; 21] = [
         0xFD, 9, 0, 0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 2, 3, 0x51, 4, 3, 0, 0,
     ];
-    let peers: Vec<UdpSocket> = (0..9).map(|_| UdpSocket::bind("127.0.0.1:0").unwrap()).collect();
+    let peers: Vec<UdpSocket> = (0..9)
+        .map(|_| UdpSocket::bind("127.0.0.1:0").unwrap())
+        .collect();
     for p in &peers {
-        p.set_read_timeout(Some(Duration::from_millis(200))).unwrap();
+        p.set_read_timeout(Some(Duration::from_millis(200)))
+            .unwrap();
         // The CRC does not matter: any datagram makes its sender a peer.
         p.send_to(&heartbeat, &addr).unwrap();
         std::thread::sleep(Duration::from_millis(20));

@@ -573,7 +573,10 @@ fn a_million_garbage_bytes_into_the_bridge() {
         assert!(b.reader().pending() < MAX_FRAME_LEN);
     }
     let s = b.stats();
-    assert_eq!(s.acks + s.angle_commands + s.rate_setpoints + s.vehicle_updates, 0);
+    assert_eq!(
+        s.acks + s.angle_commands + s.rate_setpoints + s.vehicle_updates,
+        0
+    );
     // A 12-byte MAVLink 2 frame with a matching CRC could occur by chance (2^-16 once the
     // header parses); the counters say how the bytes went either way.
     assert!(s.reader.bad_frames > 0 || s.reader.unsupported > 0);
