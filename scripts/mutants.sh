@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Mutation testing (issue 12): runs cargo-mutants over the protocol code of `idu-gimbal`
+# (src/wire, src/link, the driver as src/driver.rs or src/driver/) and fails when fewer
+# than 95% of the viable mutants are caught. Not part of CI: too slow. Results and the
+# survivor triage are in TESTING.md, "Mutation testing".
+#
+# Usage: scripts/mutants.sh [extra cargo-mutants args, e.g. --file src/wire/crc.rs --shard 0/4]
+#   MUTANTS_JOBS=2 scripts/mutants.sh    # parallel jobs (default 1: the machine has 2 cores)
+#   MUTANTS_TIMEOUT=120                  # per-mutant test timeout, seconds (default 90)
+#   PROPTEST_CASES=256                   # proptest cases per property (default 32 here)
+#
+# How long: about 940 mutants. Each costs an incremental rebuild (~13 s) plus the test run
+# (~5-10 s with PROPTEST_CASES=32), so ~25 s a mutant on one job on an idle machine:
+# about 6-7 hours for the whole scope, 1-2 minutes for the unmutated baseline first.
+# Scope a run with extra args (`--file`, `--shard k/n`, `--re`) to get an answer sooner.
+#
+# Choices:
+# - Tests run: the library's unit tests plus tests/driver_sim.rs and tests/point_at.rs (the
+#   integration tests that drive the driver over the mock bus). Left out: tests/no_panic.rs
+#   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
+#   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
+#   scope) and doctests (examples, not checks).
+# - PROPTEST_CASES=32 instead of 256: the proptests dominate the test time; 32 cases still
+#   cover each property, and the hand-written vectors do the exact checking.
+# - --all-features: the driver tests need the `mock` bus.
+# - Score = caught / (caught + missed); unviable mutants (do not build) are left out.
+#   Timeouts count as caught: the timeout is several times the unmutated test time, so a
+#   mutant that hits it has made the suite hang (e.g. a loop that never ends), which is a
+#   detected change of behaviour. They are listed separately in the summary.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! cargo mutants --version >/dev/null 2>&1; then
+    cargo install --locked cargo-mutants
+fi
+
+jobs="${MUTANTS_JOBS:-1}"
+timeout="${MUTANTS_TIMEOUT:-90}"
+export PROPTEST_CASES="${PROPTEST_CASES:-32}"
+
+echo "$(cargo mutants --version), jobs $jobs, timeout ${timeout}s, PROPTEST_CASES $PROPTEST_CASES"
+start=$(date +%s)
+rc=0
+# Both driver layouts: src/driver.rs now, src/driver/{mod,can,serial}.rs after the split.
+# #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
+cargo mutants \
+    --package idu-gimbal \
+    --all-features \
+    --file 'src/wire/**' \
+    --file 'src/link/**' \
+    --file src/driver.rs \
+    --file 'src/driver/**' \
+    --exclude src/link/tests.rs \
+    --timeout "$timeout" \
+    --build-timeout 600 \
+    --jobs "$jobs" \
+    --output . \
+    "$@" \
+    -- --lib --test driver_sim --test point_at || rc=$?
+echo "wall time: $(($(date +%s) - start)) s"
+
+# cargo-mutants exits 2 for missed mutants and 3 for timeouts: the score decides here.
+# Any other non-zero code (1 usage, 4 baseline failed) is an error of the run itself.
+case "$rc" in
+    0 | 2 | 3) ;;
+    *)
+        echo "cargo mutants failed (exit $rc)" >&2
+        exit "$rc"
+        ;;
+esac
+
+count() { if [ -f "mutants.out/$1.txt" ]; then grep -c . "mutants.out/$1.txt" || true; else echo 0; fi; }
+caught=$(count caught)
+missed=$(count missed)
+timeouts=$(count timeout)
+unviable=$(count unviable)
+detected=$((caught + timeouts))
+viable=$((detected + missed))
+echo "caught $caught, missed $missed, timeout $timeouts, unviable $unviable"
+if [ "$viable" -eq 0 ]; then
+    echo "no viable mutants in scope"
+    exit 0
+fi
+# Score in tenths of a percent, integer arithmetic only.
+score=$((detected * 1000 / viable))
+echo "score: $detected / $viable = $((score / 10)).$((score % 10))% (goal 95%)"
+if [ "$missed" -gt 0 ]; then
+    echo "missed:"
+    sed 's/^/  /' mutants.out/missed.txt
+fi
+if [ "$score" -lt 950 ]; then
+    exit 1
+fi
