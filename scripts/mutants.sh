@@ -18,8 +18,8 @@
 #
 # Choices:
 # - Tests run: the library's unit tests, tests/driver_sim.rs and tests/point_at.rs (the
-#   integration tests that drive the driver over the mock bus) and tests/defmt_format.rs
-#   (the driver error's defmt encoding). Left out: tests/no_panic.rs
+#   integration tests that drive the driver over the mock bus), tests/driver_errors.rs
+#   and tests/defmt_format.rs (the driver errors' counters and defmt encoding). Left out: tests/no_panic.rs
 #   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
 #   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
 #   scope) and doctests (examples, not checks).
@@ -59,7 +59,7 @@ cargo mutants \
     --jobs "$jobs" \
     --output . \
     "$@" \
-    -- --lib --test driver_sim --test point_at --test defmt_format || rc=$?
+    -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format || rc=$?
 echo "wall time: $(($(date +%s) - start)) s"
 
 # cargo-mutants exits 2 for missed mutants and 3 for timeouts: the score decides here.
