@@ -212,6 +212,29 @@ mod tests {
         );
     }
 
+    #[test]
+    fn pending_counts_the_bytes_of_an_incomplete_text() {
+        let mut asm = TextAssembler::<32>::new();
+        assert_eq!(asm.pending(), 0);
+        // Middle frames carry 8 bytes each.
+        assert_eq!(asm.feed(ids::TEXT, b"WAYPOINT"), Ok(None));
+        assert_eq!(asm.pending(), 8);
+        assert_eq!(asm.feed(ids::TEXT, b" 7 REACH"), Ok(None));
+        assert_eq!(asm.pending(), 16);
+        // A delivered text is not pending, though its bytes are still borrowed.
+        assert_eq!(
+            asm.feed(ids::TEXT_END, b"ED\0\0\0\0\0\0"),
+            Ok(Some("WAYPOINT 7 REACHED"))
+        );
+        assert_eq!(asm.pending(), 0);
+        // A discarded text leaves nothing pending.
+        assert_eq!(
+            asm.feed(ids::TEXT, b"abc"),
+            Err(TextError::WrongLength { len: 3 })
+        );
+        assert_eq!(asm.pending(), 0);
+    }
+
     proptest! {
         #[test]
         fn round_trip(texts in proptest::collection::vec(proptest::collection::vec(1u8..=0x7F, 1..64), 1..5)) {

@@ -415,6 +415,26 @@ mod tests {
     }
 
     #[test]
+    fn attitude_accessors_in_wire_units_and_degrees() {
+        // -12.34° pitch = -1234 cdeg, 56.78° roll = 5678 cdeg, 90° heading = 9000 cdeg.
+        let a = Attitude::new(-12.34, 56.78, 90.0).unwrap();
+        assert_eq!(
+            (a.pitch_centideg(), a.roll_centideg(), a.heading_centideg()),
+            (-1234, 5678, 9000)
+        );
+        // Wire units straight through, and back to degrees (exact: n / 100 rounds once).
+        let a = Attitude::from_centideg(-9000, 18000, -18000).unwrap();
+        assert_eq!(
+            (a.pitch_centideg(), a.roll_centideg(), a.heading_centideg()),
+            (-9000, 18000, -18000)
+        );
+        assert_eq!(
+            (a.pitch_deg(), a.roll_deg(), a.heading_deg()),
+            (-90.0, 180.0, -180.0)
+        );
+    }
+
+    #[test]
     fn attitude_heading_normalisation() {
         let h = |deg: f32| Attitude::new(0.0, 0.0, deg).unwrap().heading_centideg();
         assert_eq!(h(0.0), 0);
