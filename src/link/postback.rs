@@ -528,18 +528,19 @@ mod tests {
     }
 
     proptest! {
-        // A fixed seed: with random seeds the 2^-16 chance above makes a run fail now and
-        // then (it did once: `a_crc_16_collision_is_delivered`). Fixed, the test still checks
-        // 512 fault mixes and fails if the assembler ever delivers a non-collision.
+        // Fresh random seeds every run. The 2^-16 chance of a CRC collision (above) is part
+        // of the property, not pinned away with a fixed seed: a message that was not sent may
+        // be delivered only where faults were injected, and only with a CRC that holds.
         #![proptest_config(ProptestConfig {
             cases: 512,
-            rng_seed: proptest::test_runner::RngSeed::Fixed(0x1D06_1BA1),
             failure_persistence: None,
             ..ProptestConfig::default()
         })]
 
-        /// Whatever the faults, every message delivered is one that was sent, in order, and
-        /// the frame accounting holds; with no faults, every message is delivered.
+        /// Whatever the faults, every message delivered is one that was sent, in order, or
+        /// (the CRC's limit, `a_crc_16_collision_is_delivered`) a window of faulty frames
+        /// whose CRC holds by chance; the frame accounting holds; with no faults, every
+        /// message is delivered and nothing else.
         #[test]
         fn faults_never_yield_a_wrong_message(
             msgs in proptest::collection::vec(arb_postback(), 1..12),
@@ -564,7 +565,16 @@ mod tests {
             }
             let mut sent = msgs.iter();
             for got in &r.out {
-                prop_assert!(sent.any(|s| s == got), "delivered {:?} was not sent (in order)", got);
+                match sent.clone().position(|s| s == got) {
+                    Some(k) => {
+                        sent.nth(k);
+                    }
+                    None => {
+                        // Not a sent message delivered twice or out of order: a new one.
+                        prop_assert!(!clean && !msgs.contains(got), "delivered {:?} was not sent (in order)", got);
+                        prop_assert!(Postback::parse(&got.to_can_bytes()).is_ok());
+                    }
+                }
             }
             if clean {
                 prop_assert_eq!(&r.out, &msgs);
