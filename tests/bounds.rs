@@ -4,8 +4,12 @@
 #![cfg(feature = "mock")]
 
 use embedded_can::{nb::Can, ExtendedId, Frame as _};
+use idu_gimbal::link::postback::PostbackAssembler;
+use idu_gimbal::link::text::TextAssembler;
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, MockFrame};
+use idu_gimbal::wire::ids;
+use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::serial::{StreamParser, MAX_FRAME_LEN};
 use idu_gimbal::{Gimbal, Instant};
 
@@ -73,4 +77,86 @@ fn one_poll_takes_at_most_max_rx_per_poll_frames() {
     assert_eq!(gimbal.stats().link.frames_received, 256);
     assert_eq!(gimbal.stats().link.ignored_frames, 256);
     assert_eq!(gimbal.stats().driver_errors.overrun, 1);
+}
+
+/// xorshift64*: a fixed, reproducible byte source.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Garbage dense in the stream's own vocabulary, so false headers are frequent.
+    fn byte(&mut self) -> u8 {
+        let r = self.next();
+        match (r >> 56) % 8 {
+            0 => 0xEB,
+            1 => 0x90,
+            2 => 0x0A,
+            3 => 0x0C,
+            _ => (r >> 8) as u8,
+        }
+    }
+}
+
+#[test]
+fn a_hundred_thousand_random_frames_through_the_assembler() {
+    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
+    let mut asm = PostbackAssembler::new();
+    let mut t = 0u32;
+    let good = Postback::default().to_can_frames();
+    let mut fed_good = 0u32;
+    for i in 0..100_000u32 {
+        let r = rng.next();
+        t = t.wrapping_add((r % 64) as u32);
+        // A good message every 50 frames, random frames otherwise.
+        if i % 50 == 0 {
+            for f in &good {
+                assert!(asm.pending() <= 3);
+                let _ = asm.feed(ids::POSTBACK, f, Instant::from_millis(t));
+            }
+            fed_good += 1;
+            continue;
+        }
+        let id = if r & 1 == 0 {
+            ids::POSTBACK
+        } else {
+            (r >> 3) as u32 & 0x1FFF_FFFF
+        };
+        let mut data = [0u8; 9];
+        for b in &mut data {
+            *b = rng.byte();
+        }
+        let len = ((r >> 40) % 10) as usize;
+        let _ = asm.feed(id, &data[..len], Instant::from_millis(t));
+        assert!(asm.pending() <= 3, "{}", asm.pending());
+    }
+    let s = asm.stats();
+    assert_eq!(
+        s.frames,
+        4 * s.messages + s.discarded_frames + asm.pending() as u32
+    );
+    assert!(s.messages >= fed_good, "{s:?}");
+}
+
+/// A text stream with no end frame, 800 kB long: the assembler holds at most its capacity,
+/// refuses the text once with an error, counts it, and takes the next text after the end.
+#[test]
+fn an_endless_text_stays_within_capacity() {
+    let mut text: TextAssembler<64> = TextAssembler::new();
+    let mut errors = 0;
+    for i in 0..100_000u32 {
+        let chunk = [b'a' + (i % 26) as u8; 8];
+        if text.feed(ids::TEXT, &chunk).is_err() {
+            errors += 1;
+        }
+        assert!(text.pending() <= 64, "{}", text.pending());
+    }
+    assert_eq!(text.feed(ids::TEXT_END, b"end\0\0\0\0\0"), Ok(None));
+    assert_eq!(errors, 1);
+    assert_eq!((text.stats().overflows, text.stats().messages), (1, 0));
+    assert_eq!(text.feed(ids::TEXT_END, b"next\0\0\0\0"), Ok(Some("next")));
 }
