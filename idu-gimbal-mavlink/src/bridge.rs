@@ -304,10 +304,11 @@ impl State {
     ) -> Check {
         let id = frame.message_id();
         if id == id_of::<Heartbeat>() {
-            let Some(hb) = decode::<Heartbeat>(frame) else {
+            // Decoded for its CRC; only who sent it matters.
+            if decode::<Heartbeat>(frame).is_none() {
                 return Check::Bad;
-            };
-            self.heartbeat(frame.system_id(), frame.component_id(), &hb, now);
+            }
+            self.heartbeat(frame.system_id(), frame.component_id());
             Check::Handled
         } else if id == id_of::<CommandLong>() {
             let Some(cmd) = decode::<CommandLong>(frame) else {
@@ -348,7 +349,7 @@ impl State {
         }
     }
 
-    fn heartbeat(&mut self, system: u8, component: u8, _hb: &Heartbeat, now: Instant) {
+    fn heartbeat(&mut self, system: u8, component: u8) {
         if component != AUTOPILOT_COMPONENT {
             return;
         }
@@ -360,7 +361,6 @@ impl State {
         if self.config.system_id.is_none() {
             self.system_id = system;
         }
-        let _ = now;
     }
 
     fn ack(&mut self, from: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
@@ -410,7 +410,7 @@ impl State {
             return;
         }
         if me == gimbal_id {
-            let result = self.gimbal_command(gimbal, cmd, now);
+            let result = self.gimbal_command(cmd, now);
             self.ack(me, from, cmd.command, result);
             // The information follows the ACK.
             if result == MavResult::Accepted && cmd.command == MavCmd::RequestMessage {
@@ -478,12 +478,7 @@ impl State {
     }
 
     /// A gimbal command's result (the gimbal owns it).
-    fn gimbal_command<G: GimbalControl>(
-        &mut self,
-        _gimbal: &mut G,
-        cmd: &CommandLong,
-        now: Instant,
-    ) -> MavResult {
+    fn gimbal_command(&mut self, cmd: &CommandLong, now: Instant) -> MavResult {
         match cmd.command {
             MavCmd::SetMessageInterval => self.set_status_interval(cmd.param2, now),
             MavCmd::RequestMessage => MavResult::Accepted,

@@ -155,23 +155,19 @@ impl FrameReader {
     /// Hands out every frame the buffer completes; resyncs after a bad one.
     fn complete(&mut self, check: &mut impl FnMut(&Frame<V2>) -> Check) {
         loop {
-            let (Some(&payload_len), Some(&iflags)) = (self.buf.get(1), self.buf.get(2)) else {
-                return;
-            };
             if self.len < HEADER_LEN {
                 return;
             }
-            if iflags & !IFLAG_SIGNED != 0 {
+            if self
+                .buf
+                .get(2)
+                .is_some_and(|&iflags| iflags & !IFLAG_SIGNED != 0)
+            {
                 self.stats.unsupported = self.stats.unsupported.wrapping_add(1);
                 self.resync();
                 continue;
             }
-            let signature = if iflags & IFLAG_SIGNED != 0 {
-                SIGNATURE_LEN
-            } else {
-                0
-            };
-            let total = HEADER_LEN + usize::from(payload_len) + CHECKSUM_LEN + signature;
+            let total = self.needed();
             if self.len < total {
                 return;
             }
