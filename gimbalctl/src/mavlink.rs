@@ -19,7 +19,7 @@ use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family, Stream};
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::framing::{Check, FrameReader, MAX_FRAME_LEN};
+use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
@@ -261,12 +261,9 @@ fn serve<S: Pump>(
             }
             bridge.transmit_written(bytes.len());
             splitter.feed(&bytes, |frame| {
-                let mut out = [0u8; MAX_FRAME_LEN];
-                if let Ok(n) = frame.serialize(&mut out) {
-                    for peer in peers.iter().chain(to.iter()) {
-                        // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
-                        let _ = socket.send_to(&out[..n], peer);
-                    }
+                for peer in peers.iter().chain(to.iter()) {
+                    // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
+                    let _ = socket.send_to(frame.bytes(), peer);
                 }
                 Check::Unhandled
             });

@@ -174,14 +174,14 @@ mod fw {
                     break;
                 }
                 reader.feed(&buf[..n], |f| {
-                    if let Ok(ack) = f.decode_message::<CommandAck>() {
+                    if let Ok(ack) = f.decode::<CommandAck>() {
                         let slot = seen.acks.iter_mut().find(|a| a.is_none());
                         if let Some(slot) = slot {
                             *slot = Some(ack.result);
                         }
-                    } else if f.decode_message::<GimbalDeviceInformation>().is_ok() {
+                    } else if f.decode::<GimbalDeviceInformation>().is_ok() {
                         seen.info = true;
-                    } else if let Ok(s) = f.decode_message::<GimbalDeviceAttitudeStatus>() {
+                    } else if let Ok(s) = f.decode::<GimbalDeviceAttitudeStatus>() {
                         if let Some(last) = seen.last_status {
                             seen.worst_gap = seen.worst_gap.max(ms - last);
                         }

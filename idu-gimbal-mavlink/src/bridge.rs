@@ -14,13 +14,12 @@ use mavio::dialects::common::messages::{
     GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
-use mavio::protocol::{Frame, V2};
 use mavio::Message;
 
 use crate::attitude::{is_nan_quaternion, wrap_pi, YawPitch};
 use crate::camera::{self, Camera, CameraConfig, Tx};
 
-use crate::framing::{Check, FrameReader, Outbox, ReaderStats};
+use crate::framing::{Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
 
 /// The autopilot's component id (`MAV_COMP_ID_AUTOPILOT1`).
@@ -228,11 +227,11 @@ impl<G: GimbalControl> Bridge<G> {
 }
 
 /// Decodes `frame` as `M` when its CRC holds with `M`'s `CRC_EXTRA`.
-fn decode<'a, M>(frame: &'a Frame<V2>) -> Option<M>
+fn decode<M>(frame: &ReceivedFrame<'_>) -> Option<M>
 where
-    M: MessageSpecStatic + TryFrom<&'a mavio::protocol::Payload, Error = mavio::error::SpecError>,
+    M: MessageSpecStatic + for<'p> TryFrom<&'p mavio::protocol::Payload>,
 {
-    frame.decode_message::<M>().ok()
+    frame.decode::<M>().ok()
 }
 
 /// A message's id.
@@ -296,10 +295,13 @@ impl State {
             && (component == 0 || component == self.config.gimbal_component)
     }
 
+    // Out of line: decoding needs a large stack frame (mavio's 255-byte payload and the
+    // message), which would otherwise be set up on every `receive` call, a frame or not.
+    #[inline(never)]
     fn dispatch<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
-        frame: &Frame<V2>,
+        frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
         let id = frame.message_id();

@@ -36,8 +36,11 @@
 //!
 //! # Choice of MAVLink crate
 //!
-//! Framing, CRC_EXTRA and (de)serialization are `mavio`'s (0.5, `dlct-common`), and only the
-//! messages handled are decoded, each through its own type. The `mavlink` crate (0.21) was
+//! Message (de)serialization, CRC_EXTRA and the framing of what is sent are `mavio`'s (0.5,
+//! `dlct-common`), and only the messages handled are decoded, each through its own type.
+//! Received frames are found and checksummed by [`framing::FrameReader`] in one pass over
+//! their bytes, for speed (see [`framing`] for the measurements and the tests that hold
+//! it to `mavio`'s parse). The `mavlink` crate (0.21) was
 //! the first choice, but with `default-features = false` and the features `embedded`,
 //! `dialect-common` and `mav2-message-extensions` it does not build for a no_std target:
 //! that last feature is written `mavlink-bindgen/mav2-message-extensions`, which turns the
@@ -45,11 +48,6 @@
 //! normal dependency. Without the feature, GIMBAL_DEVICE_ATTITUDE_STATUS lacks `delta_yaw`
 //! and `gimbal_device_id`. `mavio` builds for `thumbv7em-none-eabihf` with every extension
 //! field.
-//!
-//! # Not yet here
-//!
-//! The firmware example, the emulated demo and the host bridge in `gimbalctl` are the rest
-//! of issue 13.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

@@ -1,31 +1,9 @@
-//! MAVLink 2 bytes in, frames out; frames in, bytes out. Fixed memory, no I/O.
-//!
-//! [`FrameReader`] finds frame boundaries in a byte stream split anywhere (the start byte
-//! `0xFD`, the payload length, the signature flag) and hands each complete frame, parsed by
-//! `mavio`, to the caller, who checks its CRC with the message's `CRC_EXTRA` (only the
-//! messages the caller handles are known). A frame whose CRC fails is not consumed whole:
-//! the reader drops its start byte and looks for the next start byte inside it, so a
-//! corrupt length cannot swallow the frames that follow. MAVLink 1 frames and frames with
-//! unknown incompatibility flags are skipped (this bridge speaks MAVLink 2 only).
-//!
-//! [`Outbox`] holds serialized frames until the transport takes them, whole frames only.
+//! Finding MAVLink 2 frames in a byte stream split anywhere: [`FrameReader`].
 
-use heapless::Deque;
-use mavio::protocol::{Frame, V2};
-use mavio::Message;
-
-/// The MAVLink 2 start byte.
-pub const STX_V2: u8 = 0xFD;
-/// Header bytes before the payload (start byte to message id).
-const HEADER_LEN: usize = 10;
-/// CRC bytes after the payload.
-const CHECKSUM_LEN: usize = 2;
-/// Signature bytes after the CRC when the frame is signed.
-const SIGNATURE_LEN: usize = 13;
-/// Incompatibility flag: the frame is signed.
-const IFLAG_SIGNED: u8 = 0x01;
-/// The longest MAVLink 2 frame.
-pub const MAX_FRAME_LEN: usize = HEADER_LEN + 255 + CHECKSUM_LEN + SIGNATURE_LEN;
+use super::{
+    x25, ReceivedFrame, CHECKSUM_LEN, HEADER_LEN, IFLAG_SIGNED, MAX_FRAME_LEN, SIGNATURE_LEN,
+    STX_V2,
+};
 
 /// What the caller found when it checked a frame.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -53,11 +31,32 @@ pub struct ReaderStats {
     pub skipped_bytes: u32,
 }
 
-/// An incremental MAVLink 2 frame finder; see the [module docs](self).
+/// An incremental MAVLink 2 frame finder.
+///
+/// It reads the start byte `0xFD`, the payload length and the signature flag to find where
+/// each frame ends, and hands each complete frame to the caller, who checks its CRC with
+/// the message's `CRC_EXTRA` (only the messages the caller handles are known). A frame
+/// whose CRC fails is not consumed whole: the reader drops its start byte and looks for the
+/// next start byte inside it, so a corrupt length cannot swallow the frames that follow.
+/// MAVLink 1 frames and frames with unknown incompatibility flags are skipped (this bridge
+/// speaks MAVLink 2 only).
+///
+/// The checksum runs in the loop that copies each byte in (over the header after the start
+/// byte, and the payload), so a frame is read once; the caller adds its message's
+/// `CRC_EXTRA` ([`ReceivedFrame::checksum_holds`]).
 #[derive(Clone, Debug)]
 pub struct FrameReader {
     buf: [u8; MAX_FRAME_LEN],
+    /// Bytes of the frame in hand; `buf[0]` is its start byte when `len > 0`.
     len: usize,
+    /// Bytes to hold before there is something to look at: the header's length until the
+    /// header is whole, then the frame's. `len < need` between calls.
+    need: usize,
+    /// Where the checksummed bytes end: the header's end until the header is whole, then
+    /// the payload's.
+    crc_end: usize,
+    /// The checksum over `buf[1..len.min(crc_end)]`.
+    crc: u16,
     stats: ReaderStats,
 }
 
@@ -67,26 +66,15 @@ impl Default for FrameReader {
     }
 }
 
-/// `mavio`'s reader trait over the bytes of one complete frame.
-struct FrameBytes<'a>(&'a [u8]);
-
-impl mavio::io::Read<mavio::error::IoError> for FrameBytes<'_> {
-    fn read_exact(&mut self, buf: &mut [u8]) -> Result<(), mavio::error::IoError> {
-        let Some((head, rest)) = self.0.split_at_checked(buf.len()) else {
-            return Err(mavio::error::IoErrorKind::UnexpectedEof.into());
-        };
-        buf.copy_from_slice(head);
-        self.0 = rest;
-        Ok(())
-    }
-}
-
 impl FrameReader {
     /// A reader waiting for a start byte.
     pub const fn new() -> Self {
         FrameReader {
             buf: [0; MAX_FRAME_LEN],
             len: 0,
+            need: HEADER_LEN,
+            crc_end: HEADER_LEN,
+            crc: x25::INIT,
             stats: ReaderStats {
                 frames: 0,
                 bad_frames: 0,
@@ -107,8 +95,8 @@ impl FrameReader {
     }
 
     /// Takes bytes in any split; calls `check` with each complete frame, in order.
-    pub fn feed(&mut self, mut bytes: &[u8], mut check: impl FnMut(&Frame<V2>) -> Check) {
-        while !bytes.is_empty() {
+    pub fn feed(&mut self, mut bytes: &[u8], mut check: impl FnMut(&ReceivedFrame<'_>) -> Check) {
+        loop {
             if self.len == 0 {
                 // Look for a start byte; everything before it is skipped.
                 let start = bytes
@@ -118,64 +106,84 @@ impl FrameReader {
                 // A slice is shorter than 2^32 bytes here (it came through a UART buffer);
                 // were it not, the counter wraps as every counter does.
                 self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(start as u32);
-                bytes = bytes.get(start..).unwrap_or(&[]);
-                if bytes.is_empty() {
+                let Some(rest) = bytes.get(start + 1..) else {
                     return;
+                };
+                // The start byte is not checksummed.
+                if let Some(first) = self.buf.first_mut() {
+                    *first = STX_V2;
                 }
+                self.len = 1;
+                self.crc = x25::INIT;
+                bytes = rest;
             }
-            // Copy what the frame in hand still needs (the header first), in one go.
-            let want = self.needed().saturating_sub(self.len).max(1);
-            let n = want.min(bytes.len()).min(MAX_FRAME_LEN - self.len);
+            if bytes.is_empty() {
+                return;
+            }
+            // Copy what the frame in hand still needs (the header first), in one go,
+            // checksumming up to the payload's end. `len < need <= MAX_FRAME_LEN` here.
+            let n = self.need.saturating_sub(self.len).min(bytes.len());
             let (now, rest) = bytes.split_at(n);
+            let covered = self.crc_end.saturating_sub(self.len).min(n);
             if let Some(dst) = self.buf.get_mut(self.len..self.len + n) {
-                dst.copy_from_slice(now);
+                let (dst_crc, dst_plain) = dst.split_at_mut(covered);
+                let (src_crc, src_plain) = now.split_at(covered);
+                let mut crc = self.crc;
+                for (d, &b) in dst_crc.iter_mut().zip(src_crc) {
+                    *d = b;
+                    crc = x25::step(crc, b);
+                }
+                self.crc = crc;
+                if !src_plain.is_empty() {
+                    dst_plain.copy_from_slice(src_plain);
+                }
             }
             self.len += n;
             bytes = rest;
-            self.complete(&mut check);
+            if self.len >= self.need {
+                self.complete(&mut check);
+            }
         }
     }
 
     /// How long the frame in hand is, as far as its header says (the header's length until
-    /// it is all here).
-    fn needed(&self) -> usize {
+    /// it is all here), and where its checksummed bytes end.
+    fn extent(&self) -> (usize, usize) {
         match (self.buf.get(1), self.buf.get(2)) {
-            (Some(&payload_len), Some(&iflags)) if self.len >= 3 => {
+            (Some(&payload_len), Some(&iflags)) if self.len >= HEADER_LEN => {
                 let signature = if iflags & IFLAG_SIGNED != 0 {
                     SIGNATURE_LEN
                 } else {
                     0
                 };
-                HEADER_LEN + usize::from(payload_len) + CHECKSUM_LEN + signature
+                let payload_end = HEADER_LEN + usize::from(payload_len);
+                (payload_end + CHECKSUM_LEN + signature, payload_end)
             }
-            _ => HEADER_LEN,
+            _ => (HEADER_LEN, HEADER_LEN),
         }
     }
 
     /// Hands out every frame the buffer completes; resyncs after a bad one.
-    fn complete(&mut self, check: &mut impl FnMut(&Frame<V2>) -> Check) {
+    fn complete(&mut self, check: &mut impl FnMut(&ReceivedFrame<'_>) -> Check) {
         loop {
-            if self.len < HEADER_LEN {
-                return;
-            }
-            if self
-                .buf
-                .get(2)
-                .is_some_and(|&iflags| iflags & !IFLAG_SIGNED != 0)
+            if self.len >= HEADER_LEN
+                && self
+                    .buf
+                    .get(2)
+                    .is_some_and(|&iflags| iflags & !IFLAG_SIGNED != 0)
             {
                 self.stats.unsupported = self.stats.unsupported.wrapping_add(1);
                 self.resync();
                 continue;
             }
-            let total = self.needed();
+            let (total, crc_end) = self.extent();
+            self.need = total;
+            self.crc_end = crc_end;
             if self.len < total {
                 return;
             }
             let bytes = self.buf.get(..total).unwrap_or(&[]);
-            let verdict = match mavio::Receiver::versioned(FrameBytes(bytes), V2).recv() {
-                Ok(frame) => check(&frame),
-                Err(_) => Check::Bad,
-            };
+            let verdict = check(&ReceivedFrame::new(bytes, self.crc));
             if verdict == Check::Bad {
                 self.stats.bad_frames = self.stats.bad_frames.wrapping_add(1);
                 self.resync();
@@ -198,94 +206,22 @@ impl FrameReader {
         self.drop_front(next);
     }
 
+    /// Drops the first `n` bytes; what is left starts with a start byte (or is empty), and
+    /// its checksum is taken again (only after a bad or unsupported frame).
     fn drop_front(&mut self, n: usize) {
         let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
         self.len -= n;
-    }
-}
-
-/// Why a message was not queued for sending.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum OutboxError {
-    /// `mavio` could not encode it (a message this bridge builds wrongly: a bug).
-    Encode,
-    /// No room for the whole frame: the transport is not taking bytes fast enough.
-    Full,
-}
-
-/// Serialized frames waiting for the transport, `N` bytes in all; whole frames only.
-#[derive(Clone, Debug)]
-pub struct Outbox<const N: usize> {
-    bytes: Deque<u8, N>,
-    sequence: u8,
-}
-
-impl<const N: usize> Default for Outbox<N> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl<const N: usize> Outbox<N> {
-    /// An empty outbox; the first frame gets sequence number 0.
-    pub const fn new() -> Self {
-        Outbox {
-            bytes: Deque::new(),
-            sequence: 0,
+        self.need = HEADER_LEN;
+        self.crc_end = HEADER_LEN;
+        self.crc = x25::INIT;
+        if self.len > 0 {
+            self.buf.copy_within(n..n + self.len, 0);
+            let (_, crc_end) = self.extent();
+            self.crc_end = crc_end;
+            self.crc = x25::update(
+                x25::INIT,
+                self.buf.get(1..self.len.min(crc_end)).unwrap_or(&[]),
+            );
         }
-    }
-
-    /// Queues `message` from `(system, component)` as one MAVLink 2 frame: all of it or,
-    /// when it does not fit, nothing.
-    pub fn push(
-        &mut self,
-        system: u8,
-        component: u8,
-        message: &dyn Message,
-    ) -> Result<(), OutboxError> {
-        let frame = Frame::builder()
-            .version(V2)
-            .sequence(self.sequence)
-            .system_id(system)
-            .component_id(component)
-            .message(message)
-            .map_err(|_| OutboxError::Encode)?
-            .build();
-        let mut buf = [0u8; MAX_FRAME_LEN];
-        let n = frame.serialize(&mut buf).map_err(|_| OutboxError::Encode)?;
-        if N - self.bytes.len() < n {
-            return Err(OutboxError::Full);
-        }
-        for &b in buf.get(..n).unwrap_or(&[]) {
-            // Room for all n was checked above.
-            let _ = self.bytes.push_back(b);
-        }
-        self.sequence = self.sequence.wrapping_add(1);
-        Ok(())
-    }
-
-    /// The bytes to write next (a prefix of what waits); empty when nothing waits.
-    pub fn bytes(&self) -> &[u8] {
-        self.bytes.as_slices().0
-    }
-
-    /// `n` bytes of [`Outbox::bytes`] were written.
-    pub fn written(&mut self, n: usize) {
-        for _ in 0..n {
-            if self.bytes.pop_front().is_none() {
-                break;
-            }
-        }
-    }
-
-    /// Bytes waiting.
-    pub fn len(&self) -> usize {
-        self.bytes.len()
-    }
-
-    /// Whether nothing waits.
-    pub fn is_empty(&self) -> bool {
-        self.bytes.is_empty()
     }
 }
