@@ -63,7 +63,7 @@ cargo mutants \
     --output . \
     "$@" \
     -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
-    --test serial --test bounds || rc=$?
+    --test serial --test bounds --test api_contracts || rc=$?
 echo "wall time: $(($(date +%s) - start)) s"
 
 # cargo-mutants exits 2 for missed mutants and 3 for timeouts: the score decides here.

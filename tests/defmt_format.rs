@@ -26,6 +26,9 @@ unsafe impl defmt::Logger for Capture {
 // A constant timestamp, so that two records differ only by what they format.
 defmt::timestamp!("{=u8}", 0);
 
+/// Tests take turns: they share the one global logger.
+static TURN: Mutex<()> = Mutex::new(());
+
 fn encode(kind: ErrorKind) -> Vec<u8> {
     LOG.lock().unwrap().clear();
     // println: not filtered by DEFMT_LOG, unlike the log levels.
@@ -35,6 +38,7 @@ fn encode(kind: ErrorKind) -> Vec<u8> {
 
 #[test]
 fn every_error_kind_has_its_own_encoding() {
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let kinds = [
         ErrorKind::Overrun,
         ErrorKind::Bit,
@@ -53,4 +57,29 @@ fn every_error_kind_has_its_own_encoding() {
             assert_ne!(a, b, "{:?} and {:?} encode alike", kinds[i], kinds[j]);
         }
     }
+}
+
+/// A range error's defmt record carries its value: two out-of-range pitches encode
+/// differently, and both differ from an empty record.
+#[test]
+fn a_range_error_encodes_its_value() {
+    use idu_gimbal::wire::control::Pitch;
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let record = |degrees: f32| {
+        let e = Pitch::new(degrees).unwrap_err();
+        LOG.lock().unwrap().clear();
+        defmt::println!("{}", e);
+        LOG.lock().unwrap().clone()
+    };
+    let empty = {
+        LOG.lock().unwrap().clear();
+        defmt::println!("{}", "");
+        LOG.lock().unwrap().clone()
+    };
+    let (a, b) = (record(200.0), record(300.0));
+    assert_ne!(a, b);
+    assert!(
+        a.len() > empty.len() + 3 * 8,
+        "a name and three f64s: {a:?}"
+    );
 }
