@@ -3,10 +3,66 @@
 # QEMU `-icount shift=0` (examples/qemu_bench.rs), then the flash cost of each CRC variant
 # (nm) and the driver's flash and static RAM (scripts/size-report.sh).
 #
-# Exit status 1 if a budget of issue 4 is exceeded. Installs the target, qemu-system-arm and
-# the ARM binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds (default 120).
+# Exit status 1 if a budget is exceeded. Installs the target, qemu-system-arm and the ARM
+# binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds (default 120).
+#
+#   scripts/bench.sh                 this tree's numbers
+#   scripts/bench.sh --compare REV   the same for REV (built in a scratch worktree, removed
+#                                    afterwards) and for this tree, side by side: one row per
+#                                    measurement, a column per revision. Exit status: this
+#                                    tree's budgets. Bad usage exits 2.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+usage() {
+    echo "usage: scripts/bench.sh [--compare REV]" >&2
+    exit 2
+}
+
+if [ "$#" -gt 0 ]; then
+    case "$1" in
+    --compare)
+        if [ "$#" -lt 2 ] || [ -z "$2" ]; then
+            echo "error: --compare needs a revision (e.g. --compare main)" >&2
+            usage
+        fi
+        if [ "$#" -gt 2 ]; then
+            echo "error: unexpected argument '$3'" >&2
+            usage
+        fi
+        rev=$2
+        if ! commit=$(git rev-parse --verify --quiet "$rev^{commit}"); then
+            echo "error: --compare: '$rev' is not a revision of this repository" >&2
+            exit 2
+        fi
+        scratch=$(mktemp -d)
+        cleanup() {
+            git worktree remove --force "$scratch/tree" >/dev/null 2>&1 || true
+            rm -rf "$scratch"
+        }
+        trap cleanup EXIT
+        git worktree add --detach "$scratch/tree" "$commit" >/dev/null
+        # The other revision builds in a target directory kept between comparisons (its
+        # dependencies then build once), inside this tree's target/, so it never mixes with
+        # this tree's artifacts.
+        mkdir -p target/bench-compare
+        ln -s "$PWD/target/bench-compare" "$scratch/tree/target"
+        echo "== $rev ($(git rev-parse --short "$commit")) ==" >&2
+        (cd "$scratch/tree" && scripts/bench.sh) >"$scratch/other.txt" 2>&1 || true
+        echo "== this tree ($(git rev-parse --short HEAD)$(git diff --quiet HEAD -- . 2>/dev/null || echo ', modified')) ==" >&2
+        status=0
+        scripts/bench.sh >"$scratch/this.txt" 2>&1 || status=$?
+        python3 scripts/bench-compare.py "$scratch/other.txt" "$scratch/this.txt" \
+            "$rev ($(git rev-parse --short "$commit"))" "this tree"
+        exit "$status"
+        ;;
+    *)
+        echo "error: unknown argument '$1'" >&2
+        usage
+        ;;
+    esac
+fi
+
 . scripts/firmware-env.sh
 
 ensure_target

@@ -375,17 +375,50 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     // ---- receiving ----
 
-    /// Takes a received frame with a 29-bit extended ID. Out of line: the driver's poll then
-    /// keeps few registers, which is what an idle poll pays for.
-    #[inline(never)]
+    /// Takes a received frame with a 29-bit extended ID.
+    #[inline]
     pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) {
         if id != ids::POSTBACK {
-            self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
+            self.receive_ignored();
             return;
         }
-        // The assembler's expiry and the link's health deadline may move.
-        self.quiet_ms = 0;
-        if let Some(p) = self.assembler.feed(id, data, now) {
+        self.receive_postback_frame(data, now);
+    }
+
+    /// Takes a received data frame whose ID the caller has found to be
+    /// [`ids::POSTBACK`]: [`Link::receive`] without the ID check, for a driver that
+    /// rejects foreign frames itself before anything else.
+    pub fn receive_postback_frame(&mut self, data: &[u8], now: Instant) {
+        match <&[u8; 8]>::try_from(data) {
+            Ok(d) => self.receive_postback_u64(now, u64::from_le_bytes(*d)),
+            Err(_) => self.assembler.malformed(),
+        }
+    }
+
+    /// [`Link::receive_postback_frame`] for a frame of 8 bytes (every good one), its data
+    /// read as a little-endian `u64`: passed in two registers, so that a driver need not
+    /// copy its frame to memory. Out of line: the driver's poll then keeps few registers,
+    /// which is what an idle poll pays for.
+    #[inline(never)]
+    pub fn receive_postback_u64(&mut self, now: Instant, data: u64) {
+        let held = self.assembler.pending() != 0;
+        if self.assembler.push(&data.to_le_bytes(), now) {
+            self.complete_postback(now);
+        } else if !held {
+            // A window that starts brings its expiry deadline; while it holds frames the
+            // deadline only moves later (a frame too late or too early empties it), so a
+            // poll woken for the first is never too late for the others.
+            if let Some(at) = self.assembler.expiry() {
+                self.wake_by(at);
+            }
+        }
+    }
+
+    /// The assembler's window is full: the CRC decides. Out of line, so that the three
+    /// frames before it pay nothing for its registers.
+    #[inline(never)]
+    fn complete_postback(&mut self, now: Instant) {
+        if let Some(p) = self.assembler.complete() {
             self.receive_postback(p, now);
         }
     }
@@ -394,7 +427,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// stream parser has already checked its header, length byte and CRC. The assembler
     /// (and its counters) is for CAN frames only and is not involved.
     pub fn receive_postback(&mut self, postback: Postback, now: Instant) {
-        self.quiet_ms = 0;
+        // The health deadline follows this postback: earlier than the one the idle fast
+        // path knows of when the link was down (none) or `now` is behind the last postback.
+        self.wake_by(now.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
         self.latest = Some((postback, now));
         self.status.set_up(true);
         self.status.raise(Event::Postback);
@@ -593,6 +628,19 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     pub fn is_quiet(&self, now: Instant) -> bool {
         // A clock that went backwards reads as a huge interval: a full poll, never a skip.
         now.millis_since(self.last_poll) < self.quiet_ms
+    }
+
+    /// Makes sure the idle fast path does not skip the poll at `at` (a new deadline): the
+    /// quiet interval is cut to end there. Cheaper than a full poll at the next call, and
+    /// the same: that poll would find the deadline and cut the interval alike. A deadline
+    /// before the last poll (a caller's `now` behind it) ends the interval at once.
+    fn wake_by(&mut self, at: Instant) {
+        let ahead = if at.is_at_or_after(self.last_poll) {
+            at.millis_since(self.last_poll)
+        } else {
+            0
+        };
+        self.quiet_ms = self.quiet_ms.min(ahead);
     }
 
     #[inline(never)]

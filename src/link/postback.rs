@@ -160,6 +160,24 @@ impl PostbackAssembler {
             self.malformed();
             return None;
         };
+        self.feed_data(data, now)
+    }
+
+    /// [`PostbackAssembler::feed`] for a frame of 8 bytes on the postback ID.
+    #[inline]
+    pub(crate) fn feed_data(&mut self, data: &[u8; 8], now: Instant) -> Option<Postback> {
+        if self.push(data, now) {
+            self.complete()
+        } else {
+            None
+        }
+    }
+
+    /// Takes a frame of 8 bytes on the postback ID into the window. Returns whether the
+    /// window is now full (four frames, the first a header): then
+    /// [`PostbackAssembler::complete`] must be called before the next frame.
+    #[inline]
+    pub(crate) fn push(&mut self, data: &[u8; 8], now: Instant) -> bool {
         let mut count = self.count;
         if count != 0 && now.millis_since(self.last) > u32::from(self.max_gap_ms) {
             self.discard(0);
@@ -167,7 +185,7 @@ impl PostbackAssembler {
         }
         if count == 0 && !is_header(data) {
             self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(1);
-            return None;
+            return false;
         }
         self.last = now;
         // `count` is below 4 here; the mask lets the compiler see it, without a check.
@@ -175,16 +193,13 @@ impl PostbackAssembler {
             *slot = *data;
         }
         self.count = count + 1;
-        if usize::from(count) + 1 < postback::FRAMES {
-            return None;
-        }
-        self.complete()
+        usize::from(count) + 1 >= postback::FRAMES
     }
 
     /// The window is full and starts with a header: the CRC decides. Kept out of line so
     /// that the three frames before it pay nothing for its registers.
     #[inline(never)]
-    fn complete(&mut self) -> Option<Postback> {
+    pub(crate) fn complete(&mut self) -> Option<Postback> {
         if let Some(p) = postback::decode_checked(self.frames.as_flattened()) {
             self.stats.messages = self.stats.messages.wrapping_add(1);
             self.count = 0;
@@ -218,8 +233,10 @@ impl PostbackAssembler {
         None
     }
 
+    /// Counts a frame on the postback ID whose length is not 8 (it breaks a partial
+    /// message).
     #[cold]
-    fn malformed(&mut self) {
+    pub(crate) fn malformed(&mut self) {
         self.stats.malformed = self.stats.malformed.wrapping_add(1);
         self.discard(1);
     }

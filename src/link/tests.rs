@@ -597,9 +597,14 @@ mod fast_path {
         Rate(i16),
         StopRate,
         Pitch,
-        Vehicle { stamp_back: u32 },
+        Vehicle {
+            stamp_back: u32,
+        },
         Postback,
         PostbackFrame(u8),
+        /// A postback taken with a time behind the last poll's (a late-processed frame, a
+        /// clock stepped back): the deadlines it brings are before the idle interval ends.
+        LatePostback(u32),
         PointAt,
         Text,
     }
@@ -613,6 +618,7 @@ mod fast_path {
             3 => (0u32..1500).prop_map(|stamp_back| Op::Vehicle { stamp_back }),
             2 => Just(Op::Postback),
             1 => (0u8..4).prop_map(Op::PostbackFrame),
+            1 => (0u32..3000).prop_map(Op::LatePostback),
             1 => Just(Op::PointAt),
             1 => Just(Op::Text),
         ]
@@ -637,6 +643,12 @@ mod fast_path {
             Op::Postback => {
                 for d in Postback::default().to_can_frames() {
                     link.receive(ids::POSTBACK, &d, now);
+                }
+            }
+            Op::LatePostback(back) => {
+                let at = Instant::from_millis(now.as_millis().wrapping_sub(back));
+                for d in Postback::default().to_can_frames() {
+                    link.receive(ids::POSTBACK, &d, at);
                 }
             }
             Op::PostbackFrame(i) => {
@@ -682,6 +694,8 @@ mod fast_path {
                 // retry paths (a zero-rate frame waiting for room, an aim deferred) run.
                 if t.wrapping_sub(start).is_multiple_of(drain_every) {
                     prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
+                    prop_assert_eq!(fast.stats(), full.stats(), "at {}", t);
+                    prop_assert_eq!(fast.is_up(), full.is_up(), "at {}", t);
                 }
                 t = t.wrapping_add(1);
             }
