@@ -54,5 +54,11 @@ fi
 cargo build --quiet -p gimbalctl
 python3 gimbalctl/tests/mavlink_e2e.py target/debug/gimbalctl
 
+step "MAVLink camera: MAVSDK's Camera plugin as the ground station against gimbalctl mavlink --sim"
+if ! python3 -c "import mavsdk" 2>/dev/null; then
+    python3 -m pip install --quiet --disable-pip-version-check mavsdk==4.1.0
+fi
+python3 gimbalctl/tests/mavsdk_camera.py target/debug/gimbalctl
+
 step "host_sim: the driver against the simulated gimbal, scripted"
 cargo run --quiet --example host_sim --features mock,std

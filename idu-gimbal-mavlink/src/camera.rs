@@ -12,7 +12,8 @@
 //!   continuous (−1, 0, +1) → zoom out, stop, in; step (±1 to ±5) → 2× out or in per step;
 //!   focal length and field of view → `UNSUPPORTED`;
 //! - one video stream (id 1, RTSP, running) whose URI comes from the configuration (built
-//!   with `idu_gimbal::video`);
+//!   with `idu_gimbal::video`): `VIDEO_STREAM_INFORMATION`, and `VIDEO_STREAM_STATUS` (which
+//!   MAVSDK's camera plugin polls);
 //! - `CAMERA_SETTINGS` (mode, zoom level as the last commanded, in %), `CAMERA_CAPTURE_STATUS`,
 //!   `STORAGE_INFORMATION` (one storage, status `NOT_SUPPORTED`: the gimbal does not say).
 //!
@@ -29,7 +30,7 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings, CommandLong,
-    StorageInformation, VideoStreamInformation,
+    StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::Message;
@@ -100,6 +101,7 @@ pub(crate) enum Reply {
     Storage,
     CaptureStatus,
     Stream,
+    StreamStatus,
     /// This many images were commanded: one CAMERA_IMAGE_CAPTURED each, then the status.
     Captured(u8),
 }
@@ -131,6 +133,7 @@ pub(crate) fn owns(cmd: &CommandLong) -> bool {
             <StorageInformation as MessageSpecStatic>::spec().id(),
             <CameraCaptureStatus as MessageSpecStatic>::spec().id(),
             <VideoStreamInformation as MessageSpecStatic>::spec().id(),
+            <VideoStreamStatus as MessageSpecStatic>::spec().id(),
         ]
         .iter()
         .any(|&id| id as f32 == cmd.param1),
@@ -139,6 +142,7 @@ pub(crate) fn owns(cmd: &CommandLong) -> bool {
         | MavCmd::RequestStorageInformation
         | MavCmd::RequestCameraCaptureStatus
         | MavCmd::RequestVideoStreamInformation
+        | MavCmd::RequestVideoStreamStatus
         | MavCmd::ImageStartCapture
         | MavCmd::ImageStopCapture
         | MavCmd::VideoStartCapture
@@ -186,6 +190,7 @@ impl Camera {
             MavCmd::RequestStorageInformation => Reply::Storage,
             MavCmd::RequestCameraCaptureStatus => Reply::CaptureStatus,
             MavCmd::RequestVideoStreamInformation => Reply::Stream,
+            MavCmd::RequestVideoStreamStatus => Reply::StreamStatus,
             MavCmd::RequestMessage if is(<CameraInformation as MessageSpecStatic>::spec().id()) => {
                 Reply::Information
             }
@@ -204,6 +209,9 @@ impl Camera {
                 if is(<VideoStreamInformation as MessageSpecStatic>::spec().id()) =>
             {
                 Reply::Stream
+            }
+            MavCmd::RequestMessage if is(<VideoStreamStatus as MessageSpecStatic>::spec().id()) => {
+                Reply::StreamStatus
             }
             MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now),
             MavCmd::ImageStopCapture => {
@@ -237,6 +245,7 @@ impl Camera {
             Reply::Storage => self.send_storage(now, tx),
             Reply::CaptureStatus => self.send_capture_status(now, tx),
             Reply::Stream => self.send_stream(tx),
+            Reply::StreamStatus => self.send_stream_status(tx),
             Reply::Captured(n) => {
                 for _ in 0..n {
                     self.captured(now, tx);
@@ -474,6 +483,23 @@ impl Camera {
             name: name("main"),
             uri,
             encoding: VideoStreamEncoding::Unknown,
+            camera_device_id: 0,
+        };
+        (tx.send)(self.config.component, &s);
+    }
+
+    /// The stream's status (MAVSDK's camera plugin asks for it before it reports the
+    /// stream): the same stream, running; what the gimbal does not report is 0 (unknown).
+    fn send_stream_status(&self, tx: &mut Tx<'_>) {
+        let s = VideoStreamStatus {
+            stream_id: 1,
+            flags: VideoStreamStatusFlags::RUNNING,
+            framerate: 0.0,
+            resolution_h: 0,
+            resolution_v: 0,
+            bitrate: 0,
+            rotation: 0,
+            hfov: 0,
             camera_device_id: 0,
         };
         (tx.send)(self.config.component, &s);

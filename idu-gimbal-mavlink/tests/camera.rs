@@ -14,7 +14,7 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings, CommandAck,
-    Heartbeat, StorageInformation, VideoStreamInformation,
+    Heartbeat, StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 use mavio::protocol::{Frame, V2};
 
@@ -256,6 +256,17 @@ fn the_stream_and_the_storage_are_said_as_they_are() {
         assert!(s.flags.contains(VideoStreamStatusFlags::RUNNING));
         let end = s.uri.iter().position(|&c| c == 0).unwrap();
         assert_eq!(&s.uri[..end], URI.as_bytes());
+    }
+    // MAVSDK's camera plugin asks for the stream's status (every 5 s) as well.
+    for (cmd, p1) in [
+        (MavCmd::RequestVideoStreamStatus, 1.0),
+        (MavCmd::RequestMessage, 270.0),
+    ] {
+        let (ack, frames) = ask(&mut b, 100, cmd, [p1, 0.0, 0.0], 10);
+        assert_eq!(ack.result, MavResult::Accepted);
+        let s = &of::<VideoStreamStatus>(&frames)[0];
+        assert_eq!(s.stream_id, 1);
+        assert!(s.flags.contains(VideoStreamStatusFlags::RUNNING));
     }
     let (_, frames) = ask(&mut b, 100, MavCmd::RequestStorageInformation, [0.0; 3], 10);
     assert_eq!(
