@@ -194,28 +194,29 @@ impl FrameReader {
         }
     }
 
-    /// Drops the first byte and everything up to the next start byte.
+    /// Drops a bad frame's start byte, and what follows up to the next start byte.
     fn resync(&mut self) {
-        let next = self
-            .buf
-            .get(1..self.len)
-            .and_then(|rest| rest.iter().position(|&b| b == STX_V2))
-            .map_or(self.len, |p| p + 1);
-        // `next` <= len <= MAX_FRAME_LEN: the cast is exact.
-        self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(next as u32);
-        self.drop_front(next);
+        self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(1);
+        self.drop_front(1);
     }
 
-    /// Drops the first `n` bytes; what is left starts with a start byte (or is empty), and
-    /// its checksum is taken again (only after a bad or unsupported frame).
+    /// Drops the first `n` bytes (a frame handed out, or a bad frame's start byte), then
+    /// every byte before the next start byte, counted as skipped: what is left starts a
+    /// frame (or is empty). Its checksum is taken again; bytes are left over only after a
+    /// bad or unsupported frame.
     fn drop_front(&mut self, n: usize) {
         let n = n.min(self.len);
-        self.len -= n;
+        let rest = self.buf.get(n..self.len).unwrap_or(&[]);
+        let skip = rest.iter().position(|&b| b == STX_V2).unwrap_or(rest.len());
+        // `skip` <= MAX_FRAME_LEN: the cast is exact.
+        self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(skip as u32);
+        let start = n + skip;
+        self.len -= start;
         self.need = HEADER_LEN;
         self.crc_end = HEADER_LEN;
         self.crc = x25::INIT;
         if self.len > 0 {
-            self.buf.copy_within(n..n + self.len, 0);
+            self.buf.copy_within(start..start + self.len, 0);
             let (_, crc_end) = self.extent();
             self.crc_end = crc_end;
             self.crc = x25::update(
