@@ -30,6 +30,25 @@ cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib
 step "docs, warnings denied"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 
+step "packages: cargo publish --dry-run of the library crates (idu-gimbal, idu-gimbal-mavlink)"
+# The bridge depends on the unpublished core: cargo packages the workspace's crates
+# together. --allow-dirty: tests may append to proptest-regressions files; the package's
+# contents are fixed by each crate's `include`.
+cargo publish --dry-run --workspace --exclude gimbalctl --allow-dirty 2>&1 |
+    grep -v '^warning: ignoring \(test\|example\)'
+
+step "MSRV: the declared rust-version builds each library crate"
+# Read from the manifests (idu-gimbal 1.87; idu-gimbal-mavlink 1.88, as mavio's code
+# generator pulls icu 2.4), installed with the minimal profile.
+msrv() { sed -n 's/^rust-version = "\(.*\)"$/\1/p' "$1"; }
+core_msrv=$(msrv Cargo.toml)
+bridge_msrv=$(msrv idu-gimbal-mavlink/Cargo.toml)
+for v in "$core_msrv" "$bridge_msrv"; do
+    rustup toolchain install "$v" --profile minimal >/dev/null 2>&1
+done
+CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock
+CARGO_TARGET_DIR=target/msrv cargo "+$bridge_msrv" check -p idu-gimbal-mavlink
+
 # Firmware steps (QEMU demo, benchmarks, STM32F405 release build) run when present.
 if [ -x scripts/firmware-checks.sh ]; then
   step "firmware"
