@@ -521,6 +521,23 @@ fn the_nb_adapter_keeps_an_error_that_follows_words() {
     assert_eq!(tx.written, [10, 11, 12, 13]);
 }
 
+/// An error before any word was moved is returned by that same call, not a moment later
+/// behind an empty read or write (which would read as "nothing to do").
+#[test]
+fn the_nb_adapter_returns_an_error_before_any_word_at_once() {
+    let rx = Script::new([Err(nb::Error::Other(Fault(3))), Ok(7)]);
+    let tx = Script::new([Err(nb::Error::Other(Fault(4))), Ok(())]);
+    let mut port = Nb::new(rx, tx);
+    let mut buf = [0u8; 4];
+    assert_eq!(port.read(&mut buf), Err(Fault(3)));
+    assert_eq!(port.read(&mut buf), Ok(1));
+    assert_eq!(buf[0], 7);
+    assert_eq!(port.write(&[20, 21]), Err(Fault(4)));
+    assert_eq!(port.write(&[20]), Ok(1));
+    let (_, tx) = port.release();
+    assert_eq!(tx.written, [20]);
+}
+
 /// An `embedded-io` half that must never be read or written while it says it is not
 /// ready (that call would block on a real UART).
 struct Gate {
