@@ -234,3 +234,25 @@ fn stop_pointing_ends_the_point_at() {
         }
     }
 }
+
+/// The postback assembler's gap bound, its expiry time (the last frame + the bound + 1 ms)
+/// and its frame accounting when a malformed frame breaks a partial message.
+#[test]
+fn the_assembler_reports_its_bound_expiry_and_discards() {
+    use idu_gimbal::link::postback::PostbackAssembler;
+    let mut a = PostbackAssembler::with_max_gap(250);
+    assert_eq!(a.max_gap_ms(), 250);
+    assert_eq!(a.expiry(), None);
+    let frames = Postback::default().to_can_frames();
+    assert!(a.feed(ids::POSTBACK, &frames[0], t(1000)).is_none());
+    assert!(a.feed(ids::POSTBACK, &frames[1], t(1010)).is_none());
+    assert_eq!(a.expiry(), Some(t(1010 + 250 + 1)));
+    // A 5-byte frame on the postback ID: the two held and itself are discarded.
+    assert!(a.feed(ids::POSTBACK, &frames[2][..5], t(1020)).is_none());
+    let s = a.stats();
+    assert_eq!(
+        (s.malformed, s.dropped_partials, s.discarded_frames),
+        (1, 1, 3)
+    );
+    assert_eq!(a.expiry(), None);
+}

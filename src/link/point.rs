@@ -159,6 +159,10 @@ mod tests {
             !moved(Some((3599, 0)), (0, 0), 100),
             "0.1° across north is within 0.1°"
         );
+        assert!(
+            !moved(Some((0, 0)), (3599, 0), 100),
+            "and back across north the other way"
+        );
         assert!(moved(Some((3598, 0)), (0, 0), 100));
         assert!(!moved(Some((100, -450)), (101, -451), 100));
         assert!(moved(Some((100, -450)), (100, -452), 100));

@@ -386,4 +386,17 @@ mod tests {
         assert_eq!(q.pop(), Some(Next::Control([7; 8])));
         assert_eq!(q.requeue(0x123, [0; 8]), Requeued::Foreign);
     }
+
+    #[test]
+    fn a_cancelled_zero_rate_frame_no_longer_waits() {
+        let mut q = TxQueue::<4, 4>::new();
+        assert!(!q.mark_zero_rate(), "it did not wait before");
+        assert_eq!(q.len(), 1);
+        q.cancel_zero_rate();
+        assert_eq!(q.len(), 0);
+        assert!(q.is_empty());
+        assert!(q.pop().is_none());
+        q.cancel_zero_rate(); // nothing waiting: nothing to withdraw
+        assert_eq!(q.len(), 0);
+    }
 }
