@@ -30,11 +30,20 @@
 //! ```
 
 /// The 256-entry table for the reflected polynomial 0xA001.
-static TABLE: [u16; 256] = make_table();
+static TABLE: [u16; 256] = reflected_table(0xA001);
 
+/// The 256-entry lookup table of a reflected CRC-16 whose polynomial, bit-reversed, is
+/// `poly` (0xA001 for this module's CRC-16/MODBUS; other members of the family, such as
+/// MAVLink's X.25 with 0x8408, build theirs the same way). Meant for compile time:
+///
+/// ```
+/// use idu_gimbal::wire::crc::reflected_table;
+/// static X25: [u16; 256] = reflected_table(0x8408);
+/// assert_eq!(X25[1], 0x1189);
+/// ```
 // Evaluated at compile time: an out-of-bounds index here is a build error, not a panic.
 #[allow(clippy::indexing_slicing)]
-const fn make_table() -> [u16; 256] {
+pub const fn reflected_table(poly: u16) -> [u16; 256] {
     let mut table = [0u16; 256];
     let mut i = 0;
     while i < 256 {
@@ -42,7 +51,7 @@ const fn make_table() -> [u16; 256] {
         let mut bit = 0;
         while bit < 8 {
             crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xA001
+                (crc >> 1) ^ poly
             } else {
                 crc >> 1
             };

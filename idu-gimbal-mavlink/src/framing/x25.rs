@@ -1,34 +1,13 @@
 //! MAVLink's checksum: CRC-16/MCRF4XX ("X.25" in the MAVLink docs; reflected polynomial
 //! 0x1021, initial value 0xFFFF, no final XOR), one table lookup a byte.
 //!
-//! Written here rather than taken from a CRC crate because the frame reader runs it in
+//! Stepped here rather than taken from a CRC crate because the frame reader runs it in
 //! the same loop that copies each byte into its buffer (see the `framing` module docs);
 //! the tests check it against the catalogue's check value and against `mavio`'s checksum.
 
-/// The 256-entry table for the reflected polynomial 0x8408.
-static TABLE: [u16; 256] = make_table();
-
-// Evaluated at compile time: an out-of-bounds index here is a build error, not a panic.
-#[allow(clippy::indexing_slicing)]
-const fn make_table() -> [u16; 256] {
-    let mut table = [0u16; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut crc = i as u16;
-        let mut bit = 0;
-        while bit < 8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0x8408
-            } else {
-                crc >> 1
-            };
-            bit += 1;
-        }
-        table[i] = crc;
-        i += 1;
-    }
-    table
-}
+/// The 256-entry table for the reflected polynomial 0x8408 (built by the core's
+/// table builder for its own CRC-16).
+static TABLE: [u16; 256] = idu_gimbal::wire::crc::reflected_table(0x8408);
 
 /// The CRC's initial value.
 pub const INIT: u16 = 0xFFFF;
