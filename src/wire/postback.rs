@@ -694,6 +694,82 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn errors_say_what_was_wrong_and_what_was_expected() {
+        let text = |e: PostbackError| e.to_string();
+        assert_eq!(
+            text(PostbackError::Truncated { len: 26 }),
+            "postback of 26 bytes is truncated: it needs 27"
+        );
+        assert_eq!(
+            text(PostbackError::BadHeader {
+                found: [0xEB, 0x91]
+            }),
+            "postback header is EB 91, expected EB 90"
+        );
+        assert_eq!(
+            text(PostbackError::BadCrc {
+                computed: 0x1234,
+                received: 0xABCD
+            }),
+            "postback CRC is 0xABCD, computed 0x1234"
+        );
+    }
+
+    #[test]
+    fn reserved_bytes_are_zero_only_when_all_nine_are() {
+        let good = sample();
+        assert!(Packet::new(&good[..]).unwrap().reserved_is_zero());
+        for i in 3..=11 {
+            let mut b = good;
+            b[i] = 0x80;
+            assert!(!Packet::new(&b[..]).unwrap().reserved_is_zero(), "byte {i}");
+        }
+    }
+
+    /// The CRC covers bytes 0..=24 whatever they hold: a message whose first 16 bytes are not
+    /// the documented prefix is checked over all of them, never over the prefix it lacks.
+    /// Each replaced word shares no bit with the documented word it replaces (a masked
+    /// compare would take it for the prefix).
+    #[test]
+    fn a_message_without_the_documented_prefix_is_checked_over_its_own_bytes() {
+        let good = sample();
+        let received = u16::from_le_bytes([good[25], good[26]]);
+
+        // CMD+DID, C_ID and Data_id changed (21 FE 0F 01 -> DE 01 F0 FE), the CRC kept.
+        let mut b = good;
+        b[12..16].copy_from_slice(&[0xDE, 0x01, 0xF0, 0xFE]);
+        let computed = crc_fly16(&b[..25]);
+        assert_ne!(computed, received);
+        assert_eq!(
+            Postback::parse(&b),
+            Err(PostbackError::BadCrc { computed, received })
+        );
+        assert_eq!(decode_checked(&b), None);
+        // With its own CRC it is a message (Data_id 0xFE, the rest as sent).
+        b[25..27].copy_from_slice(&computed.to_le_bytes());
+        let expected = Postback {
+            data_id: DataId::from_code(0xFE),
+            ..Postback::parse(&good).unwrap()
+        };
+        assert_eq!(Postback::parse(&b), Ok(expected));
+        assert_eq!(decode_checked(&b), Some(expected));
+
+        // Header and length byte changed (EB 90 0C 00 -> 14 6F F3 FF): never a message,
+        // with the old CRC or its own.
+        let mut b = good;
+        b[..4].copy_from_slice(&[0x14, 0x6F, 0xF3, 0xFF]);
+        let bad_header = Err(PostbackError::BadHeader {
+            found: [0x14, 0x6F],
+        });
+        assert_eq!(Postback::parse(&b), bad_header);
+        assert_eq!(decode_checked(&b), None);
+        let own = crc_fly16(&b[..25]).to_le_bytes();
+        b[25..27].copy_from_slice(&own);
+        assert_eq!(Postback::parse(&b), bad_header);
+        assert_eq!(decode_checked(&b), None);
+    }
+
+    #[test]
     fn unknown_codes_survive() {
         let p = Postback {
             data_id: DataId::Unknown(0x02),

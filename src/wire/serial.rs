@@ -484,6 +484,45 @@ mod tests {
         assert_eq!(p.feed(&LOOK_DOWN).count(), 1);
     }
 
+    #[test]
+    fn finish_counts_only_a_partial_frame() {
+        let mut p = StreamParser::new();
+        p.finish();
+        assert_eq!(p.stats().truncated, 0);
+        assert_eq!(p.feed(&LOOK_DOWN).count(), 1);
+        p.finish();
+        assert_eq!(p.stats().truncated, 0);
+        p.feed(&LOOK_DOWN[..1]).for_each(drop);
+        p.finish();
+        assert_eq!((p.pending(), p.stats().truncated), (0, 1));
+    }
+
+    /// A frame starts `EB 90` and then the length byte of a control frame (`0A`) or a
+    /// postback (`0C`): 27 bytes that differ in one of those three, even with a CRC that
+    /// holds over them, are skipped, and the frame after them is found.
+    #[test]
+    fn a_wrong_header_or_length_byte_is_not_a_frame_even_with_a_good_crc() {
+        for (at, byte) in [(0, 0xEA), (1, 0x91), (2, 0x0B)] {
+            let mut bad: [u8; 27] = sample()[..27].try_into().unwrap();
+            bad[at] = byte;
+            let crc = crc::checksum(&bad[..25]).to_le_bytes();
+            bad[25..].copy_from_slice(&crc);
+            let mut bytes = bad.to_vec();
+            bytes.extend(LOOK_DOWN);
+            let (items, stats) = parse_all(&bytes);
+            assert_eq!(
+                items,
+                [StreamItem::Control([0x0F, 0x07, 0, 0, 0, 0, 0, 0])],
+                "byte {at} = {byte:#04X}"
+            );
+            assert_eq!(
+                (stats.postbacks, stats.crc_errors, stats.skipped_bytes),
+                (0, 0, 27),
+                "byte {at} = {byte:#04X}"
+            );
+        }
+    }
+
     fn stream_of(frames: &[Vec<u8>], garbage: &[Vec<u8>]) -> Vec<u8> {
         let mut out = Vec::new();
         for (i, f) in frames.iter().enumerate() {
