@@ -12,6 +12,10 @@
 #
 # The output of every failing run is kept under target/flake-hunt/. Prints a table (binary,
 # runs, failures, seconds per run) and exits 1 when any run failed.
+#
+# FLAKE_ONLY=REGEX hunts only the binaries whose file name (e.g. `serial-<hash>`,
+# `idu_gimbal-<hash>` for the core's unit tests) matches REGEX: a re-run over what a
+# change touched.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -38,7 +42,12 @@ for line in sys.stdin:
         continue
     if m.get("reason") == "compiler-artifact" and m.get("profile", {}).get("test") and m.get("executable"):
         print(m["executable"] + "\t" + os.path.dirname(m["manifest_path"]))
-' | sort -u > "$out/binaries.tsv"
+' | sort -u > "$out/all.tsv"
+if [ -n "${FLAKE_ONLY:-}" ]; then
+    awk -F'\t' -v re="$FLAKE_ONLY" '{ n = $1; sub(/.*\//, "", n); if (n ~ re) print }' "$out/all.tsv" > "$out/binaries.tsv"
+else
+    cp "$out/all.tsv" "$out/binaries.tsv"
+fi
 
 count=$(wc -l < "$out/binaries.tsv")
 echo "flake-hunt: $count test binaries; N=$N, N_SLOW=$N_SLOW (slow: over ${SLOW_SECONDS}s a run)"
