@@ -11,6 +11,8 @@ use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
+use idu_gimbal::wire::text::TextError;
+use idu_gimbal::wire::vehicle::{Attitude, VehicleError};
 use idu_gimbal::{Gimbal, Instant};
 
 fn t(ms: u32) -> Instant {
@@ -41,6 +43,55 @@ fn errors_say_what_was_wrong() {
         e.to_string(),
         format!("CAN driver error: {}", ErrorKind::Overrun)
     );
+}
+
+#[test]
+fn text_and_vehicle_errors_say_what_was_wrong() {
+    let cases = [
+        (
+            TextError::Empty,
+            "text is empty: it needs at least one byte",
+        ),
+        (
+            TextError::InvalidByte {
+                index: 4,
+                byte: 0x80,
+            },
+            "byte 0x80 at index 4 is not ASCII 0x01..=0x7F",
+        ),
+        (
+            TextError::Overflow { capacity: 64 },
+            "text longer than 64 bytes",
+        ),
+        (
+            TextError::WrongLength { len: 5 },
+            "text frame has 5 bytes, expected 8",
+        ),
+        (
+            TextError::NotText { id: 0x0000_0F01 },
+            "CAN ID 0x00000F01 is not a text ID (0x02008201, 0x02008202)",
+        ),
+    ];
+    for (e, text) in cases {
+        assert_eq!(e.to_string(), text);
+    }
+    assert_eq!(
+        VehicleError::NotVehicle { id: 0x0000_0F01 }.to_string(),
+        "CAN ID 0x00000F01 is not a vehicle frame (0x0000FF13, 0x0000FF15, 0x0000FF16)"
+    );
+    assert_eq!(
+        VehicleError::WrongLength { len: 7 }.to_string(),
+        "vehicle frame has 7 bytes, expected 8"
+    );
+    assert_eq!(
+        VehicleError::NonZeroPadding { id: 0x0000_FF16 }.to_string(),
+        "unused bytes of frame 0x0000FF16 are not zero"
+    );
+    // A value out of range says what the range error says: the field, the value, the range.
+    let range = Attitude::new(91.0, 0.0, 0.0).unwrap_err();
+    let text = VehicleError::Value(range).to_string();
+    assert_eq!(text, range.to_string());
+    assert!(text.contains("pitch") && text.contains("91"), "{text}");
 }
 
 #[test]

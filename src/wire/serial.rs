@@ -266,7 +266,9 @@ impl StreamParser {
             Some(&CONTROL_LENGTH_BYTE) => FRAME_LEN,
             _ => postback::MESSAGE_LEN,
         };
-        if self.len < expected || at < field::LENGTH {
+        // Before the length byte is in, `len` <= 2 is below both frame lengths: the
+        // length compare alone waits for it.
+        if self.len < expected {
             return Step::More;
         }
         let frame = self.buf.get(..expected).unwrap_or(&[]);
