@@ -23,8 +23,8 @@ use defmt::{info, unwrap, warn};
 use defmt_rtt as _;
 use embassy_executor::Spawner;
 use embassy_futures::select::{select4, Either4};
-use embassy_stm32::can::filter::ListEntry32;
 use embassy_stm32::can::enums::TryReadError;
+use embassy_stm32::can::filter::ListEntry32;
 use embassy_stm32::can::frame::Envelope;
 use embassy_stm32::can::{
     self, Can, CanTx, ExtendedId, Fifo, Id, Rx0InterruptHandler, Rx1InterruptHandler, RxBuf,
@@ -149,7 +149,10 @@ fn log_event(link: &Link, event: Event, now: Instant) {
         Event::LinkDown => warn!("gimbal link down: no postback for 1.5 s"),
         Event::RateHoldExpired => info!("rate hold expired: gimbal stopped"),
         Event::TargetUnreachable { elevation_cdeg } => {
-            warn!("target out of the pitch range (needs {=i16} cdeg)", elevation_cdeg)
+            warn!(
+                "target out of the pitch range (needs {=i16} cdeg)",
+                elevation_cdeg
+            )
         }
     }
 }
@@ -300,6 +303,8 @@ async fn main(spawner: Spawner) {
         Fifo::Fifo0,
         [ListEntry32::data_frames_with_id(POSTBACK); 2],
     );
+    // From the CAN clock embassy configured (APB1, 42 MHz): prescaler 6, 7 time quanta a
+    // bit (1 + 5 + 1), sample point 85.7 % (as examples/common/board.rs's 14 quanta).
     can.modify_config()
         .set_bitrate(CAN_BITRATE)
         .set_automatic_retransmit(true);
@@ -307,7 +312,10 @@ async fn main(spawner: Spawner) {
     // then a free mailbox (`flush_any`) is always room for the next frame.
     can.set_tx_fifo_scheduling(true);
     can.enable().await;
-    info!("CAN1 up: {=u32} bit/s, filter passes postbacks only", CAN_BITRATE);
+    info!(
+        "CAN1 up: {=u32} bit/s, filter passes postbacks only",
+        CAN_BITRATE
+    );
 
     spawner.spawn(unwrap!(gimbal_task(can, VEHICLE.receiver())));
     spawner.spawn(unwrap!(vehicle_task(VEHICLE.sender())));
