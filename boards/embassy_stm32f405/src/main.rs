@@ -188,6 +188,14 @@ async fn gimbal_task(
         // Sleep until the first of: a frame, the link's deadline (or the next stats line),
         // vehicle data, a free mailbox (only while frames wait for one).
         let deadline = link.next_deadline(now);
+        // Just polled at `now`: a deadline still at `now` is a retry (a full queue waiting
+        // for the bus to take frames). Wait for the next millisecond or a free mailbox: a
+        // timer already due would complete at once, and the task would never yield.
+        let deadline = if deadline == now {
+            now.add_millis(1)
+        } else {
+            deadline
+        };
         let wake = if next_stats.millis_since(now) < deadline.millis_since(now) {
             next_stats
         } else {
