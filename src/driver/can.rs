@@ -186,6 +186,23 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// The instant by which [`Gimbal::poll`] must next be called if no frame is received
+    /// before then, as seen from `now`: the link's
+    /// [`next_deadline`](crate::link::Link::next_deadline), or `now` while frames wait for
+    /// transmission (the CAN driver had no room at the last poll; poll again when it has).
+    ///
+    /// A firmware that sleeps between polls sleeps until this instant or until a CAN
+    /// receive (or transmit-mailbox-empty) interrupt, whichever comes first. Every command
+    /// or vehicle value given to the driver can move the deadline earlier: ask again after
+    /// one. The result is at or after `now` and less than 2^31 ms ahead of it.
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.link.has_transmit() {
+            now
+        } else {
+            self.link.next_deadline(now)
+        }
+    }
+
     /// Out of line: an idle poll then saves only the registers the receive loop needs.
     #[inline(never)]
     fn transmit(&mut self) -> Option<DriverError> {

@@ -286,6 +286,19 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// The instant by which [`SerialGimbal::poll`] must next be called if no byte is
+    /// received before then, as seen from `now`: the link's
+    /// [`next_deadline`](SerialLink::next_deadline), or `now` while bytes wait to be
+    /// written (the port took no more at the last poll). The result is at or after `now`
+    /// and less than 2^31 ms ahead of it.
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.link.has_transmit() {
+            now
+        } else {
+            self.link.next_deadline(now)
+        }
+    }
+
     /// Takes the result of the poll's first read, then reads on until nothing waits or
     /// [`Config::max_rx_per_poll`] reads were made.
     #[inline(never)]

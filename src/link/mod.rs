@@ -630,6 +630,59 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         now.millis_since(self.last_poll) < self.quiet_ms
     }
 
+    /// The instant by which [`Link::poll`] must next be called if nothing is received and
+    /// nothing else is asked of the link before then, as seen from `now`, the caller's
+    /// current time: smoltcp's `poll_at`.
+    ///
+    /// It is the earliest of the link's deadlines: the vehicle pushes (and vehicle data
+    /// going stale), the rate hold's next repeat and its dead-man, the next point-at step,
+    /// the expiry of a partial postback, and the link health timeout. It is `now` itself
+    /// when a poll is due at once: something changed since the last poll that the schedules
+    /// must see (the first vehicle value, a new rate hold, a point-at, a full queue to
+    /// retry, ...), a deadline has come, or `now` is behind the last poll. With nothing
+    /// scheduled, it is at most 60 s after the last poll.
+    ///
+    /// Exactly: [`Link::poll`] at every instant from `now` up to, not including, the
+    /// deadline does nothing. So an async driver may sleep until the deadline or until a
+    /// frame arrives, whichever comes first, and poll then; every call that feeds the link
+    /// ([`Link::receive`], [`Link::send`], [`Link::set_rate`], [`Link::set_gps`],
+    /// [`Link::point_at`], ...) can move the deadline earlier, so ask again after one.
+    ///
+    /// Frames waiting for transmission are not a deadline of `poll`, which does not send
+    /// them: hand them to the CAN driver while [`Link::has_transmit`] and the driver has
+    /// room. ([`Gimbal::next_deadline`](crate::Gimbal::next_deadline), whose `poll` does
+    /// transmit, is `now` while frames wait.)
+    ///
+    /// The result is at or after `now` and less than 2^31 ms ahead of it, whatever the
+    /// wrap: the time to sleep is `deadline.millis_since(now)`.
+    ///
+    /// ```
+    /// use idu_gimbal::link::{Config, Link};
+    /// use idu_gimbal::wire::vehicle::Gps;
+    /// use idu_gimbal::Instant;
+    ///
+    /// let mut link: Link = Link::new(Config::default());
+    /// // Ten milliseconds before the tick wraps.
+    /// let t0 = Instant::from_millis(u32::MAX - 9);
+    /// link.set_gps(Gps::new(47.0, 8.0).unwrap(), t0);
+    /// assert_eq!(link.next_deadline(t0), t0); // the first value: push it at once
+    /// link.poll(t0);
+    /// while link.next_transmit().is_some() {
+    ///     link.transmit_done(None);
+    /// }
+    /// // The next GPS push, 200 ms later (the data goes stale only after 1000 ms).
+    /// assert_eq!(link.next_deadline(t0), Instant::from_millis(190));
+    /// assert_eq!(link.next_deadline(t0).millis_since(t0), 200);
+    /// ```
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.is_quiet(now) {
+            // Quiet: `now` is within `quiet_ms` after the last poll, so this is after it.
+            self.last_poll.add_millis(self.quiet_ms)
+        } else {
+            now
+        }
+    }
+
     /// Makes sure the idle fast path does not skip the poll at `at` (a new deadline): the
     /// quiet interval is cut to end there. Cheaper than a full poll at the next call, and
     /// the same: that poll would find the deadline and cut the interval alike. A deadline
@@ -943,5 +996,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 }
 
+#[cfg(test)]
+mod deadline_tests;
 #[cfg(test)]
 mod tests;

@@ -149,6 +149,14 @@ impl<const Q: usize> SerialLink<Q> {
         self.link.poll(now);
     }
 
+    /// The instant by which [`SerialLink::poll`] must next be called if nothing is received
+    /// and nothing else is asked of the link before then, as seen from `now`: see
+    /// [`Link::next_deadline`]. Bytes waiting to be written are not a deadline of `poll`
+    /// (see [`SerialLink::has_transmit`]).
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        self.link.next_deadline(now)
+    }
+
     /// The bytes to write next: the rest of the frame being written, or the next frame the
     /// link hands out; empty when nothing waits. Report how many were written with
     /// [`SerialLink::transmit_written`].
