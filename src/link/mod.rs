@@ -653,6 +653,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// room. ([`Gimbal::next_deadline`](crate::Gimbal::next_deadline), whose `poll` does
     /// transmit, is `now` while frames wait.)
     ///
+    /// While a rate hold or point-at has a frame to queue and the transmit queue is full
+    /// (the driver takes nothing: a dead bus, full mailboxes), the deadline stays `now`
+    /// until room is made. An async loop that sleeps until the deadline should then also
+    /// wait for the driver to have room, or sleep at least one tick, so it does not spin
+    /// and starve its other tasks (`boards/embassy_stm32f405` does both).
+    ///
     /// The result is at or after `now` and less than 2^31 ms ahead of it, whatever the
     /// wrap: the time to sleep is `deadline.millis_since(now)`.
     ///
