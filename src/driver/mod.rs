@@ -15,5 +15,5 @@
 pub mod can;
 pub mod serial;
 
-pub use can::{Blocking, DriverError, DriverErrors, Gimbal, Stats};
+pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, Stats};
 pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialPort};
