@@ -13,6 +13,8 @@
 //! heading reference over serial is the nose (see [`serial`]).
 
 pub mod can;
+#[cfg(feature = "fdcan")]
+pub mod fdcan;
 pub mod serial;
 
 pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, Stats};
