@@ -8,7 +8,10 @@
 //! * 1 Mbit/s, extended IDs; the controller's acceptance filters pass only the postback ID
 //!   (both receive buffers, every filter on it, masks on all 29 bits), RXB0 rolls over into
 //!   RXB1, so the 4 back-to-back frames of a postback need the loop to come round once per
-//!   two frames (~250 µs at 1 Mbit/s).
+//!   two frames (~250 µs at 1 Mbit/s). (mcp25xx reads RXB0 before RXB1: a frame that
+//!   arrives in RXB0 while an older one still waits in RXB1 is read first. Busy polling at
+//!   10 MHz SPI empties both well within a frame time; a postback whose frames did come out
+//!   of order fails its CRC and is counted, never delivered.)
 //! * Millisecond tick: the RP2040's 1 MHz 64-bit timer.
 //! * GP25 (the Pico's LED) is on while the gimbal's link is up.
 //!
@@ -38,8 +41,8 @@ use idu_gimbal::wire::control::{GimbalCommand, Pitch};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Gimbal, Instant};
 
-/// The second-stage bootloader for the Pico's W25Q080 flash (generic 03h reads work with
-/// any QSPI flash).
+/// The second-stage bootloader for the Pico's W25Q080 flash (for other flash chips,
+/// `rp2040_boot2::BOOT_LOADER_GENERIC_03H` works with any).
 #[link_section = ".boot2"]
 #[used]
 pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
