@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Builds every board crate under boards/*/ (each a standalone crate with its own workspace,
 # Cargo.lock, .cargo/config.toml naming its target, and linker setup): a release build
-# (the ELF is linked), clippy with -D warnings, and the ELF's size (text, data, bss).
+# (the ELF is linked), rustfmt --check and clippy with -D warnings (the root's `cargo fmt
+# --all` and clippy do not reach them: they are outside its workspace), and the ELF's size
+# (text, data, bss).
 #
 # Generic: a new boards/<name>/ is picked up with nothing to add here. The Rust target of
 # each crate comes from `target = "…"` under [build] in its .cargo/config.toml and is
 # installed with rustup when missing. All crates share one target directory (target/boards;
 # BOARDS_TARGET_DIR overrides it), so dependencies they have in common build once per target.
 #
-# Exits non-zero when any crate fails to build, to pass clippy, or when its lock file is out
+# Exits non-zero when any crate fails to build, rustfmt or clippy, or when its lock file is out
 # of date (--locked); every crate is still tried and the failures are listed at the end.
 #
 #   scripts/boards.sh              all boards
@@ -89,7 +91,10 @@ for dir in "${boards[@]}"; do
         failures+=("$name: build")
     fi
 
-    echo "--- boards: $name ($target): clippy -D warnings"
+    echo "--- boards: $name ($target): rustfmt --check, clippy -D warnings"
+    if ! (cd "$dir" && cargo fmt --check); then
+        failures+=("$name: rustfmt")
+    fi
     if ! (cd "$dir" && cargo clippy --release --locked -- -D warnings); then
         failures+=("$name: clippy")
     fi
@@ -113,4 +118,4 @@ if [ ${#failures[@]} -gt 0 ]; then
     printf 'boards: FAILED: %s\n' "${failures[@]}" >&2
     exit 1
 fi
-echo "boards: all built and clippy-clean"
+echo "boards: all built, formatted and clippy-clean"

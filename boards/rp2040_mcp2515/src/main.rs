@@ -116,7 +116,9 @@ fn main() -> ! {
     let miso = pins.gpio16.into_function::<hal::gpio::FunctionSpi>();
     let sck = pins.gpio18.into_function::<hal::gpio::FunctionSpi>();
     let mosi = pins.gpio19.into_function::<hal::gpio::FunctionSpi>();
-    let cs = pins.gpio17.into_push_pull_output_in_state(hal::gpio::PinState::High);
+    let cs = pins
+        .gpio17
+        .into_push_pull_output_in_state(hal::gpio::PinState::High);
     let spi = hal::Spi::<_, _, _, 8>::new(pac.SPI0, (mosi, miso, sck)).init(
         &mut pac.RESETS,
         clocks.peripheral_clock.freq(),

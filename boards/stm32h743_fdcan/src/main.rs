@@ -90,8 +90,7 @@ fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
 
 #[entry]
 fn main() -> ! {
-    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take())
-    else {
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         panic!("peripherals taken twice");
     };
 
@@ -118,7 +117,10 @@ fn main() -> ! {
     cp.SYST.enable_counter();
 
     // FDCAN1 on PD0/PD1, configured in ConfigMode, then in normal operation.
-    let fdcan_rec = ccdr.peripheral.FDCAN.kernel_clk_mux(rec::FdcanClkSel::Pll1Q);
+    let fdcan_rec = ccdr
+        .peripheral
+        .FDCAN
+        .kernel_clk_mux(rec::FdcanClkSel::Pll1Q);
     let gpiod = dp.GPIOD.split(ccdr.peripheral.GPIOD);
     let rx = gpiod.pd0.into_alternate().speed(Speed::VeryHigh);
     let tx = gpiod.pd1.into_alternate().speed(Speed::VeryHigh);
