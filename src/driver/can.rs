@@ -377,6 +377,7 @@ impl<E, F: FnMut(&E) -> bool> Classify<E> for F {
 /// The classifier of [`Blocking::new`]: every driver error is a fault. Right for drivers
 /// that really block (they report only faults).
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AllFaults;
 
 impl<E> Classify<E> for AllFaults {
