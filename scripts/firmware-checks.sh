@@ -3,7 +3,9 @@
 #   1. the QEMU demo sessions must pass (exit 0): the core's, and the MAVLink bridge's;
 #   2. the STM32F405 firmware, CAN, UART and MAVLink bridge, builds in release mode (sizes
 #      printed);
-#   3. the QEMU benchmarks and the size report must meet the budgets of issue 4.
+#   3. the QEMU benchmarks and the size report must meet the budgets of issue 4;
+#   4. every board crate under boards/ (RP2040, ESP32-C3, STM32H743, …) builds in release
+#      mode and is clippy-clean (scripts/boards.sh; sizes printed).
 #
 # IDU_BUDGETS=report turns budget failures (step 3) into warnings; the default, enforce,
 # fails the run. Every QEMU run is bounded by QEMU_TIMEOUT seconds (default 120).
@@ -35,3 +37,6 @@ else
     echo "firmware: budgets exceeded (see the tables above)" >&2
     exit 1
 fi
+
+echo "--- firmware: board crates (boards/*: release builds, clippy, sizes)"
+scripts/boards.sh

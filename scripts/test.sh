@@ -18,10 +18,11 @@ cargo clippy --workspace --all-targets --all-features -- -D warnings
 step "clippy, thumbv7em-none-eabihf, lib and examples"
 cargo clippy --target thumbv7em-none-eabihf --lib --examples -- -D warnings
 
-step "library builds for thumbv7em-none-eabihf: no features, defmt, mock"
+step "library builds for thumbv7em-none-eabihf: no features, defmt, mock, fdcan"
 cargo build --target thumbv7em-none-eabihf --lib
 cargo build --target thumbv7em-none-eabihf --lib --features defmt
 cargo build --target thumbv7em-none-eabihf --lib --features mock
+cargo build --target thumbv7em-none-eabihf --lib --features fdcan
 
 step "MAVLink bridge (idu-gimbal-mavlink): clippy and build for thumbv7em-none-eabihf"
 cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --examples -- -D warnings

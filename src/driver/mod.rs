@@ -11,9 +11,14 @@
 //! difference. The serial link carries no vehicle or text frames (the protocol document
 //! defines none on it), so [`SerialGimbal`] offers no way to push them, and the gimbal's
 //! heading reference over serial is the nose (see [`serial`]).
+//!
+//! CAN controllers whose HAL implements no `embedded-can` trait get an adapter here: the
+//! `fdcan` module (feature `fdcan`) for the STM32H7's FDCAN through the `fdcan` crate.
 
 pub mod can;
+#[cfg(feature = "fdcan")]
+pub mod fdcan;
 pub mod serial;
 
-pub use can::{Blocking, DriverError, DriverErrors, Gimbal, Stats};
+pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, Stats};
 pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialPort};

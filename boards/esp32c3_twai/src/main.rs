@@ -1,0 +1,126 @@
+//! ESP32-C3 driving an IDU gimbal through its TWAI (CAN 2.0) controller and esp-hal.
+//!
+//! * TWAI0 on **GPIO4 (TX) / GPIO5 (RX)** to a 3.3 V CAN transceiver (SN65HVD230, TJA1051T/3
+//!   or similar); any free GPIOs will do (the GPIO matrix routes them).
+//! * 1 Mbit/s, extended IDs. Hardware filter: a single extended acceptance filter on all 29
+//!   bits of the postback ID, data frames only (the TWAI's single filter also lets standard
+//!   frames whose bits happen to match through; the driver ignores those).
+//! * Millisecond tick: esp-hal's `time::Instant` (the system timer).
+//! * Logging over the USB serial/JTAG console with esp-println.
+//!
+//! The main loop points the gimbal 30° down once, pushes stand-in vehicle data at 10 Hz
+//! (replace [`vehicle_stand_in`] with your autopilot's estimates), polls the driver and
+//! logs postbacks, link events and, every 10 s, the counters.
+//!
+//! Build: `cargo build --release` in this directory. Flash and watch the console:
+//! `cargo run --release` (the runner is `espflash flash --monitor`; the ESP-IDF
+//! second-stage bootloader checks the application descriptor that `esp_app_desc!` emits).
+#![no_std]
+#![no_main]
+
+use esp_hal::time::Instant as EspInstant;
+use esp_hal::twai::filter::SingleExtendedFilter;
+use esp_hal::twai::{BaudRate, ExtendedId, TwaiConfiguration, TwaiMode};
+use esp_println::println;
+
+use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::{Config, Event, Gimbal, Instant};
+
+esp_bootloader_esp_idf::esp_app_desc!();
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    println!("panic: {}", info);
+    loop {}
+}
+
+/// Milliseconds since boot from the system timer, wrapping as the driver's `Instant` expects.
+fn now() -> Instant {
+    Instant::from_millis(EspInstant::now().duration_since_epoch().as_millis() as u32)
+}
+
+/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
+/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
+/// hovering over a fixed point while it yaws one degree every 100 ms.
+fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
+    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
+    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
+    let altitude = Altitude::new(488.0).ok()?;
+    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
+    Some((gps, altitude, attitude))
+}
+
+#[esp_hal::main]
+fn main() -> ! {
+    let peripherals = esp_hal::init(esp_hal::Config::default());
+
+    let mut config = TwaiConfiguration::new(
+        peripherals.TWAI0,
+        peripherals.GPIO5,
+        peripherals.GPIO4,
+        BaudRate::B1000K,
+        TwaiMode::Normal,
+    );
+    // The postback only: every ID bit compared, RTR compared and 0 (data frames).
+    let (Some(postback), Some(all_bits)) = (
+        ExtendedId::new(idu_gimbal::wire::ids::POSTBACK),
+        ExtendedId::new(idu_gimbal::wire::ids::EXTENDED_MAX),
+    ) else {
+        panic!("the postback ID is a 29-bit ID");
+    };
+    config.set_filter(SingleExtendedFilter::new_from_code_mask(
+        postback, all_bits, false, true,
+    ));
+    // esp-hal's `Twai` implements `embedded_can::nb::Can` (feature `unstable`).
+    let twai = config.start();
+    println!("TWAI up: 1 Mbit/s, filter passes postbacks only");
+
+    let mut gimbal: Gimbal<_> = Gimbal::new(twai, Config::default());
+    if let Ok(pitch) = Pitch::new(-30.0) {
+        // The queue is empty: this cannot be refused.
+        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+    }
+
+    let mut next_vehicle = now();
+    let mut next_stats = now().add_millis(10_000);
+    loop {
+        let now = now();
+
+        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
+        if now.is_at_or_after(next_vehicle) {
+            next_vehicle = now.add_millis(100);
+            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
+                gimbal.set_gps(gps, now);
+                gimbal.set_altitude(altitude, now);
+                gimbal.set_attitude(attitude, now);
+            }
+        }
+
+        // Busy polling: the TWAI's receive FIFO (64 bytes) holds the four frames of a
+        // postback, and it has one transmit buffer.
+        if let Err(e) = gimbal.poll(now) {
+            println!("{}", e);
+        }
+
+        while let Some(event) = gimbal.next_event() {
+            match event {
+                Event::Postback => {
+                    if let Some((p, _age)) = gimbal.latest_postback(now) {
+                        println!(
+                            "postback: pitch {} deg, heading {} deg",
+                            p.pitch_deg(),
+                            p.heading_deg()
+                        );
+                    }
+                }
+                other => println!("event: {:?}", other),
+            }
+        }
+
+        if now.is_at_or_after(next_stats) {
+            next_stats = now.add_millis(10_000);
+            println!("stats: {:?}", gimbal.stats());
+        }
+    }
+}

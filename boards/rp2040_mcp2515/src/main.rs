@@ -1,0 +1,190 @@
+//! RP2040 (Raspberry Pi Pico class) driving an IDU gimbal through an MCP2515 CAN controller
+//! on SPI0.
+//!
+//! * MCP2515 with a **16 MHz crystal** (1 Mbit/s needs it: the 8 MHz modules top out at
+//!   500 kbit/s) and a CAN transceiver (e.g. the common MCP2515 + TJA1050 module, or an
+//!   MCP25625). Wiring: GP16 = MISO (SO), GP17 = CS, GP18 = SCK, GP19 = MOSI (SI), 3V3, GND.
+//!   The INT pin is not needed: the driver polls the controller's status over SPI.
+//! * 1 Mbit/s, extended IDs; the controller's acceptance filters pass only the postback ID
+//!   (both receive buffers, every filter on it, masks on all 29 bits), RXB0 rolls over into
+//!   RXB1, so the 4 back-to-back frames of a postback need the loop to come round once per
+//!   two frames (~250 µs at 1 Mbit/s). (mcp25xx reads RXB0 before RXB1: a frame that
+//!   arrives in RXB0 while an older one still waits in RXB1 is read first. Busy polling at
+//!   10 MHz SPI empties both well within a frame time; a postback whose frames did come out
+//!   of order fails its CRC and is counted, never delivered.)
+//! * Millisecond tick: the RP2040's 1 MHz 64-bit timer.
+//! * GP25 (the Pico's LED) is on while the gimbal's link is up.
+//!
+//! The main loop points the gimbal 30° down once, pushes stand-in vehicle data at 10 Hz
+//! (replace [`vehicle_stand_in`] with your autopilot's estimates) and polls the driver.
+//!
+//! Build: `cargo build --release` in this directory (the target comes from
+//! `.cargo/config.toml`). Flash: `cargo run --release` with a debug probe (probe-rs), or
+//! convert the ELF to UF2 (`elf2uf2-rs`, `picotool`) for the USB bootloader.
+//!
+//! Feature `wire-units`: the same program built with the integer (wire-unit) constructors
+//! only (`Pitch::from_deci`, `Attitude::from_centideg`, `Gps::from_e7`, `Altitude::from_cm`)
+//! instead of the `f32`/`f64` ones, to measure what soft-float costs on the Cortex-M0+.
+#![no_std]
+#![no_main]
+
+use embedded_can::{ExtendedId, Id};
+use embedded_hal::digital::OutputPin;
+use embedded_hal_bus::spi::ExclusiveDevice;
+use mcp25xx::bitrates::clock_16mhz::CNF_1000K_BPS;
+use mcp25xx::registers::{OperationMode, RXB0CTRL, RXB1CTRL, RXM};
+use mcp25xx::{AcceptanceFilter, Config as McpConfig, IdHeader, MCP25xx};
+use panic_halt as _;
+use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
+
+use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::{Config, Gimbal, Instant};
+
+/// The second-stage bootloader for the Pico's W25Q080 flash (for other flash chips,
+/// `rp2040_boot2::BOOT_LOADER_GENERIC_03H` works with any).
+#[link_section = ".boot2"]
+#[used]
+pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
+
+/// The Pico's crystal.
+const XTAL_FREQ_HZ: u32 = 12_000_000;
+
+/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
+/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
+/// hovering over a fixed point while it yaws one degree every 100 ms.
+#[cfg(not(feature = "wire-units"))]
+fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
+    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
+    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
+    let altitude = Altitude::new(488.0).ok()?;
+    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
+    Some((gps, altitude, attitude))
+}
+
+/// The same stand-in, built from wire units (1e-7 degree, cm, centi-degree): no floats.
+#[cfg(feature = "wire-units")]
+fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
+    let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
+    let gps = Gps::from_e7(473_977_420, 85_455_940).ok()?;
+    let altitude = Altitude::from_cm(48_800);
+    let attitude = Attitude::from_centideg(150, -40, heading).ok()?;
+    Some((gps, altitude, attitude))
+}
+
+/// The first command: look 30° down.
+fn look_down() -> Option<Pitch> {
+    #[cfg(not(feature = "wire-units"))]
+    let pitch = Pitch::new(-30.0);
+    #[cfg(feature = "wire-units")]
+    let pitch = Pitch::from_deci(-300);
+    pitch.ok()
+}
+
+#[hal::entry]
+fn main() -> ! {
+    let Some(mut pac) = pac::Peripherals::take() else {
+        panic!("peripherals taken twice");
+    };
+    let mut watchdog = hal::Watchdog::new(pac.WATCHDOG);
+    let Ok(clocks) = hal::clocks::init_clocks_and_plls(
+        XTAL_FREQ_HZ,
+        pac.XOSC,
+        pac.CLOCKS,
+        pac.PLL_SYS,
+        pac.PLL_USB,
+        &mut pac.RESETS,
+        &mut watchdog,
+    ) else {
+        panic!("clock setup failed");
+    };
+    let timer = hal::Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
+    // The 1 MHz, 64-bit timer in milliseconds; the u32 wraps after 49.7 days, as the driver's
+    // `Instant` expects.
+    let now = || Instant::from_millis((timer.get_counter().ticks() / 1_000) as u32);
+
+    let sio = hal::Sio::new(pac.SIO);
+    let pins = hal::gpio::Pins::new(
+        pac.IO_BANK0,
+        pac.PADS_BANK0,
+        sio.gpio_bank0,
+        &mut pac.RESETS,
+    );
+    let mut led = pins.gpio25.into_push_pull_output();
+
+    // SPI0 at 10 MHz (the MCP2515's maximum), mode 0.
+    let miso = pins.gpio16.into_function::<hal::gpio::FunctionSpi>();
+    let sck = pins.gpio18.into_function::<hal::gpio::FunctionSpi>();
+    let mosi = pins.gpio19.into_function::<hal::gpio::FunctionSpi>();
+    let cs = pins
+        .gpio17
+        .into_push_pull_output_in_state(hal::gpio::PinState::High);
+    let spi = hal::Spi::<_, _, _, 8>::new(pac.SPI0, (mosi, miso, sck)).init(
+        &mut pac.RESETS,
+        clocks.peripheral_clock.freq(),
+        10.MHz(),
+        embedded_hal::spi::MODE_0,
+    );
+    // The error type is `Infallible` (the RP2040's GPIOs cannot fail).
+    let Ok(device) = ExclusiveDevice::new(spi, cs, timer);
+
+    // Only the postback: masks on all 29 bits (and the extended-ID bit), every filter of both
+    // receive buffers on the postback ID (a filter left at reset would pass standard ID 0).
+    let postback: IdHeader = match ExtendedId::new(idu_gimbal::wire::ids::POSTBACK) {
+        Some(id) => Id::Extended(id).into(),
+        None => panic!("the postback ID is a 29-bit ID"),
+    };
+    let all_bits: IdHeader = Id::Extended(ExtendedId::MAX).into();
+    let filters = [
+        (AcceptanceFilter::Mask0, all_bits),
+        (AcceptanceFilter::Mask1, all_bits),
+        (AcceptanceFilter::Filter0, postback),
+        (AcceptanceFilter::Filter1, postback),
+        (AcceptanceFilter::Filter2, postback),
+        (AcceptanceFilter::Filter3, postback),
+        (AcceptanceFilter::Filter4, postback),
+        (AcceptanceFilter::Filter5, postback),
+    ];
+    let config = McpConfig::default()
+        .mode(OperationMode::NormalOperation)
+        .bitrate(CNF_1000K_BPS)
+        .receive_buffer_0(RXB0CTRL::default().with_rxm(RXM::Filter).with_bukt(true))
+        .receive_buffer_1(RXB1CTRL::default())
+        .filters(&filters);
+    let mut mcp = MCP25xx { spi: device };
+    if mcp.apply_config(&config).is_err() {
+        panic!("MCP2515 configuration over SPI failed");
+    }
+
+    // `MCP25xx` implements `embedded_can::nb::Can` with a real `WouldBlock`: no adapter.
+    let mut gimbal: Gimbal<_> = Gimbal::new(mcp, Config::default());
+    if let Some(pitch) = look_down() {
+        // The queue is empty: this cannot be refused.
+        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+    }
+
+    let mut next_vehicle = now();
+    loop {
+        let now = now();
+
+        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
+        if now.is_at_or_after(next_vehicle) {
+            next_vehicle = now.add_millis(100);
+            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
+                gimbal.set_gps(gps, now);
+                gimbal.set_altitude(altitude, now);
+                gimbal.set_attitude(attitude, now);
+            }
+        }
+
+        // A driver error (an SPI failure) is counted in gimbal.stats(); the loop goes on.
+        let _ = gimbal.poll(now);
+        while gimbal.next_event().is_some() {}
+
+        let _ = if gimbal.is_link_up() {
+            led.set_high()
+        } else {
+            led.set_low()
+        };
+    }
+}

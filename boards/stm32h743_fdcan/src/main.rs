@@ -1,0 +1,199 @@
+//! STM32H743 (Pixhawk-class flight controller: Pixhawk 6X, Cube Orange, …) driving an IDU
+//! gimbal on FDCAN1, through stm32h7xx-hal and `idu_gimbal::driver::fdcan::FdCan`.
+//!
+//! * FDCAN1 on **PD0 (RX) / PD1 (TX)** (CAN1 on Pixhawk boards), classic CAN at 1 Mbit/s
+//!   with extended IDs. The FDCAN's kernel clock is PLL1 Q at 32 MHz: 32 time quanta a bit,
+//!   sample point at 87.5 %.
+//! * Hardware filter: extended filter 0 stores the postback ID (and only it) in FIFO 0; the
+//!   global filter rejects every other frame and every remote frame.
+//! * Clocks: HSE at [`HSE_HZ`] (16 MHz on the Pixhawk 6X; set 24 MHz for a Cube Orange),
+//!   400 MHz core. Millisecond tick: SysTick at 1 kHz.
+//! * Logging through defmt-rtt, panics through panic-probe (over the debug probe).
+//!
+//! The main loop points the gimbal 30° down once, pushes stand-in vehicle data at 10 Hz
+//! (replace [`vehicle_stand_in`] with your autopilot's estimates), polls the driver and
+//! logs postbacks, link events and, every 10 s, the counters.
+//!
+//! Build: `cargo build --release` in this directory. Flash and watch the logs:
+//! `cargo run --release` (probe-rs; see memory.x about a Pixhawk's bootloader).
+#![no_std]
+#![no_main]
+
+use core::num::{NonZeroU16, NonZeroU8};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::{entry, exception};
+use defmt_rtt as _;
+use fdcan::config::{FrameTransmissionConfig, GlobalFilter, NominalBitTiming};
+use fdcan::filter::{Action, ExtendedFilter, ExtendedFilterSlot, FilterType};
+use panic_probe as _;
+use stm32h7xx_hal::gpio::Speed;
+use stm32h7xx_hal::rcc::rec;
+use stm32h7xx_hal::{pac, prelude::*};
+
+use idu_gimbal::driver::fdcan::FdCan;
+use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::{Config, Event, Gimbal, Instant};
+
+/// The board's crystal.
+const HSE_HZ: u32 = 16_000_000;
+/// The core clock.
+const SYS_HZ: u32 = 400_000_000;
+/// The FDCAN kernel clock (PLL1 Q).
+const FDCAN_HZ: u32 = 32_000_000;
+
+/// 1 Mbit/s from 32 MHz: prescaler 1, 1 + 27 + 4 = 32 quanta, sample point 28/32 = 87.5 %.
+const BIT_TIMING: NominalBitTiming = NominalBitTiming {
+    prescaler: NonZeroU16::MIN,
+    seg1: match NonZeroU8::new(27) {
+        Some(n) => n,
+        None => panic!(),
+    },
+    seg2: match NonZeroU8::new(4) {
+        Some(n) => n,
+        None => panic!(),
+    },
+    sync_jump_width: match NonZeroU8::new(4) {
+        Some(n) => n,
+        None => panic!(),
+    },
+};
+const _: () = assert!(FDCAN_HZ / (1 + 27 + 4) == idu_gimbal::interface::CAN_BITRATE);
+
+/// Milliseconds since boot, advanced by the SysTick interrupt (wraps after ~49.7 days, which
+/// `Instant` handles).
+static TICKS_MS: AtomicU32 = AtomicU32::new(0);
+
+#[exception]
+fn SysTick() {
+    TICKS_MS.fetch_add(1, Ordering::Relaxed);
+}
+
+fn now() -> Instant {
+    Instant::from_millis(TICKS_MS.load(Ordering::Relaxed))
+}
+
+defmt::timestamp!("{=u32:ms}", TICKS_MS.load(Ordering::Relaxed));
+
+/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
+/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
+/// hovering over a fixed point while it yaws one degree every 100 ms.
+fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
+    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
+    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
+    let altitude = Altitude::new(488.0).ok()?;
+    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
+    Some((gps, altitude, attitude))
+}
+
+#[entry]
+fn main() -> ! {
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        panic!("peripherals taken twice");
+    };
+
+    let pwrcfg = dp.PWR.constrain().freeze();
+    let ccdr = dp
+        .RCC
+        .constrain()
+        .use_hse(HSE_HZ.Hz())
+        .sys_ck(SYS_HZ.Hz())
+        .pll1_strategy(stm32h7xx_hal::rcc::PllConfigStrategy::Iterative)
+        .pll1_q_ck(FDCAN_HZ.Hz())
+        .freeze(pwrcfg, &dp.SYSCFG);
+    assert_eq!(
+        ccdr.clocks.pll1_q_ck().map(|f| f.raw()),
+        Some(FDCAN_HZ),
+        "the CAN bit timing needs the FDCAN kernel clock at 32 MHz"
+    );
+
+    // SysTick at 1 kHz from the core clock.
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(ccdr.clocks.c_ck().raw() / 1000 - 1);
+    cp.SYST.clear_current();
+    cp.SYST.enable_interrupt();
+    cp.SYST.enable_counter();
+
+    // FDCAN1 on PD0/PD1, configured in ConfigMode, then in normal operation.
+    let fdcan_rec = ccdr
+        .peripheral
+        .FDCAN
+        .kernel_clk_mux(rec::FdcanClkSel::Pll1Q);
+    let gpiod = dp.GPIOD.split(ccdr.peripheral.GPIOD);
+    let rx = gpiod.pd0.into_alternate().speed(Speed::VeryHigh);
+    let tx = gpiod.pd1.into_alternate().speed(Speed::VeryHigh);
+    let mut can = dp.FDCAN1.fdcan(tx, rx, fdcan_rec);
+    can.set_protocol_exception_handling(false);
+    can.set_nominal_bit_timing(BIT_TIMING);
+    can.set_frame_transmit(FrameTransmissionConfig::ClassicCanOnly);
+    can.set_automatic_retransmit(true);
+    let Some(postback) = fdcan::id::ExtendedId::new(idu_gimbal::wire::ids::POSTBACK) else {
+        panic!("the postback ID is a 29-bit ID");
+    };
+    can.set_extended_filter(
+        ExtendedFilterSlot::_0,
+        ExtendedFilter {
+            filter: FilterType::DedicatedSingle(postback),
+            action: Action::StoreInFifo0,
+        },
+    );
+    // Everything else, remote frames included, is rejected in hardware.
+    can.set_global_filter(GlobalFilter::default());
+    let can = FdCan::new(can.into_normal());
+    defmt::info!(
+        "FDCAN1 up: {=u32} bit/s, filter passes postbacks only",
+        idu_gimbal::interface::CAN_BITRATE
+    );
+
+    let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+    if let Ok(pitch) = Pitch::new(-30.0) {
+        // The queue is empty: this cannot be refused.
+        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+    }
+
+    let mut next_vehicle = now();
+    let mut next_stats = now().add_millis(10_000);
+    loop {
+        let now = now();
+
+        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
+        if now.is_at_or_after(next_vehicle) {
+            next_vehicle = now.add_millis(100);
+            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
+                gimbal.set_gps(gps, now);
+                gimbal.set_altitude(altitude, now);
+                gimbal.set_attitude(attitude, now);
+            }
+        }
+
+        // Busy polling: the adapter keeps one frame in flight, and the FIFO holds the four
+        // frames of a postback.
+        if let Err(e) = gimbal.poll(now) {
+            defmt::warn!("{}", defmt::Display2Format(&e));
+        }
+
+        while let Some(event) = gimbal.next_event() {
+            match event {
+                Event::Postback => {
+                    if let Some((p, _age)) = gimbal.latest_postback(now) {
+                        defmt::info!(
+                            "postback: pitch {=f32} deg, heading {=f32} deg",
+                            p.pitch_deg(),
+                            p.heading_deg()
+                        );
+                    }
+                }
+                Event::LinkUp => defmt::info!("gimbal link up"),
+                Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
+                other => defmt::info!("event: {}", other),
+            }
+        }
+
+        if now.is_at_or_after(next_stats) {
+            next_stats = now.add_millis(10_000);
+            defmt::info!("stats: {}", gimbal.stats());
+        }
+    }
+}

@@ -1,0 +1,847 @@
+//! An `embedded_can::nb::Can` adapter for the STM32 FDCAN peripheral (feature `fdcan`).
+//!
+//! The [`fdcan`](https://docs.rs/fdcan/0.2) crate, which stm32h7xx-hal uses (feature `can`),
+//! implements no `embedded-can` trait. [`FdCan`] wraps its
+//! `fdcan::FdCan<I, NormalOperationMode>` and implements `embedded_can::nb::Can` for classic
+//! CAN (8-byte frames, standard or extended IDs), so that [`Gimbal`](super::Gimbal) drives
+//! it like any other controller:
+//!
+//! - `transmit` puts the frame in a transmit buffer when none is pending, and answers
+//!   `WouldBlock` otherwise: one frame in flight. The fdcan crate runs the transmit buffers
+//!   as a priority queue, in which frames of equal ID leave lowest buffer first, not in the
+//!   order they were written; with more than one in flight, a refilled buffer would
+//!   overtake older frames of the same ID (the protocol's text chunks, or a zoom-in and
+//!   its zoom-stop). One at a time is also what the gimbal needs: a frame takes about
+//!   130 µs at 1 Mbit/s, and the protocol sends a few dozen a second.
+//! - `receive` takes a frame from receive FIFO 0 (configure the filters to store the
+//!   postback there), or answers `WouldBlock` when the FIFO is empty.
+//! - Errors, each counted by the driver under its [`ErrorKind`]: the controller's last
+//!   error code (read, and so cleared, once per `receive`: stuff, form, acknowledge, bit 0/1
+//!   and CRC errors as their kinds), a receive FIFO overrun (`Overrun`; the frame that
+//!   came with it is delivered by the next `receive`), the controller going bus-off, and
+//!   frames the adapter cannot carry (both `Other`). See [`Error`].
+//!
+//! The fdcan crate's register layout is chosen by a feature of its own: `fdcan` turns on
+//! `fdcan/fdcan_h7` (the STM32H7's FDCAN, as stm32h7xx-hal does). Not for the G0/G4/L5
+//! layout.
+//!
+//! Recovery from bus-off is left to the application (the M_CAN core stays in
+//! initialisation until software restarts it): take the controller back with
+//! [`FdCan::release`], move it through `into_config_mode()` and `into_normal()`, and wrap
+//! it again.
+
+use core::convert::Infallible;
+use core::fmt;
+
+use embedded_can::{ErrorKind, ExtendedId, Id, StandardId};
+use fdcan::frame::{FrameFormat, RxFrameInfo, TxFrameHeader};
+use fdcan::{LastErrorCode, Mailbox, NormalOperationMode, ReceiveOverrun};
+
+/// The largest frame the FDCAN's receive FIFO can hand out (CAN FD, 64 bytes): the buffer
+/// given to it, so that it never panics on a long frame.
+const RX_BUFFER: usize = 64;
+
+/// A classic CAN frame for [`FdCan`]: a standard or extended ID, a data frame of 0 to 8
+/// bytes or a remote frame.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Frame {
+    id: Id,
+    remote: bool,
+    dlc: u8,
+    data: [u8; 8],
+}
+
+impl embedded_can::Frame for Frame {
+    fn new(id: impl Into<Id>, data: &[u8]) -> Option<Self> {
+        let mut d = [0u8; 8];
+        d.get_mut(..data.len())?.copy_from_slice(data);
+        Some(Frame {
+            id: id.into(),
+            remote: false,
+            dlc: u8::try_from(data.len()).ok()?,
+            data: d,
+        })
+    }
+
+    fn new_remote(id: impl Into<Id>, dlc: usize) -> Option<Self> {
+        if dlc > 8 {
+            return None;
+        }
+        Some(Frame {
+            id: id.into(),
+            remote: true,
+            dlc: u8::try_from(dlc).ok()?,
+            data: [0; 8],
+        })
+    }
+
+    fn is_extended(&self) -> bool {
+        matches!(self.id, Id::Extended(_))
+    }
+
+    fn is_remote_frame(&self) -> bool {
+        self.remote
+    }
+
+    fn id(&self) -> Id {
+        self.id
+    }
+
+    fn dlc(&self) -> usize {
+        usize::from(self.dlc)
+    }
+
+    fn data(&self) -> &[u8] {
+        if self.remote {
+            return &[];
+        }
+        self.data.get(..usize::from(self.dlc)).unwrap_or(&[])
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for Frame {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let (raw, extended) = match self.id {
+            Id::Standard(id) => (u32::from(id.as_raw()), false),
+            Id::Extended(id) => (id.as_raw(), true),
+        };
+        defmt::write!(
+            f,
+            "Frame {{ id: {=u32:#x}, extended: {=bool}, remote: {=bool}, data: {=[u8]:x} }}",
+            raw,
+            extended,
+            self.remote,
+            embedded_can::Frame::data(self)
+        )
+    }
+}
+
+/// What [`FdCan`] reports. Its [`ErrorKind`] (through `embedded_can::Error`) is what the
+/// driver counts.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// The controller saw a stuff error on the bus (`ErrorKind::Stuff`).
+    Stuff,
+    /// A form error (`ErrorKind::Form`).
+    Form,
+    /// A frame it sent was not acknowledged: no other node on the bus, or none at this bit
+    /// rate (`ErrorKind::Acknowledge`).
+    Acknowledge,
+    /// It sent a recessive bit and read back a dominant one (`ErrorKind::Bit`).
+    Bit1,
+    /// It sent a dominant bit and read back a recessive one (`ErrorKind::Bit`).
+    Bit0,
+    /// A received frame's CRC did not match (`ErrorKind::Crc`).
+    Crc,
+    /// Receive FIFO 0 overran: frames were lost (`ErrorKind::Overrun`).
+    Overrun,
+    /// The controller went bus-off and stopped taking part in the bus (`ErrorKind::Other`).
+    /// Reported once, when it happens.
+    BusOff,
+    /// A frame the controller cannot carry as asked (`ErrorKind::Other`): a data frame of no
+    /// bytes or a remote frame with a DLC other than 0 (the fdcan crate sends a frame of
+    /// length 0 as a remote frame and has no other way to ask for one).
+    Unsupported,
+    /// A CAN FD frame was received (`ErrorKind::Other`); the adapter carries classic frames
+    /// only. It is dropped.
+    NotClassic,
+}
+
+impl embedded_can::Error for Error {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            Error::Stuff => ErrorKind::Stuff,
+            Error::Form => ErrorKind::Form,
+            Error::Acknowledge => ErrorKind::Acknowledge,
+            Error::Bit1 | Error::Bit0 => ErrorKind::Bit,
+            Error::Crc => ErrorKind::Crc,
+            Error::Overrun => ErrorKind::Overrun,
+            Error::BusOff | Error::Unsupported | Error::NotClassic => ErrorKind::Other,
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Error::Stuff => "FDCAN: stuff error",
+            Error::Form => "FDCAN: form error",
+            Error::Acknowledge => "FDCAN: acknowledge error",
+            Error::Bit1 => "FDCAN: bit 1 error",
+            Error::Bit0 => "FDCAN: bit 0 error",
+            Error::Crc => "FDCAN: CRC error",
+            Error::Overrun => "FDCAN: receive FIFO overrun",
+            Error::BusOff => "FDCAN: bus-off",
+            Error::Unsupported => "FDCAN: frame not supported",
+            Error::NotClassic => "FDCAN: CAN FD frame received",
+        })
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for Error {}
+
+/// The error a last error code stands for (none for "no error" and "no change").
+fn lec_error(lec: LastErrorCode) -> Option<Error> {
+    match lec {
+        LastErrorCode::NoError | LastErrorCode::NoChange => None,
+        LastErrorCode::StuffError => Some(Error::Stuff),
+        LastErrorCode::FormError => Some(Error::Form),
+        LastErrorCode::AckError => Some(Error::Acknowledge),
+        LastErrorCode::Bit1Error => Some(Error::Bit1),
+        LastErrorCode::Bit0Error => Some(Error::Bit0),
+        LastErrorCode::CRCError => Some(Error::Crc),
+    }
+}
+
+fn to_fdcan_id(id: Id) -> fdcan::id::Id {
+    match id {
+        Id::Standard(id) => match fdcan::id::StandardId::new(id.as_raw()) {
+            Some(id) => id.into(),
+            // Not taken: both are 11 bits.
+            None => fdcan::id::StandardId::ZERO.into(),
+        },
+        Id::Extended(id) => match fdcan::id::ExtendedId::new(id.as_raw()) {
+            Some(id) => id.into(),
+            // Not taken: both are 29 bits.
+            None => fdcan::id::ExtendedId::ZERO.into(),
+        },
+    }
+}
+
+fn from_fdcan_id(id: fdcan::id::Id) -> Id {
+    match id {
+        fdcan::id::Id::Standard(id) => match StandardId::new(id.as_raw()) {
+            Some(id) => Id::Standard(id),
+            // Not taken: both are 11 bits.
+            None => Id::Standard(StandardId::ZERO),
+        },
+        fdcan::id::Id::Extended(id) => match ExtendedId::new(id.as_raw()) {
+            Some(id) => Id::Extended(id),
+            // Not taken: both are 29 bits.
+            None => Id::Extended(ExtendedId::ZERO),
+        },
+    }
+}
+
+/// The transmit header for a frame: classic format, no bit-rate switching. The fdcan crate
+/// sends a remote frame exactly when the length is 0.
+fn tx_header(frame: &Frame) -> Result<TxFrameHeader, Error> {
+    let len = if frame.remote { 0 } else { frame.dlc };
+    if (frame.remote && frame.dlc != 0) || (!frame.remote && frame.dlc == 0) {
+        return Err(Error::Unsupported);
+    }
+    Ok(TxFrameHeader {
+        len,
+        frame_format: FrameFormat::Standard,
+        id: to_fdcan_id(frame.id),
+        bit_rate_switching: false,
+        marker: None,
+    })
+}
+
+/// The frame a transmit buffer held, from its header and data words (as the fdcan crate
+/// wrote them: the bytes in memory order).
+fn displaced_frame(header: TxFrameHeader, words: &[u32]) -> Option<Frame> {
+    let id = from_fdcan_id(header.id);
+    if header.len == 0 {
+        return <Frame as embedded_can::Frame>::new_remote(id, 0);
+    }
+    let mut bytes = [0u8; 8];
+    for (chunk, word) in bytes.chunks_mut(4).zip(words) {
+        chunk.copy_from_slice(&word.to_ne_bytes());
+    }
+    let data = bytes.get(..usize::from(header.len))?;
+    <Frame as embedded_can::Frame>::new(id, data)
+}
+
+/// The frame received with `info` and the bytes the FIFO wrote to `data`.
+fn rx_frame(info: &RxFrameInfo, data: &[u8]) -> Result<Frame, Error> {
+    if info.frame_format != FrameFormat::Standard || info.len > 8 {
+        return Err(Error::NotClassic);
+    }
+    let id = from_fdcan_id(info.id);
+    let frame = if info.rtr {
+        <Frame as embedded_can::Frame>::new_remote(id, usize::from(info.len))
+    } else {
+        data.get(..usize::from(info.len))
+            .and_then(|d| <Frame as embedded_can::Frame>::new(id, d))
+    };
+    frame.ok_or(Error::NotClassic)
+}
+
+/// The displaced-frame callback of the fdcan crate's `transmit_preserve`.
+type Keep<'a> = &'a mut dyn FnMut(Mailbox, TxFrameHeader, &[u32]) -> Option<Frame>;
+
+/// What the adapter needs of the controller: the fdcan crate's calls, so that the adapter's
+/// logic can be tested against a stand-in.
+trait Controller {
+    /// Whether a frame waits in a transmit buffer.
+    fn tx_pending(&mut self) -> bool;
+    /// Bus-off, and the last error code (reading it clears it).
+    fn status(&mut self) -> (bool, LastErrorCode);
+    /// `receive0`: a frame from receive FIFO 0, its bytes written to `data`.
+    fn receive0(&mut self, data: &mut [u8]) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible>;
+    /// `transmit_preserve`: `keep` is called with a pending frame the new one displaced.
+    fn transmit(
+        &mut self,
+        header: TxFrameHeader,
+        data: &[u8],
+        keep: Keep<'_>,
+    ) -> nb::Result<Option<Option<Frame>>, Infallible>;
+}
+
+impl<I: fdcan::Instance> Controller for fdcan::FdCan<I, NormalOperationMode> {
+    fn tx_pending(&mut self) -> bool {
+        !self.is_transmitter_idle()
+    }
+
+    fn status(&mut self) -> (bool, LastErrorCode) {
+        let s = self.get_protocol_status();
+        (s.bus_off_status, s.last_error)
+    }
+
+    fn receive0(&mut self, data: &mut [u8]) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible> {
+        fdcan::FdCan::receive0(self, data)
+    }
+
+    fn transmit(
+        &mut self,
+        header: TxFrameHeader,
+        data: &[u8],
+        mut keep: Keep<'_>,
+    ) -> nb::Result<Option<Option<Frame>>, Infallible> {
+        self.transmit_preserve(header, data, &mut keep)
+    }
+}
+
+/// The adapter over any [`Controller`]: the fdcan crate's, or a test's stand-in.
+struct Adapter<C> {
+    can: C,
+    /// A frame that came with an overrun: delivered by the next `receive`.
+    held: Option<Frame>,
+    /// Whether the controller was bus-off at the last look.
+    bus_off: bool,
+}
+
+impl<C> Adapter<C> {
+    fn new(can: C) -> Self {
+        Adapter {
+            can,
+            held: None,
+            bus_off: false,
+        }
+    }
+}
+
+impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
+    type Frame = Frame;
+    type Error = Error;
+
+    fn transmit(&mut self, frame: &Frame) -> nb::Result<Option<Frame>, Error> {
+        let header = tx_header(frame).map_err(nb::Error::Other)?;
+        // One frame in flight (see the module documentation): the order is kept.
+        if self.can.tx_pending() {
+            return Err(nb::Error::WouldBlock);
+        }
+        let mut keep =
+            |_: Mailbox, header: TxFrameHeader, words: &[u32]| displaced_frame(header, words);
+        match self
+            .can
+            .transmit(header, embedded_can::Frame::data(frame), &mut keep)
+        {
+            // Not with one frame in flight; were a frame displaced, it is handed back for the
+            // driver to queue again.
+            Ok(displaced) => Ok(displaced.flatten()),
+            Err(nb::Error::WouldBlock) => Err(nb::Error::WouldBlock),
+            Err(nb::Error::Other(never)) => match never {},
+        }
+    }
+
+    fn receive(&mut self) -> nb::Result<Frame, Error> {
+        if let Some(frame) = self.held.take() {
+            return Ok(frame);
+        }
+        let (bus_off, lec) = self.can.status();
+        let went_off = bus_off && !self.bus_off;
+        self.bus_off = bus_off;
+        if went_off {
+            return Err(nb::Error::Other(Error::BusOff));
+        }
+        if let Some(e) = lec_error(lec) {
+            return Err(nb::Error::Other(e));
+        }
+        let mut data = [0u8; RX_BUFFER];
+        match self.can.receive0(&mut data) {
+            Ok(ReceiveOverrun::NoOverrun(info)) => rx_frame(&info, &data).map_err(nb::Error::Other),
+            Ok(ReceiveOverrun::Overrun(info)) => {
+                // This frame is good; frames before it were lost. The loss is reported first.
+                self.held = rx_frame(&info, &data).ok();
+                Err(nb::Error::Other(Error::Overrun))
+            }
+            Err(nb::Error::WouldBlock) => Err(nb::Error::WouldBlock),
+            Err(nb::Error::Other(never)) => match never {},
+        }
+    }
+}
+
+/// An STM32 FDCAN in normal operation as an `embedded_can::nb::Can` controller for classic
+/// CAN. See the [module documentation](self) and `boards/stm32h743_fdcan/` in the
+/// repository for a whole program.
+///
+/// ```ignore
+/// // stm32h7xx-hal (feature `can`): configure in ConfigMode (bit timing, a filter storing
+/// // the postback in FIFO 0), then wrap the controller in normal operation.
+/// let can = idu_gimbal::driver::fdcan::FdCan::new(fdcan_in_config_mode.into_normal());
+/// let mut gimbal: idu_gimbal::Gimbal<_> = idu_gimbal::Gimbal::new(can, Config::default());
+/// ```
+pub struct FdCan<I: fdcan::Instance>(Adapter<fdcan::FdCan<I, NormalOperationMode>>);
+
+impl<I: fdcan::Instance> FdCan<I> {
+    /// Wraps a configured controller.
+    pub fn new(can: fdcan::FdCan<I, NormalOperationMode>) -> Self {
+        FdCan(Adapter::new(can))
+    }
+
+    /// The controller, for what the adapter does not wrap (error counters, interrupts).
+    pub fn inner(&mut self) -> &mut fdcan::FdCan<I, NormalOperationMode> {
+        &mut self.0.can
+    }
+
+    /// Gives back the controller (a frame held back by an overrun is dropped).
+    pub fn release(self) -> fdcan::FdCan<I, NormalOperationMode> {
+        self.0.can
+    }
+}
+
+impl<I: fdcan::Instance> embedded_can::nb::Can for FdCan<I> {
+    type Frame = Frame;
+    type Error = Error;
+
+    fn transmit(&mut self, frame: &Frame) -> nb::Result<Option<Frame>, Error> {
+        embedded_can::nb::Can::transmit(&mut self.0, frame)
+    }
+
+    fn receive(&mut self) -> nb::Result<Frame, Error> {
+        embedded_can::nb::Can::receive(&mut self.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{SimConfig, Simulator};
+    use crate::wire::control::{GimbalCommand, Pitch};
+    use crate::wire::ids;
+    use crate::{Config, Gimbal, Instant};
+    use embedded_can::nb::Can;
+    use embedded_can::{Error as _, Frame as _};
+    use std::cell::RefCell;
+    use std::collections::VecDeque;
+    use std::rc::Rc;
+    use std::vec::Vec;
+
+    fn ext(raw: u32) -> Id {
+        Id::Extended(ExtendedId::new(raw).unwrap())
+    }
+
+    fn data_frame(raw: u32, data: &[u8]) -> Frame {
+        Frame::new(ext(raw), data).unwrap()
+    }
+
+    fn rx_info(id: fdcan::id::Id, len: u8, format: FrameFormat, rtr: bool) -> RxFrameInfo {
+        RxFrameInfo {
+            len,
+            frame_format: format,
+            id,
+            rtr,
+            filter_match: None,
+            bit_rate_switching: false,
+            time_stamp: 0,
+        }
+    }
+
+    fn fd_ext(raw: u32) -> fdcan::id::Id {
+        fdcan::id::ExtendedId::new(raw).unwrap().into()
+    }
+
+    /// The fdcan crate and the FDCAN, in memory: three transmit buffers in queue mode (a
+    /// frame goes to the first free buffer; when all are pending, the first holding a
+    /// lower-priority frame is displaced through `keep`, `WouldBlock` when none is; the bus
+    /// sends the lowest ID first and, among equal IDs, the lowest buffer first); receive
+    /// FIFO 0 (`WouldBlock` when empty); the protocol status, whose last error code reads
+    /// back as "no change" once read.
+    #[derive(Default)]
+    struct Chip {
+        mailboxes: [Option<(TxFrameHeader, [u32; 16])>; 3],
+        /// Frames that left the buffers, in order.
+        sent: Vec<Frame>,
+        fifo: VecDeque<(RxFrameInfo, [u8; 64], bool)>,
+        bus_off: bool,
+        lec: Option<LastErrorCode>,
+    }
+
+    fn raw_id(id: fdcan::id::Id) -> u32 {
+        match id {
+            fdcan::id::Id::Standard(id) => u32::from(id.as_raw()) << 18,
+            fdcan::id::Id::Extended(id) => id.as_raw(),
+        }
+    }
+
+    /// The adapter's handle on the chip; the test keeps another.
+    #[derive(Default, Clone)]
+    struct Stub(Rc<RefCell<Chip>>);
+
+    fn adapter() -> (Adapter<Stub>, Rc<RefCell<Chip>>) {
+        let stub = Stub::default();
+        let chip = stub.0.clone();
+        (Adapter::new(stub), chip)
+    }
+
+    impl Chip {
+        /// The bus sends the highest-priority pending frame.
+        fn send_one(&mut self) -> bool {
+            let best = self
+                .mailboxes
+                .iter()
+                .enumerate()
+                .filter_map(|(i, m)| m.map(|(h, _)| (raw_id(h.id), i)))
+                .min();
+            // (raw ID, buffer index): lowest ID, then lowest buffer, as the M_CAN does.
+            let Some((_, i)) = best else { return false };
+            let (h, words) = self.mailboxes[i].take().unwrap();
+            self.sent.push(displaced_frame(h, &words).unwrap());
+            true
+        }
+
+        fn push_rx(&mut self, frame: &Frame, overrun: bool) {
+            let mut data = [0u8; 64];
+            data[..frame.dlc()].copy_from_slice(frame.data());
+            let info = rx_info(
+                to_fdcan_id(frame.id()),
+                frame.dlc() as u8,
+                FrameFormat::Standard,
+                frame.is_remote_frame(),
+            );
+            self.fifo.push_back((info, data, overrun));
+        }
+    }
+
+    impl Controller for Stub {
+        fn tx_pending(&mut self) -> bool {
+            self.0.borrow().mailboxes.iter().any(Option::is_some)
+        }
+
+        fn status(&mut self) -> (bool, LastErrorCode) {
+            let mut chip = self.0.borrow_mut();
+            let lec = chip.lec.take().unwrap_or(LastErrorCode::NoChange);
+            (chip.bus_off, lec)
+        }
+
+        fn receive0(
+            &mut self,
+            data: &mut [u8],
+        ) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible> {
+            let popped = self.0.borrow_mut().fifo.pop_front();
+            let (info, bytes, overrun) = popped.ok_or(nb::Error::WouldBlock)?;
+            data[..info.len as usize].copy_from_slice(&bytes[..info.len as usize]);
+            Ok(if overrun {
+                ReceiveOverrun::Overrun(info)
+            } else {
+                ReceiveOverrun::NoOverrun(info)
+            })
+        }
+
+        fn transmit(
+            &mut self,
+            header: TxFrameHeader,
+            data: &[u8],
+            keep: Keep<'_>,
+        ) -> nb::Result<Option<Option<Frame>>, Infallible> {
+            // The bytes in memory order, as the fdcan crate writes them.
+            let mut bytes = [0u8; 64];
+            bytes[..usize::from(header.len)].copy_from_slice(&data[..usize::from(header.len)]);
+            let mut words = [0u32; 16];
+            for (w, c) in words.iter_mut().zip(bytes.chunks(4)) {
+                *w = u32::from_ne_bytes(c.try_into().unwrap());
+            }
+            let mut chip = self.0.borrow_mut();
+            if let Some(free) = chip.mailboxes.iter().position(Option::is_none) {
+                chip.mailboxes[free] = Some((header, words));
+                return Ok(None);
+            }
+            let boxes = [Mailbox::_0, Mailbox::_1, Mailbox::_2];
+            for (i, mailbox) in boxes.into_iter().enumerate() {
+                let (old, old_words) = chip.mailboxes[i].unwrap();
+                if raw_id(header.id) < raw_id(old.id) {
+                    let displaced = keep(mailbox, old, &old_words);
+                    chip.mailboxes[i] = Some((header, words));
+                    return Ok(Some(displaced));
+                }
+            }
+            Err(nb::Error::WouldBlock)
+        }
+    }
+
+    #[test]
+    fn last_error_codes_map_to_their_kinds() {
+        let table = [
+            (LastErrorCode::NoError, None),
+            (LastErrorCode::NoChange, None),
+            (
+                LastErrorCode::StuffError,
+                Some((Error::Stuff, ErrorKind::Stuff)),
+            ),
+            (
+                LastErrorCode::FormError,
+                Some((Error::Form, ErrorKind::Form)),
+            ),
+            (
+                LastErrorCode::AckError,
+                Some((Error::Acknowledge, ErrorKind::Acknowledge)),
+            ),
+            (
+                LastErrorCode::Bit1Error,
+                Some((Error::Bit1, ErrorKind::Bit)),
+            ),
+            (
+                LastErrorCode::Bit0Error,
+                Some((Error::Bit0, ErrorKind::Bit)),
+            ),
+            (LastErrorCode::CRCError, Some((Error::Crc, ErrorKind::Crc))),
+        ];
+        for (lec, expected) in table {
+            let got = lec_error(lec).map(|e| (e, e.kind()));
+            assert_eq!(got, expected, "{lec:?}");
+        }
+        assert_eq!(Error::Overrun.kind(), ErrorKind::Overrun);
+        for e in [Error::BusOff, Error::Unsupported, Error::NotClassic] {
+            assert_eq!(e.kind(), ErrorKind::Other, "{e:?}");
+        }
+    }
+
+    #[test]
+    fn transmit_headers_are_classic_with_the_frame_s_id_and_length() {
+        let h = tx_header(&data_frame(ids::CONTROL, &[1, 2, 3, 4, 5, 6, 7, 8])).unwrap();
+        assert_eq!(h.len, 8);
+        assert_eq!(h.frame_format, FrameFormat::Standard);
+        assert!(!h.bit_rate_switching);
+        assert_eq!(h.id, fd_ext(ids::CONTROL));
+        let std_id = StandardId::new(0x123).unwrap();
+        let h = tx_header(&Frame::new(std_id, &[9; 3]).unwrap()).unwrap();
+        assert_eq!(h.len, 3);
+        assert_eq!(
+            h.id,
+            fdcan::id::Id::Standard(fdcan::id::StandardId::new(0x123).unwrap())
+        );
+        // A remote frame is length 0 to the fdcan crate; anything it cannot say is refused.
+        let remote = Frame::new_remote(ext(5), 0).unwrap();
+        assert_eq!(tx_header(&remote).unwrap().len, 0);
+        let remote3 = Frame::new_remote(ext(5), 3).unwrap();
+        assert_eq!(tx_header(&remote3).err(), Some(Error::Unsupported));
+        assert_eq!(
+            tx_header(&data_frame(5, &[])).err(),
+            Some(Error::Unsupported)
+        );
+    }
+
+    #[test]
+    fn received_frames_convert_and_fd_frames_are_refused() {
+        let data = [0xA5u8; 64];
+        let f = rx_frame(
+            &rx_info(fd_ext(ids::POSTBACK), 8, FrameFormat::Standard, false),
+            &data,
+        )
+        .unwrap();
+        assert_eq!(f, data_frame(ids::POSTBACK, &[0xA5; 8]));
+        let f = rx_frame(&rx_info(fd_ext(7), 2, FrameFormat::Standard, true), &data).unwrap();
+        assert!(f.is_remote_frame());
+        assert_eq!((f.dlc(), f.data()), (2, &[][..]));
+        for (len, format) in [(8, FrameFormat::Fdcan), (12, FrameFormat::Standard)] {
+            assert_eq!(
+                rx_frame(&rx_info(fd_ext(7), len, format, false), &data),
+                Err(Error::NotClassic)
+            );
+        }
+    }
+
+    #[test]
+    fn receive_reports_errors_then_frames_and_would_block_when_empty() {
+        let (mut can, chip) = adapter();
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        let f = data_frame(ids::POSTBACK, &[1; 8]);
+        chip.borrow_mut().push_rx(&f, false);
+        chip.borrow_mut().lec = Some(LastErrorCode::AckError);
+        // The error first (its code is cleared by the read), then the frame.
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::Acknowledge)));
+        assert_eq!(can.receive(), Ok(f));
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        // An overrun: the loss, then the frame that came with it.
+        let g = data_frame(ids::POSTBACK, &[2; 8]);
+        chip.borrow_mut().push_rx(&g, true);
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::Overrun)));
+        assert_eq!(can.receive(), Ok(g));
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        // Bus-off is reported once, when it happens, and again after a recovery.
+        chip.borrow_mut().bus_off = true;
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::BusOff)));
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        chip.borrow_mut().bus_off = false;
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        chip.borrow_mut().bus_off = true;
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::BusOff)));
+    }
+
+    #[test]
+    fn transmit_keeps_one_frame_in_flight() {
+        let (mut can, chip) = adapter();
+        let a = data_frame(0x100, &[1, 2, 3, 4, 5, 6, 7, 8]);
+        assert_eq!(can.transmit(&a), Ok(None));
+        // Pending: even a higher-priority frame waits (no displacement, no reordering).
+        let b = data_frame(0x10, &[9; 8]);
+        assert_eq!(can.transmit(&b), Err(nb::Error::WouldBlock));
+        assert!(chip.borrow_mut().send_one());
+        assert_eq!(can.transmit(&b), Ok(None));
+        assert!(chip.borrow_mut().send_one());
+        assert_eq!(chip.borrow().sent, [a, b]);
+        // Short frames survive the trip through the buffer's words.
+        let short = data_frame(0x300, &[0xAB, 0xCD, 0xEF]);
+        assert_eq!(can.transmit(&short), Ok(None));
+        assert!(chip.borrow_mut().send_one());
+        assert_eq!(chip.borrow().sent.last(), Some(&short));
+        // What the controller cannot carry is an error, not a silent change.
+        assert_eq!(
+            can.transmit(&Frame::new_remote(ext(1), 2).unwrap()),
+            Err(nb::Error::Other(Error::Unsupported))
+        );
+    }
+
+    #[test]
+    fn displaced_frames_are_rebuilt_from_the_buffer_words() {
+        let (mut stub, chip) = {
+            let s = Stub::default();
+            let c = s.0.clone();
+            (s, c)
+        };
+        let frames: Vec<Frame> = (0..3u8)
+            .map(|i| data_frame(0x100 + u32::from(i), &[i, 1, 2, 3, 4, 5, 6, 0xF0 | i]))
+            .collect();
+        let mut keep = |_: Mailbox, h: TxFrameHeader, w: &[u32]| displaced_frame(h, w);
+        for f in &frames {
+            let h = tx_header(f).unwrap();
+            assert_eq!(stub.transmit(h, f.data(), &mut keep), Ok(None));
+        }
+        let urgent = data_frame(0x10, &[7; 8]);
+        let h = tx_header(&urgent).unwrap();
+        assert_eq!(
+            stub.transmit(h, urgent.data(), &mut keep),
+            Ok(Some(Some(frames[0])))
+        );
+        let remote = Frame::new_remote(ext(0x1234), 0).unwrap();
+        let h = tx_header(&remote).unwrap();
+        assert_eq!(displaced_frame(h, &[0; 16]), Some(remote));
+        assert_eq!(chip.borrow().mailboxes.iter().flatten().count(), 3);
+    }
+
+    #[test]
+    fn the_gimbal_driver_runs_over_the_adapter() {
+        let (can, chip) = adapter();
+        let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
+        // Six control commands at once: one goes out at a time, the rest wait their turn.
+        let commands: Vec<GimbalCommand> = (0..6)
+            .map(|i| GimbalCommand::Pitch(Pitch::from_deci(-100 * i).unwrap()))
+            .collect();
+        for &c in &commands {
+            gimbal.send(c).unwrap();
+        }
+        let mut busy = 0;
+        for t in 0..1600u32 {
+            let now = Instant::from_millis(t);
+            gimbal.poll(now).unwrap();
+            // Frames left waiting: the adapter answered WouldBlock.
+            if gimbal.link().has_transmit() {
+                busy += 1;
+            }
+            // One frame a millisecond leaves the controller; the simulator takes it and its
+            // postbacks arrive in the FIFO.
+            let mut c = chip.borrow_mut();
+            if c.send_one() {
+                let f = *c.sent.last().unwrap();
+                let Id::Extended(id) = f.id() else {
+                    panic!("standard ID sent")
+                };
+                sim.receive(id.as_raw(), f.data(), now).unwrap();
+            }
+            sim.poll(now);
+            while let Some(f) = sim.pop_frame() {
+                c.push_rx(&data_frame(f.id, &f.data), false);
+            }
+        }
+        assert!(busy > 0, "the adapter never refused a frame");
+        let sent: Vec<Frame> = chip.borrow().sent.clone();
+        let expected: Vec<Frame> = commands
+            .iter()
+            .map(|c| {
+                let f = crate::wire::control::Command::from(*c).to_frame();
+                data_frame(f.id, &f.data)
+            })
+            .collect();
+        // Same ID: the controller keeps their order, nothing is displaced or lost.
+        assert_eq!(sent, expected);
+        let stats = gimbal.stats();
+        assert_eq!(stats.driver_errors.total(), 0);
+        assert_eq!(stats.link.frames_sent, 6);
+        assert_eq!(stats.link.postbacks, 3);
+        assert_eq!(stats.link.frames_received, 12);
+        assert!(gimbal.is_link_up());
+    }
+
+    #[test]
+    fn frames_of_one_id_keep_their_order() {
+        let (can, chip) = adapter();
+        let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        // Five text frames of one ID and two commands of another, queued at once.
+        let text = b"0123456789abcdefghijklmnopqrstuvwxyz-+*/";
+        gimbal.send_text(text).unwrap();
+        gimbal
+            .send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
+            .unwrap();
+        gimbal
+            .send(GimbalCommand::Zoom(crate::wire::control::Zoom::Stop))
+            .unwrap();
+        for t in 0..20 {
+            gimbal.poll(Instant::from_millis(t)).unwrap();
+            chip.borrow_mut().send_one();
+        }
+        let sent: Vec<(u32, [u8; 8])> = chip
+            .borrow()
+            .sent
+            .iter()
+            .map(|f| {
+                let Id::Extended(id) = f.id() else {
+                    panic!("standard ID sent")
+                };
+                (id.as_raw(), f.data().try_into().unwrap())
+            })
+            .collect();
+        let zoom = |z| {
+            crate::wire::control::Command::from(GimbalCommand::Zoom(z))
+                .to_frame()
+                .data
+        };
+        let mut expected = std::vec![
+            (ids::CONTROL, zoom(crate::wire::control::Zoom::In)),
+            (ids::CONTROL, zoom(crate::wire::control::Zoom::Stop)),
+        ];
+        for (i, chunk) in text.chunks(8).enumerate() {
+            let id = if i == 4 { ids::TEXT_END } else { ids::TEXT };
+            expected.push((id, chunk.try_into().unwrap()));
+        }
+        assert_eq!(sent, expected);
+        assert_eq!(gimbal.stats().link.frames_sent, 7);
+        assert_eq!(gimbal.stats().driver_errors.total(), 0);
+    }
+}
