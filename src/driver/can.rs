@@ -179,16 +179,19 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         }
         self.link.poll(now);
         if self.link.has_transmit() {
-            if let Some(e) = self.transmit() {
-                first_error.get_or_insert(e);
-            }
+            // A tail call: the result is `transmit`'s.
+            return self.transmit(first_error);
         }
         first_error.map_or(Ok(()), Err)
     }
 
-    /// Out of line: an idle poll then saves only the registers the receive loop needs.
+    /// Transmits until the queue is empty or the CAN driver is busy; the poll's result
+    /// given `first_error`, the first error its receive loop saw (it wins over any seen
+    /// here). Out of line: an idle poll then saves only the registers the receive loop
+    /// needs.
     #[inline(never)]
-    fn transmit(&mut self) -> Option<DriverError> {
+    fn transmit(&mut self, first_error: Option<DriverError>) -> Result<(), DriverError> {
+        let fail = |kind| Err(first_error.unwrap_or(DriverError(kind)));
         while let Some(frame) = self.link.next_transmit() {
             let Some(can_frame) =
                 ExtendedId::new(frame.id).and_then(|id| C::Frame::new(id, &frame.data))
@@ -196,7 +199,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                 // Every queued frame is a valid 29-bit extended frame of 8 bytes; a CAN driver
                 // whose frame type refuses one cannot send it. Counted, never silent.
                 self.errors.count(ErrorKind::Other);
-                return Some(DriverError(ErrorKind::Other));
+                return fail(ErrorKind::Other);
             };
             match self.can.transmit(&can_frame) {
                 Ok(displaced) => {
@@ -210,17 +213,17 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                 }
                 Err(nb::Error::WouldBlock) => {
                     self.link.transmit_refused(frame);
-                    return None;
+                    break;
                 }
                 Err(nb::Error::Other(e)) => {
                     let kind = embedded_can::Error::kind(&e);
                     self.errors.count(kind);
                     self.link.transmit_refused(frame);
-                    return Some(DriverError(kind));
+                    return fail(kind);
                 }
             }
         }
-        None
+        first_error.map_or(Ok(()), Err)
     }
 
     /// Queues a command (see [`Link::send`]).

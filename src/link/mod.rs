@@ -854,6 +854,20 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// it with [`Link::transmit_done`] or [`Link::transmit_refused`].
     #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
+        // Inline: nothing waiting, or a control frame (what most polls that send send).
+        if !self.has_transmit() {
+            return None;
+        }
+        if let Some(data) = self.tx.pop_control() {
+            return Some(Frame::new(ids::CONTROL, data));
+        }
+        self.next_transmit_other()
+    }
+
+    /// [`Link::next_transmit`] past the control frames, out of line: a driver's transmit
+    /// loop then keeps nothing of the vehicle values or the text FIFO in registers.
+    #[inline(never)]
+    fn next_transmit_other(&mut self) -> Option<Frame> {
         loop {
             let frame = match self.tx.pop()? {
                 queue::Next::Control(data) => Some(Frame::new(ids::CONTROL, data)),
@@ -880,9 +894,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The driver accepted the frame last taken. `displaced` is a frame it handed back
     /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
+    #[inline]
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
-        let Some(frame) = displaced else { return };
+        if let Some(frame) = displaced {
+            self.displaced(frame);
+        }
+    }
+
+    /// A frame the driver handed back (see [`Link::transmit_done`]), out of line: rare.
+    #[inline(never)]
+    fn displaced(&mut self, frame: Frame) {
         let requeued = self.requeue(frame);
         if requeued != Requeued::Foreign {
             // The displaced frame had been counted as sent; it is not yet.
