@@ -855,13 +855,23 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
         // Inline: nothing waiting, or a control frame (what most polls that send send).
+        if let Some(data) = self.next_control() {
+            return Some(Frame::new(ids::CONTROL, data));
+        }
         if !self.has_transmit() {
             return None;
         }
-        if let Some(data) = self.tx.pop_control() {
-            return Some(Frame::new(ids::CONTROL, data));
-        }
         self.next_transmit_other()
+    }
+
+    /// [`Link::next_transmit`] when it is a control frame (ID [`ids::CONTROL`]): its data.
+    /// `None` when nothing waits or the next frame is of another class.
+    #[inline]
+    pub(crate) fn next_control(&mut self) -> Option<[u8; 8]> {
+        if !self.has_transmit() {
+            return None;
+        }
+        self.tx.pop_control()
     }
 
     /// [`Link::next_transmit`] past the control frames, out of line: a driver's transmit
