@@ -313,6 +313,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     }
 
     /// The next event (see [`Event`] for how events wait).
+    #[inline]
     pub fn next_event(&mut self) -> Option<Event> {
         self.link.next_event()
     }

@@ -369,6 +369,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The next event; see [`Event`] for how events wait. Nothing is ever dropped: an
     /// event of a kind already waiting merges with it.
+    #[inline]
     pub fn next_event(&mut self) -> Option<Event> {
         self.status.take()
     }
@@ -429,7 +430,14 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     pub fn receive_postback(&mut self, postback: Postback, now: Instant) {
         // The health deadline follows this postback: earlier than the one the idle fast
         // path knows of when the link was down (none) or `now` is behind the last postback.
-        self.wake_by(now.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
+        // While the link is up the fast path wakes for the last postback's deadline (the
+        // full poll offers it, or this call did when the link came up), and a postback at
+        // or after that one only moves it later: no need to cut the interval then.
+        let later =
+            self.status.is_up() && self.latest.is_some_and(|(_, at)| now.is_at_or_after(at));
+        if !later {
+            self.wake_by(now.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
+        }
         self.latest = Some((postback, now));
         self.status.set_up(true);
         self.status.raise(Event::Postback);
