@@ -169,7 +169,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     match <&[u8; 8]>::try_from(data) {
                         // In registers: the frame need not be copied to the stack.
                         Ok(d) => self.link.receive_postback_u64(now, u64::from_le_bytes(*d)),
-                        Err(_) => self.link.receive_postback_frame(data, now),
+                        Err(_) => self.link.receive_malformed(),
                     }
                 }
                 Ok(_) => self.link.receive_ignored(),

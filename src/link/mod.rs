@@ -396,6 +396,15 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
+    /// [`Link::receive_postback_frame`] for a frame whose length is not 8: counted as
+    /// malformed. Out of line, taking only the link: a driver's receive loop then keeps
+    /// nothing in registers for it.
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn receive_malformed(&mut self) {
+        self.assembler.malformed();
+    }
+
     /// [`Link::receive_postback_frame`] for a frame of 8 bytes (every good one), its data
     /// read as a little-endian `u64`: passed in two registers, so that a driver need not
     /// copy its frame to memory. Out of line: the driver's poll then keeps few registers,
