@@ -19,7 +19,8 @@
 //! * A measurement during which SysTick wrapped (COUNTFLAG set) aborts the run.
 //!
 //! Exit status 0 when every budget is met (issue 4's floors, issue 7's goals whichever is
-//! tighter, and issue 16's goals that are met), 1 otherwise (or on any fault).
+//! tighter, and issue 16's goals that are met: a foreign frame, a postback frame, send +
+//! poll), 1 otherwise (or on any fault).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -248,8 +249,11 @@ mod fw {
     const GOAL_WORST_FRAME: f32 = 350.0;
     const GOAL_FOREIGN_ID: f32 = 12.0;
     const GOAL_CRC_PER_BYTE: f32 = 6.0;
-    /// Issue 16's goals that are met, enforced from then on.
+    /// Issue 16's goals that are met, enforced from then on (the per-frame one is tighter
+    /// than issue 4's budget, which it replaces).
     const GOAL_DRIVER_FOREIGN_FRAME: f32 = 25.0;
+    const GOAL_DRIVER_RX_FRAME: f32 = 99.0;
+    const GOAL_SEND_POLL: f32 = 100.0;
 
     /// Messages per batch in the amortized postback measurements.
     const MESSAGES: u32 = 512;
@@ -425,7 +429,7 @@ mod fw {
             "driver: per received postback frame, amortized (Gimbal::poll, marginal)",
             per_frame,
             "",
-            BUDGET_RX_FRAME,
+            GOAL_DRIVER_RX_FRAME.min(BUDGET_RX_FRAME),
         );
         table.add(
             "driver: poll receiving one whole postback (4 frames), event taken",
@@ -450,10 +454,11 @@ mod fw {
             "",
             BUDGET_IDLE_POLL,
         );
-        table.add(
+        table.budget(
             "driver: send one command + poll that transmits it",
             send_poll - idle_vehicle,
             "",
+            GOAL_SEND_POLL,
         );
         table.budget(
             "driver: per frame on a foreign ID (8 per poll, marginal)",

@@ -21,6 +21,14 @@ const POSTBACK_ID: Id = match ExtendedId::new(crate::wire::ids::POSTBACK) {
     None => Id::Extended(ExtendedId::ZERO),
 };
 
+/// The ID of control frames, checked once (at compile time): the transmit path builds the
+/// CAN driver's frame with it and need not check it again.
+const CONTROL_ID: ExtendedId = match ExtendedId::new(crate::wire::ids::CONTROL) {
+    Some(id) => id,
+    // Not taken: the ID fits in 29 bits (a test checks the constant).
+    None => ExtendedId::ZERO,
+};
+
 /// CAN driver errors by kind.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -161,7 +169,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     match <&[u8; 8]>::try_from(data) {
                         // In registers: the frame need not be copied to the stack.
                         Ok(d) => self.link.receive_postback_u64(now, u64::from_le_bytes(*d)),
-                        Err(_) => self.link.receive_postback_frame(data, now),
+                        Err(_) => self.link.receive_malformed(),
                     }
                 }
                 Ok(_) => self.link.receive_ignored(),
@@ -179,9 +187,8 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         }
         self.link.poll(now);
         if self.link.has_transmit() {
-            if let Some(e) = self.transmit() {
-                first_error.get_or_insert(e);
-            }
+            // A tail call: the result is `transmit`'s.
+            return self.transmit(first_error);
         }
         first_error.map_or(Ok(()), Err)
     }
@@ -203,41 +210,77 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         }
     }
 
-    /// Out of line: an idle poll then saves only the registers the receive loop needs.
+    /// Transmits until the queue is empty or the CAN driver is busy; the poll's result
+    /// given `first_error`, the first error its receive loop saw (it wins over any seen
+    /// here). Out of line: an idle poll then saves only the registers the receive loop
+    /// needs.
     #[inline(never)]
-    fn transmit(&mut self) -> Option<DriverError> {
-        while let Some(frame) = self.link.next_transmit() {
-            let Some(can_frame) =
-                ExtendedId::new(frame.id).and_then(|id| C::Frame::new(id, &frame.data))
-            else {
-                // Every queued frame is a valid 29-bit extended frame of 8 bytes; a CAN driver
-                // whose frame type refuses one cannot send it. Counted, never silent.
-                self.errors.count(ErrorKind::Other);
-                return Some(DriverError(ErrorKind::Other));
+    fn transmit(&mut self, first_error: Option<DriverError>) -> Result<(), DriverError> {
+        loop {
+            // A control frame (what most polls that send send) with its ID known valid;
+            // the others, in the order of `Link::next_transmit`, with theirs checked.
+            let (id, data) = if let Some(data) = self.link.next_control() {
+                (CONTROL_ID, data)
+            } else if let Some(frame) = self.link.next_transmit() {
+                let Some(id) = ExtendedId::new(frame.id) else {
+                    // Every queued frame has a valid 29-bit extended ID.
+                    return Err(first_error.unwrap_or(self.unsendable()));
+                };
+                (id, frame.data)
+            } else {
+                return first_error.map_or(Ok(()), Err);
             };
-            match self.can.transmit(&can_frame) {
-                Ok(displaced) => {
-                    let displaced = displaced.and_then(|d| match d.id() {
-                        Id::Extended(id) => <[u8; 8]>::try_from(d.data())
-                            .ok()
-                            .map(|data| Frame::new(id.as_raw(), data)),
-                        Id::Standard(_) => None,
-                    });
-                    self.link.transmit_done(displaced);
-                }
-                Err(nb::Error::WouldBlock) => {
-                    self.link.transmit_refused(frame);
-                    return None;
-                }
-                Err(nb::Error::Other(e)) => {
-                    let kind = embedded_can::Error::kind(&e);
-                    self.errors.count(kind);
-                    self.link.transmit_refused(frame);
-                    return Some(DriverError(kind));
-                }
+            if let Err(e) = self.transmit_frame(id, data) {
+                return first_error.or(e).map_or(Ok(()), Err);
             }
         }
-        None
+    }
+
+    /// Hands one frame, just taken from the link, to the CAN driver and reports to the
+    /// link. `Err` ends the transmission: the CAN driver is busy (`None`; the frame is back
+    /// in the queue) or failed.
+    #[inline(always)]
+    fn transmit_frame(&mut self, id: ExtendedId, data: [u8; 8]) -> Result<(), Option<DriverError>> {
+        let Some(can_frame) = C::Frame::new(id, &data) else {
+            // A CAN driver whose frame type refuses an extended frame of 8 bytes cannot
+            // send it.
+            return Err(Some(self.unsendable()));
+        };
+        match self.can.transmit(&can_frame) {
+            Ok(displaced) => {
+                let displaced = displaced.and_then(|d| match d.id() {
+                    Id::Extended(id) => <[u8; 8]>::try_from(d.data())
+                        .ok()
+                        .map(|data| Frame::new(id.as_raw(), data)),
+                    Id::Standard(_) => None,
+                });
+                self.link.transmit_done(displaced);
+                Ok(())
+            }
+            Err(e) => Err(self.refused(Frame::new(id.as_raw(), data), e)),
+        }
+    }
+
+    /// The CAN driver did not take `frame`: it goes back to the queue, and an error is
+    /// counted. Out of line: rare.
+    #[inline(never)]
+    fn refused(&mut self, frame: Frame, e: nb::Error<C::Error>) -> Option<DriverError> {
+        self.link.transmit_refused(frame);
+        match e {
+            nb::Error::WouldBlock => None,
+            nb::Error::Other(e) => {
+                let kind = embedded_can::Error::kind(&e);
+                self.errors.count(kind);
+                Some(DriverError(kind))
+            }
+        }
+    }
+
+    /// A frame the CAN driver's frame type cannot represent: counted, never silent.
+    #[cold]
+    fn unsendable(&mut self) -> DriverError {
+        self.errors.count(ErrorKind::Other);
+        DriverError(ErrorKind::Other)
     }
 
     /// Queues a command (see [`Link::send`]).
@@ -287,6 +330,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     }
 
     /// The next event (see [`Event`] for how events wait).
+    #[inline]
     pub fn next_event(&mut self) -> Option<Event> {
         self.link.next_event()
     }
@@ -485,6 +529,14 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_id_constant_is_the_control_id() {
+        assert_eq!(
+            CONTROL_ID,
+            ExtendedId::new(crate::wire::ids::CONTROL).unwrap()
+        );
+    }
 
     #[test]
     fn postback_id_constant_is_the_postback_id() {

@@ -398,6 +398,7 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
     }
 
     /// The next event (see [`Event`] for how events wait).
+    #[inline]
     pub fn next_event(&mut self) -> Option<Event> {
         self.link.link_mut().next_event()
     }

@@ -102,8 +102,29 @@ impl Status {
         };
     }
 
-    /// Takes the next event.
+    /// Takes the next event. In line, and what an application's event loop meets most
+    /// (nothing, or a postback) is two tests of the flags; the rest out of line.
+    #[inline]
     pub(crate) fn take(&mut self) -> Option<Event> {
+        let f = self.flags;
+        // A transition to tell: the state differs from the one last told (`TOLD_UP` is
+        // the bit above `UP`), or the link left that state and came back.
+        let transition = ((f ^ (f >> 1)) & UP) | (f & RETURNED);
+        if transition == 0 {
+            if f & POSTBACK != 0 {
+                self.flags = f & !POSTBACK;
+                return Some(Event::Postback);
+            }
+            if f & EVENTS == 0 {
+                return None;
+            }
+        }
+        self.take_slow()
+    }
+
+    /// [`Status::take`], every case.
+    #[inline(never)]
+    fn take_slow(&mut self) -> Option<Event> {
         let told = self.told_up();
         if self.is_up() != told || self.flags & RETURNED != 0 {
             // Tell the change from the state last told: the net change, or the first leg of

@@ -369,6 +369,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The next event; see [`Event`] for how events wait. Nothing is ever dropped: an
     /// event of a kind already waiting merges with it.
+    #[inline]
     pub fn next_event(&mut self) -> Option<Event> {
         self.status.take()
     }
@@ -393,6 +394,15 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             Ok(d) => self.receive_postback_u64(now, u64::from_le_bytes(*d)),
             Err(_) => self.assembler.malformed(),
         }
+    }
+
+    /// [`Link::receive_postback_frame`] for a frame whose length is not 8: counted as
+    /// malformed. Out of line, taking only the link: a driver's receive loop then keeps
+    /// nothing in registers for it.
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn receive_malformed(&mut self) {
+        self.assembler.malformed();
     }
 
     /// [`Link::receive_postback_frame`] for a frame of 8 bytes (every good one), its data
@@ -429,7 +439,14 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     pub fn receive_postback(&mut self, postback: Postback, now: Instant) {
         // The health deadline follows this postback: earlier than the one the idle fast
         // path knows of when the link was down (none) or `now` is behind the last postback.
-        self.wake_by(now.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
+        // While the link is up the fast path wakes for the last postback's deadline (the
+        // full poll offers it, or this call did when the link came up), and a postback at
+        // or after that one only moves it later: no need to cut the interval then.
+        let later =
+            self.status.is_up() && self.latest.is_some_and(|(_, at)| now.is_at_or_after(at));
+        if !later {
+            self.wake_by(now.add_millis(u32::from(self.config.link_timeout_ms).saturating_add(1)));
+        }
         self.latest = Some((postback, now));
         self.status.set_up(true);
         self.status.raise(Event::Postback);
@@ -913,6 +930,30 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// it with [`Link::transmit_done`] or [`Link::transmit_refused`].
     #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
+        // Inline: nothing waiting, or a control frame (what most polls that send send).
+        if let Some(data) = self.next_control() {
+            return Some(Frame::new(ids::CONTROL, data));
+        }
+        if !self.has_transmit() {
+            return None;
+        }
+        self.next_transmit_other()
+    }
+
+    /// [`Link::next_transmit`] when it is a control frame (ID [`ids::CONTROL`]): its data.
+    /// `None` when nothing waits or the next frame is of another class.
+    #[inline]
+    pub(crate) fn next_control(&mut self) -> Option<[u8; 8]> {
+        if !self.has_transmit() {
+            return None;
+        }
+        self.tx.pop_control()
+    }
+
+    /// [`Link::next_transmit`] past the control frames, out of line: a driver's transmit
+    /// loop then keeps nothing of the vehicle values or the text FIFO in registers.
+    #[inline(never)]
+    fn next_transmit_other(&mut self) -> Option<Frame> {
         loop {
             let frame = match self.tx.pop()? {
                 queue::Next::Control(data) => Some(Frame::new(ids::CONTROL, data)),
@@ -939,9 +980,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// The driver accepted the frame last taken. `displaced` is a frame it handed back
     /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
+    #[inline]
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
-        let Some(frame) = displaced else { return };
+        if let Some(frame) = displaced {
+            self.displaced(frame);
+        }
+    }
+
+    /// A frame the driver handed back (see [`Link::transmit_done`]), out of line: rare.
+    #[inline(never)]
+    fn displaced(&mut self, frame: Frame) {
         let requeued = self.requeue(frame);
         if requeued != Requeued::Foreign {
             // The displaced frame had been counted as sent; it is not yet.

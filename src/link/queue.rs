@@ -15,7 +15,6 @@
 //! `T` are at most 255 (checked at compile time).
 
 use super::ring::Ring;
-use crate::wire::control::{Command, GimbalCommand, Rate};
 use crate::wire::ids;
 
 /// The priority class of a frame.
@@ -175,6 +174,14 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         Ok(())
     }
 
+    /// Takes the first control frame, if one waits: what [`TxQueue::pop`] takes first.
+    #[inline]
+    pub(crate) fn pop_control(&mut self) -> Option<[u8; 8]> {
+        let d = self.control.pop_front()?;
+        self.waiting -= 1;
+        Some(d)
+    }
+
     /// Takes what leaves next.
     #[inline]
     pub(crate) fn pop(&mut self) -> Option<Next> {
@@ -250,9 +257,13 @@ const VEHICLE: u8 = 0b0111;
 /// The zero-rate frame's bit in [`TxQueue::flags`].
 const ZERO_RATE: u8 = 0b1000;
 
+/// The data of the zero-rate frame: `Command::Gimbal(GimbalCommand::Rate(Rate::ZERO))`
+/// encoded (a test checks it), a constant so that comparing with it calls nothing.
+const ZERO_RATE_DATA: [u8; 8] = [0x0F, 0x04, 0, 0, 0, 0, 0, 0];
+
 /// The data of the zero-rate frame.
 pub(crate) fn zero_rate() -> [u8; 8] {
-    Command::from(GimbalCommand::Rate(Rate::ZERO)).encode()
+    ZERO_RATE_DATA
 }
 
 /// What happened to a frame offered back to the queue.
@@ -271,6 +282,7 @@ pub(crate) enum Requeued {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::wire::control::{Command, GimbalCommand, Rate};
     use std::vec::Vec;
 
     fn text(tag: u8, last: bool) -> TextSlot {
@@ -338,6 +350,14 @@ mod tests {
         assert_eq!(8 * size_of::<[u8; 8]>() + 8 * size_of::<TextSlot>(), 136);
         // Beyond the slots: two bytes of ring indices per FIFO, the flags, the count.
         assert_eq!(size_of::<TxQueue<8, 8>>(), 136 + 8);
+    }
+
+    #[test]
+    fn zero_rate_data_is_the_zero_rate_command() {
+        assert_eq!(
+            zero_rate(),
+            Command::from(GimbalCommand::Rate(Rate::ZERO)).encode()
+        );
     }
 
     #[test]

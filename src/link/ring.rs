@@ -40,10 +40,25 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         N - self.len()
     }
 
-    /// `i` reduced into `0..N`, for `i < 2 * N` (no division).
+    /// `i` reduced into `0..N`, for `i < 2 * N` (no division). For a power of two (the
+    /// default queues) a mask, which also shows the compiler that the index is in bounds.
+    #[inline(always)]
     fn wrap(i: usize) -> usize {
-        if i >= N {
+        if N.is_power_of_two() {
+            i & (N - 1)
+        } else if i >= N {
             i - N
+        } else {
+            i
+        }
+    }
+
+    /// `i`, for `i < N`: for a power of two masked, which changes nothing but shows the
+    /// compiler that the index is in bounds (no bounds check).
+    #[inline(always)]
+    fn index(i: usize) -> usize {
+        if N.is_power_of_two() {
+            i & (N - 1)
         } else {
             i
         }
@@ -85,7 +100,7 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         if self.len == 0 {
             return None;
         }
-        let x = *self.slots.get(usize::from(self.head))?;
+        let x = *self.slots.get(Self::index(usize::from(self.head)))?;
         self.head = Self::wrap(usize::from(self.head) + 1) as u8;
         self.len -= 1;
         Some(x)

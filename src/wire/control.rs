@@ -787,8 +787,10 @@ pub enum GimbalCommand {
     Rate(Rate),
     /// Start tracking the target in the box (`0x05`).
     StartTracking(TrackingBox),
-    /// Stop tracking (`0x06`).
-    StopTracking,
+    // The variants are in command-code order but for stop tracking, after the angle
+    // commands: the pointing commands then come first and the three angle commands
+    // together, so that `is_pointing` and `Command::encode`'s fast path each test the
+    // variant with one compare.
     /// One-click down 90° (`0x07`).
     LookDown,
     /// Point at this heading (`0x08`, type 1).
@@ -797,6 +799,8 @@ pub enum GimbalCommand {
     Pitch(Pitch),
     /// Set this optical zoom ratio (`0x08`, type 3).
     ZoomRatio(ZoomRatio),
+    /// Stop tracking (`0x06`).
+    StopTracking,
     /// Photo command (`0x10`).
     Photo(Photo),
     /// Video command (`0x11`).
@@ -1142,7 +1146,8 @@ impl Command {
             Command::Gimbal(GimbalCommand::Heading(h)) => (ANGLE_HEADING, h.0),
             Command::Gimbal(GimbalCommand::Pitch(p)) => (ANGLE_PITCH, p.0 as u16),
             Command::Gimbal(GimbalCommand::ZoomRatio(z)) => (ANGLE_ZOOM, z.0),
-            _ => return self.encode_fields(),
+            // As a `u64`: returned in two registers, not through memory.
+            _ => return self.encode_fields().to_le_bytes(),
         };
         // Little-endian: byte 0 the peripheral, 1 CMD 0x08, 2 the angle type, 3-4 the
         // value (field::MODE and field::ANGLE; a test holds this to `encode_fields`).
@@ -1150,16 +1155,17 @@ impl Command {
         (prefix | u64::from(mode) << 16 | u64::from(value) << 24).to_le_bytes()
     }
 
-    /// [`Command::encode`], field by field: every command.
+    /// [`Command::encode`], field by field: every command (the bytes as a little-endian
+    /// `u64`).
     #[inline(never)]
-    fn encode_fields(&self) -> [u8; 8] {
+    fn encode_fields(&self) -> u64 {
         let mut buf = [0u8; Self::LEN];
         put_u8(&mut buf, field::PERIPHERAL, self.peripheral().code());
         match self {
             Command::Gimbal(c) => c.write(&mut buf),
             Command::DualLight(c) => c.write(&mut buf),
         }
-        buf
+        u64::from_le_bytes(buf)
     }
 
     /// Decodes a control frame's data strictly (see the [module docs](self)).
@@ -1977,7 +1983,7 @@ mod tests {
         /// writer does, for every command.
         #[test]
         fn encode_equals_the_field_writer(cmd in arb_command()) {
-            prop_assert_eq!(cmd.encode(), cmd.encode_fields());
+            prop_assert_eq!(cmd.encode(), cmd.encode_fields().to_le_bytes());
         }
 
         #[test]
