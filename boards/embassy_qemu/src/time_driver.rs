@@ -24,7 +24,7 @@ pub const SYSCLK_HZ: u32 = 168_000_000;
 const TICK_HZ: u32 = 1_000;
 
 const _: () = assert!(embassy_time_driver::TICK_HZ == TICK_HZ as u64);
-const _: () = assert!(SYSCLK_HZ % TICK_HZ == 0 && SYSCLK_HZ / TICK_HZ <= 1 << 24);
+const _: () = assert!(SYSCLK_HZ.is_multiple_of(TICK_HZ) && SYSCLK_HZ / TICK_HZ <= 1 << 24);
 
 struct SysTickDriver {
     /// Milliseconds since [`start`]: 64 bits never wrap.
