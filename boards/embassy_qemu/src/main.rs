@@ -181,6 +181,9 @@ fn with_sim<R>(f: impl FnOnce(&Simulator) -> R) -> Option<R> {
 struct LinkTaskStats {
     /// Times it woke up.
     wakeups: u32,
+    /// Times the bus had no room for a frame (the link kept it, and the task waited for
+    /// room).
+    bus_full: u32,
     /// Reports the session had no room for (none expected: it always listens).
     reports_lost: u32,
 }
@@ -192,12 +195,13 @@ fn report(stats: &mut LinkTaskStats, r: Report) {
 }
 
 /// Hands the link's frames to the bus until it is full.
-fn transmit(link: &mut Link) {
+fn transmit(link: &mut Link, stats: &mut LinkTaskStats) {
     while let Some(frame) = link.next_transmit() {
         match TO_GIMBAL.try_send(frame) {
             Ok(()) => link.transmit_done(None),
             Err(_) => {
                 link.transmit_refused(frame);
+                stats.bus_full = stats.bus_full.wrapping_add(1);
                 return;
             }
         }
@@ -216,7 +220,7 @@ async fn link_task() {
         let now = tick(at);
         link.poll(now);
         if link.has_transmit() {
-            transmit(&mut link);
+            transmit(&mut link, &mut stats);
         }
         while let Some(event) = link.next_event() {
             let r = match event {
@@ -550,8 +554,8 @@ impl Session {
                     s.frames_sent, s.frames_received, s.postbacks, s.superseded
                 );
                 println!(
-                    "link task woke {} times in {} ms; reports lost {}",
-                    task.wakeups, elapsed_ms, task.reports_lost
+                    "link task woke {} times in {} ms; bus full {} times; reports lost {}",
+                    task.wakeups, elapsed_ms, task.bus_full, task.reports_lost
                 );
                 if task.reports_lost != 0 {
                     self.failures += 1;
