@@ -19,6 +19,8 @@
 #![no_std]
 #![no_main]
 
+mod time;
+
 use defmt::{info, unwrap, warn};
 use defmt_rtt as _;
 use embassy_executor::Spawner;
@@ -44,6 +46,7 @@ use idu_gimbal::link::{Config, Event, Link};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
+use time::{embassy_at, tick};
 
 bind_interrupts!(struct Irqs {
     CAN1_TX => TxInterruptHandler<CAN1>;
@@ -74,23 +77,6 @@ struct VehicleSample {
 }
 
 static VEHICLE: Channel<CriticalSectionRawMutex, VehicleSample, 4> = Channel::new();
-
-// ---- time ----
-
-/// The crate's wrapping millisecond tick at embassy's `at`: embassy's u64 millisecond
-/// count truncated to 32 bits is exactly a tick that wraps at `u32::MAX` (the truncation is
-/// the wrap).
-fn tick(at: embassy_time::Instant) -> Instant {
-    Instant::from_millis(at.as_millis() as u32)
-}
-
-/// The embassy instant of the crate's `deadline`, seen from `now` (embassy's) whose tick is
-/// `tick(now)`: the start of the deadline's millisecond. `next_deadline` is at or after the
-/// tick and less than 2^31 ms ahead, so the wrapping difference is the real distance.
-fn embassy_at(deadline: Instant, now: embassy_time::Instant) -> embassy_time::Instant {
-    let ahead = deadline.millis_since(tick(now));
-    embassy_time::Instant::from_millis(now.as_millis() + u64::from(ahead))
-}
 
 // ---- the gimbal task ----
 

@@ -1,0 +1,663 @@
+//! idu-gimbal under embassy on QEMU's `netduinoplus2` (an emulated STM32F405): the sans-IO
+//! [`Link`] driven by an async task, as in `boards/embassy_stm32f405`, against the crate's
+//! simulated gimbal, playing the scripted session of `examples/common/session.rs` in real
+//! (virtual) embassy time.
+//!
+//! embassy-stm32 cannot boot there (see `boards/embassy_stm32f405/examples/qemu_probe.rs`:
+//! no RCC, TIM2-5 raise no compare flags, no CAN), but embassy itself can:
+//!
+//! * **Time**: embassy-time on the Cortex-M SysTick ([`time_driver`]), which QEMU models,
+//!   at 1 kHz from the 168 MHz system clock.
+//! * **Executor**: embassy-executor's raw executor in a thread-mode loop that sleeps in
+//!   `WFI` ([`main`]). The stock thread executor sleeps in `WFE`, which QEMU 7.2 runs as a
+//!   no-op (it yields to its main loop and returns): it would spin through every idle
+//!   millisecond, and under `-icount` spinning is virtual time burnt instruction by
+//!   instruction (measured: the same session, with the same output, takes 24 s of host
+//!   time on `embassy_executor::Executor` against 0.4 s here). `WFI` halts, and
+//!   `-icount sleep=off` jumps to the next SysTick.
+//! * **CAN** is replaced by two embassy-sync channels of frames, one each way, with
+//!   `idu_gimbal::sim::Simulator` on the other side ([`gimbal_task`]).
+//!
+//! Tasks:
+//!
+//! * [`link_task`] owns the [`Link`] and sleeps until the first of: a received frame, the
+//!   link's [`Link::next_deadline`], vehicle data or a request from the session, room on the
+//!   bus (only while frames wait for it). Never on a fixed period.
+//! * [`vehicle_task`] sends vehicle data at 10 Hz through a channel (a stand-in autopilot).
+//! * [`gimbal_task`] runs the simulated gimbal: it takes the link's frames as they come and
+//!   steps every millisecond (its slew and its 500 ms postbacks).
+//! * [`session_task`] plays the script, checks each step's effect on the simulator's state
+//!   and the postbacks, prints telemetry through semihosting, and exits QEMU through
+//!   semihosting `SYS_EXIT`: 0 only if every check passed, 1 otherwise (and on a panic or a
+//!   HardFault).
+//!
+//! Run: `./run.sh` (installs the target and QEMU when missing), or `cargo run --release`
+//! in this directory.
+#![no_std]
+#![no_main]
+
+// The conversion between embassy-time and the crate's clock, as the STM32F405 board does it.
+#[path = "../../embassy_stm32f405/src/time.rs"]
+mod time;
+mod time_driver;
+
+use core::cell::RefCell;
+use core::fmt::{self, Write as _};
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::{debug, hio};
+use embassy_executor::{raw, Spawner};
+use embassy_futures::select::{select, select4, Either, Either4};
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::blocking_mutex::Mutex;
+use embassy_sync::channel::Channel;
+use embassy_time::{Duration, Ticker, Timer};
+
+use idu_gimbal::link::{Config, Event, Link, LinkStats};
+use idu_gimbal::sim::{SimConfig, SimState, Simulator};
+use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
+use idu_gimbal::wire::postback::Postback;
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::wire::Frame;
+use idu_gimbal::Instant;
+use time::{embassy_at, tick};
+
+// ---- output and exit ----
+
+/// A line of output, sent to the host in one semihosting call.
+struct Line(heapless::String<192>);
+
+impl fmt::Write for Line {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        // Output is best effort: a line too long is cut, never a failure.
+        for c in s.chars() {
+            if self.0.push(c).is_err() {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn print(args: fmt::Arguments<'_>) {
+    let mut line = Line(heapless::String::new());
+    let _ = line.write_fmt(args);
+    let _ = line.0.push('\n');
+    if let Ok(mut out) = hio::hstdout() {
+        let _ = out.write_str(&line.0);
+    }
+}
+
+macro_rules! println {
+    ($($arg:tt)*) => { print(format_args!($($arg)*)) };
+}
+
+/// Ends the emulation: status 0 when `success`, 1 otherwise.
+fn exit(success: bool) -> ! {
+    debug::exit(if success {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    // Only reached when not running under a semihosting host.
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+    if let Ok(mut err) = hio::hstderr() {
+        let _ = writeln!(err, "PANIC: {info}");
+    }
+    exit(false)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    if let Ok(mut err) = hio::hstderr() {
+        let _ = writeln!(err, "HARD FAULT at pc={:#010x}", frame.pc());
+    }
+    exit(false)
+}
+
+// ---- what the tasks exchange ----
+
+/// Frames on the emulated bus, link to gimbal: a CAN controller's three transmit
+/// mailboxes.
+static TO_GIMBAL: Channel<CriticalSectionRawMutex, Frame, 3> = Channel::new();
+/// Frames on the emulated bus, gimbal to link: a receive queue (a postback is 4 frames).
+static TO_LINK: Channel<CriticalSectionRawMutex, Frame, 16> = Channel::new();
+
+/// One vehicle state with the time it was measured.
+#[derive(Clone, Copy)]
+struct VehicleSample {
+    attitude: Attitude,
+    gps: Gps,
+    altitude: Altitude,
+    stamp: Instant,
+}
+
+static VEHICLE: Channel<CriticalSectionRawMutex, VehicleSample, 4> = Channel::new();
+
+/// What the session asks of the link.
+#[derive(Clone, Copy)]
+enum Request {
+    Command(GimbalCommand),
+    Rate(Rate),
+    Text(&'static [u8]),
+    Stats,
+}
+
+static REQUESTS: Channel<CriticalSectionRawMutex, Request, 4> = Channel::new();
+
+/// What the link tells the session.
+#[derive(Clone, Copy)]
+enum Report {
+    Event(Event),
+    /// A new postback, and whether the link is up.
+    Postback(Postback, bool),
+    /// A request the link refused (its queue was full).
+    Refused,
+    Stats(LinkStats, LinkTaskStats),
+}
+
+static REPORTS: Channel<CriticalSectionRawMutex, Report, 16> = Channel::new();
+
+/// The simulated gimbal, stepped by [`gimbal_task`] and inspected by the session's checks.
+static SIM: Mutex<CriticalSectionRawMutex, RefCell<Option<Simulator>>> =
+    Mutex::new(RefCell::new(None));
+
+/// Runs `f` on the simulator's state.
+fn with_sim<R>(f: impl FnOnce(&Simulator) -> R) -> Option<R> {
+    SIM.lock(|sim| sim.borrow().as_ref().map(f))
+}
+
+// ---- the link task ----
+
+/// How the link task spent its time.
+#[derive(Clone, Copy, Default)]
+struct LinkTaskStats {
+    /// Times it woke up.
+    wakeups: u32,
+    /// Times the bus had no room for a frame (the link kept it, and the task waited for
+    /// room).
+    bus_full: u32,
+    /// Reports the session had no room for (none expected: it always listens).
+    reports_lost: u32,
+}
+
+fn report(stats: &mut LinkTaskStats, r: Report) {
+    if REPORTS.try_send(r).is_err() {
+        stats.reports_lost = stats.reports_lost.wrapping_add(1);
+    }
+}
+
+/// Hands the link's frames to the bus until it is full.
+fn transmit(link: &mut Link, stats: &mut LinkTaskStats) {
+    while let Some(frame) = link.next_transmit() {
+        match TO_GIMBAL.try_send(frame) {
+            Ok(()) => link.transmit_done(None),
+            Err(_) => {
+                link.transmit_refused(frame);
+                stats.bus_full = stats.bus_full.wrapping_add(1);
+                return;
+            }
+        }
+    }
+}
+
+/// Drives the link: never returns.
+#[embassy_executor::task]
+async fn link_task() {
+    let mut link: Link = Link::new(Config::default());
+    let max_rx = link.config().max_rx_per_poll.get();
+    let mut stats = LinkTaskStats::default();
+
+    loop {
+        let at = embassy_time::Instant::now();
+        let now = tick(at);
+        link.poll(now);
+        if link.has_transmit() {
+            transmit(&mut link, &mut stats);
+        }
+        while let Some(event) = link.next_event() {
+            let r = match event {
+                Event::Postback => match link.latest_postback(now) {
+                    Some((p, _age)) => Report::Postback(p, link.is_up()),
+                    None => continue,
+                },
+                other => Report::Event(other),
+            };
+            report(&mut stats, r);
+        }
+
+        // Sleep until the first of: a frame, the link's deadline, vehicle data or a
+        // request, room on the bus (only while frames wait for it).
+        let deadline = link.next_deadline(now);
+        // Just polled at `now`: a deadline still at `now` is a retry (a full queue waiting
+        // for the bus to take frames). Wait for the next millisecond or room: a timer
+        // already due would complete at once, and the task would never yield.
+        let deadline = if deadline == now {
+            now.add_millis(1)
+        } else {
+            deadline
+        };
+        let waiting = link.has_transmit();
+        let room = async {
+            if waiting {
+                core::future::poll_fn(|cx| TO_GIMBAL.poll_ready_to_send(cx)).await
+            } else {
+                core::future::pending().await
+            }
+        };
+        let woke = select4(
+            TO_LINK.receive(),
+            Timer::at(embassy_at(deadline, at)),
+            select(VEHICLE.receive(), REQUESTS.receive()),
+            room,
+        )
+        .await;
+        stats.wakeups = stats.wakeups.wrapping_add(1);
+        let now = tick(embassy_time::Instant::now());
+        match woke {
+            Either4::First(frame) => {
+                link.receive(frame.id, &frame.data, now);
+                // And those queued behind it, at most `max_rx_per_poll` in all.
+                for _ in 1..max_rx {
+                    let Ok(frame) = TO_LINK.try_receive() else {
+                        break;
+                    };
+                    link.receive(frame.id, &frame.data, now);
+                }
+            }
+            Either4::Second(()) | Either4::Fourth(()) => {}
+            Either4::Third(Either::First(sample)) => {
+                link.set_attitude(sample.attitude, sample.stamp);
+                link.set_gps(sample.gps, sample.stamp);
+                link.set_altitude(sample.altitude, sample.stamp);
+            }
+            Either4::Third(Either::Second(request)) => {
+                let refused = match request {
+                    Request::Command(command) => link.send(command).is_err(),
+                    Request::Rate(rate) => link.set_rate(rate, now).is_err(),
+                    Request::Text(text) => link.send_text(text).is_err(),
+                    Request::Stats => {
+                        let task = stats;
+                        report(&mut stats, Report::Stats(link.stats(), task));
+                        false
+                    }
+                };
+                if refused {
+                    report(&mut stats, Report::Refused);
+                }
+            }
+        }
+    }
+}
+
+// ---- the vehicle data ----
+
+/// Stand-in vehicle data at 10 Hz, as `examples/common/session.rs` pushes it: level,
+/// heading 30°, hovering over Zurich at 450 m.
+#[embassy_executor::task]
+async fn vehicle_task() {
+    let mut ticker = Ticker::every(Duration::from_millis(100));
+    loop {
+        let stamp = tick(embassy_time::Instant::now());
+        if let (Ok(attitude), Ok(gps), Ok(altitude)) = (
+            Attitude::new(0.0, 0.0, 30.0),
+            Gps::new(47.397_742, 8.545_594),
+            Altitude::new(450.0),
+        ) {
+            VEHICLE
+                .send(VehicleSample {
+                    attitude,
+                    gps,
+                    altitude,
+                    stamp,
+                })
+                .await;
+        }
+        ticker.next().await;
+    }
+}
+
+// ---- the simulated gimbal ----
+
+/// The gimbal on the other side of the bus: takes frames as they come, steps every
+/// millisecond, and puts its postback frames on the bus while it has room.
+#[embassy_executor::task]
+async fn gimbal_task() {
+    let mut ticker = Ticker::every(Duration::from_millis(1));
+    loop {
+        let now = tick(embassy_time::Instant::now());
+        SIM.lock(|sim| {
+            let mut sim = sim.borrow_mut();
+            let Some(sim) = sim.as_mut() else {
+                return;
+            };
+            while let Ok(frame) = TO_GIMBAL.try_receive() {
+                // A frame the gimbal rejects is counted in its stats.
+                let _ = sim.receive(frame.id, &frame.data, now);
+            }
+            let _ = sim.poll(now);
+            while !TO_LINK.is_full() {
+                let Some(frame) = sim.pop_frame() else {
+                    break;
+                };
+                let _ = TO_LINK.try_send(frame);
+            }
+        });
+        select(TO_GIMBAL.ready_to_receive(), ticker.next()).await;
+    }
+}
+
+// ---- the session ----
+
+/// The session's view: the newest postback, its clock and its failures.
+struct Session {
+    start: embassy_time::Instant,
+    latest: Option<Postback>,
+    stats: Option<(LinkStats, LinkTaskStats)>,
+    failures: u32,
+}
+
+/// What a step waits for.
+type Check<'s> = &'s dyn Fn(&Postback, &SimState) -> bool;
+
+impl Session {
+    /// Seconds and milliseconds since the session started.
+    fn seconds(&self) -> (u64, u64) {
+        let ms = self.start.elapsed().as_millis();
+        (ms / 1000, ms % 1000)
+    }
+
+    /// Takes one report; true for a new postback.
+    fn handle(&mut self, r: Report) -> bool {
+        match r {
+            Report::Postback(p, up) => {
+                self.latest = Some(p);
+                let (s, ms) = self.seconds();
+                println!(
+                    "t={s:3}.{ms:03} s  pitch {:7.2}°  heading {:6.2}°  motor {:7.2}°  mode {:<14}  link {}",
+                    p.pitch_deg(),
+                    p.heading_deg(),
+                    p.motor_heading_deg(),
+                    p.mode.name().unwrap_or("unknown"),
+                    if up { "up" } else { "down" },
+                );
+                return true;
+            }
+            Report::Event(Event::LinkUp) => println!("link up"),
+            Report::Event(Event::LinkDown) => println!("link down"),
+            Report::Event(Event::RateHoldExpired) => {
+                println!("rate hold released: dead-man sent zero rate")
+            }
+            Report::Event(_) => {}
+            Report::Refused => {
+                self.failures += 1;
+                println!("  FAIL queue full");
+            }
+            Report::Stats(link, task) => self.stats = Some((link, task)),
+        }
+        false
+    }
+
+    /// Takes reports until `end`.
+    async fn run_until(&mut self, end: embassy_time::Instant) {
+        while let Either::First(r) = select(REPORTS.receive(), Timer::at(end)).await {
+            self.handle(r);
+        }
+    }
+
+    async fn run(&mut self, ms: u64) {
+        self.run_until(embassy_time::Instant::now() + Duration::from_millis(ms))
+            .await;
+    }
+
+    /// Waits until `check` holds on a postback received after this call, or `timeout_ms`.
+    async fn expect(&mut self, what: &str, timeout_ms: u64, check: Check<'_>) {
+        let end = embassy_time::Instant::now() + Duration::from_millis(timeout_ms);
+        while let Either::First(r) = select(REPORTS.receive(), Timer::at(end)).await {
+            if !self.handle(r) {
+                continue;
+            }
+            let Some(p) = self.latest else {
+                continue;
+            };
+            if with_sim(|sim| check(&p, sim.state())) == Some(true) {
+                let (s, ms) = self.seconds();
+                println!("  ok  {what} (t={s}.{ms:03} s)");
+                return;
+            }
+        }
+        self.failures += 1;
+        println!("  FAIL {what}: not seen within {timeout_ms} ms");
+    }
+
+    async fn request(&mut self, r: Request) {
+        REQUESTS.send(r).await;
+    }
+
+    async fn step(&mut self, what: &str, command: GimbalCommand) {
+        println!("> {what}");
+        self.request(Request::Command(command)).await;
+    }
+
+    /// Plays the script of `examples/common/session.rs` (its CAN rig); returns the number of
+    /// checks that failed.
+    async fn play(&mut self) -> u32 {
+        println!(
+            "idu-gimbal session: embassy link task <-> simulated gimbal over embassy-sync channels"
+        );
+        self.expect("postbacks arrive, link up", 1500, &|_, _| true)
+            .await;
+
+        self.step("re-center", GimbalCommand::Recenter).await;
+        self.expect("pitch 0°, motor 0°", 3000, &|p, _| {
+            p.pitch == 0 && p.motor_heading == 0
+        })
+        .await;
+
+        if let Ok(pitch) = Pitch::new(-45.0) {
+            self.step("pitch -45°", GimbalCommand::Pitch(pitch)).await;
+        }
+        self.expect("pitch -45.00° reported", 3000, &|p, _| p.pitch == -4500)
+            .await;
+
+        if let Ok(heading) = Heading::new(90.0) {
+            self.step(
+                "heading 90° (north-referenced: attitude is pushed, vehicle heading 30°)",
+                GimbalCommand::Heading(heading),
+            )
+            .await;
+        }
+        self.expect("heading 90.00°, motor 60.00°", 3000, &|p, _| {
+            p.heading == 9000 && p.motor_heading == 6000
+        })
+        .await;
+
+        println!("> rate hold: yaw 20°/s, refreshed every 20 ms for 1 s, then released");
+        let before = self.latest.map_or(0, |p| p.motor_heading);
+        if let Ok(rate) = Rate::new(20.0, 0.0) {
+            let hold = embassy_time::Instant::now();
+            for i in 1..=50 {
+                self.request(Request::Rate(rate)).await;
+                self.run_until(hold + Duration::from_millis(20 * i)).await;
+            }
+        }
+        self.run(400).await;
+        let after = with_sim(|s| s.state().motor_yaw_deg);
+        self.run(1000).await;
+        let still = with_sim(|s| s.state().motor_yaw_deg);
+        let stopped = with_sim(|s| s.state().rate == (0.0, 0.0)) == Some(true);
+        let turned = self.latest.map_or(0, |p| p.motor_heading) - before;
+        println!("  turned {:.2}° during the hold", f32::from(turned) / 100.0);
+        if turned > 1500 && after.is_some() && after == still && stopped {
+            println!("  ok  gimbal turned, then stopped after the dead-man");
+        } else {
+            self.failures += 1;
+            println!(
+                "  FAIL rate hold: turned {turned} cdeg, stopped: {}",
+                after == still && stopped
+            );
+        }
+
+        if let Ok(zoom) = ZoomRatio::new(10.0) {
+            self.step("zoom to 10x", GimbalCommand::ZoomRatio(zoom))
+                .await;
+        }
+        self.expect("zoom 10x", 1500, &|_, s| s.zoom_ratio == 10.0)
+            .await;
+
+        self.step("photo", GimbalCommand::Photo(Photo::Single))
+            .await;
+        self.expect("one photo taken", 1500, &|_, s| s.photos == 1)
+            .await;
+
+        self.step("recording on", GimbalCommand::Video(Video::Start))
+            .await;
+        self.expect("recording", 1500, &|_, s| s.recording).await;
+        self.step("recording off", GimbalCommand::Video(Video::Stop))
+            .await;
+        self.expect("not recording", 1500, &|_, s| !s.recording)
+            .await;
+
+        println!("> text message");
+        self.request(Request::Text(b"HELLO FROM THE FLIGHT CONTROLLER"))
+            .await;
+        self.expect("text received", 1500, &|_, s| {
+            s.last_text.as_str() == "HELLO FROM THE FLIGHT CONTROLLER"
+        })
+        .await;
+
+        // The link's counters, through the request channel like everything else.
+        self.request(Request::Stats).await;
+        let asked = embassy_time::Instant::now();
+        while self.stats.is_none() && asked.elapsed() < Duration::from_millis(100) {
+            if let Either::First(r) = select(
+                REPORTS.receive(),
+                Timer::at(asked + Duration::from_millis(100)),
+            )
+            .await
+            {
+                self.handle(r);
+            }
+        }
+        let elapsed_ms = self.start.elapsed().as_millis();
+        match self.stats {
+            Some((s, task)) => {
+                println!(
+                    "frames sent {} received {}; postbacks {}; superseded vehicle frames {}",
+                    s.frames_sent, s.frames_received, s.postbacks, s.superseded
+                );
+                println!(
+                    "link task woke {} times in {} ms; bus full {} times; reports lost {}",
+                    task.wakeups, elapsed_ms, task.bus_full, task.reports_lost
+                );
+                if task.reports_lost != 0 {
+                    self.failures += 1;
+                    println!("  FAIL reports lost");
+                }
+            }
+            None => {
+                self.failures += 1;
+                println!("  FAIL no stats from the link task");
+            }
+        }
+        let sim = with_sim(|s| s.stats());
+        let vehicle_frames = sim.map_or(0, |s| s.vehicle_frames);
+        println!(
+            "gimbal saw {} vehicle frames, {} commands",
+            vehicle_frames,
+            sim.map_or(0, |s| s.commands)
+        );
+        // Vehicle frames reach the gimbal: the emulated bus carries them.
+        if vehicle_frames == 0 {
+            self.failures += 1;
+            println!("  FAIL vehicle frames: none reached the gimbal");
+        }
+        println!(
+            "{}",
+            if self.failures == 0 {
+                "session passed"
+            } else {
+                "session FAILED"
+            }
+        );
+        self.failures
+    }
+}
+
+/// Plays the session, then ends the emulation with its result.
+#[embassy_executor::task]
+async fn session_task() {
+    let mut session = Session {
+        start: embassy_time::Instant::now(),
+        latest: None,
+        stats: None,
+        failures: 0,
+    };
+    let failures = session.play().await;
+    exit(failures == 0)
+}
+
+// ---- start-up and the thread-mode loop ----
+
+/// Set by the executor when a task is woken; cleared before each poll.
+static PENDED: AtomicBool = AtomicBool::new(false);
+
+/// The executor's pender: a task was woken (from a task or an interrupt).
+#[export_name = "__pender"]
+fn pender(_context: *mut ()) {
+    PENDED.store(true, Ordering::Release);
+}
+
+fn spawn_all(spawner: Spawner) -> Result<(), embassy_executor::SpawnError> {
+    spawner.spawn(link_task()?);
+    spawner.spawn(vehicle_task()?);
+    spawner.spawn(gimbal_task()?);
+    spawner.spawn(session_task()?);
+    Ok(())
+}
+
+#[entry]
+fn main() -> ! {
+    static mut EXECUTOR: Option<raw::Executor> = None;
+
+    println!("embassy_qemu: STM32F405 (QEMU netduinoplus2), embassy-executor with a SysTick time driver at 1 kHz");
+    let Some(core) = cortex_m::Peripherals::take() else {
+        println!("embassy_qemu: core peripherals already taken");
+        exit(false)
+    };
+    SIM.lock(|sim| {
+        *sim.borrow_mut() = Some(Simulator::new(
+            SimConfig::default(),
+            Instant::from_millis(0),
+        ))
+    });
+    time_driver::start(core.SYST);
+
+    let executor: &'static raw::Executor =
+        EXECUTOR.insert(raw::Executor::new(core::ptr::null_mut()));
+    if spawn_all(executor.spawner()).is_err() {
+        println!("embassy_qemu: could not spawn the tasks");
+        exit(false)
+    }
+    loop {
+        PENDED.store(false, Ordering::Release);
+        // SAFETY: this loop is the only caller of `poll`, never re-entered (the pender only
+        // sets a flag).
+        unsafe { executor.poll() };
+        // Sleep unless a task was woken meanwhile. With interrupts masked a wake-up cannot
+        // slip in between the check and WFI; a pending interrupt still ends WFI, and runs
+        // once they are unmasked.
+        cortex_m::interrupt::free(|_| {
+            if !PENDED.load(Ordering::Acquire) {
+                cortex_m::asm::wfi();
+            }
+        });
+    }
+}
