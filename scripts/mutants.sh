@@ -20,7 +20,8 @@
 #   integration tests that drive the driver over the mock bus), tests/driver_errors.rs
 #   and tests/defmt_format.rs (the driver errors' counters and defmt encoding),
 #   tests/serial.rs (the serial driver and link over the mock pipe) and tests/bounds.rs
-#   (the parsers and the link under floods). Left out: tests/no_panic.rs
+#   (the parsers and the link under floods), tests/blocking_adapter.rs (the Blocking
+#   adapter's classifier) and tests/next_deadline.rs (the drivers' next_deadline). Left out: tests/no_panic.rs
 #   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
 #   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
 #   scope) and doctests (examples, not checks).
@@ -57,13 +58,15 @@ cargo mutants \
     --file src/driver.rs \
     --file 'src/driver/**' \
     --exclude src/link/tests.rs \
+    --exclude src/link/deadline_tests.rs \
     --timeout "$timeout" \
     --build-timeout 600 \
     --jobs "$jobs" \
     --output . \
     "$@" \
     -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
-    --test serial --test bounds --test api_contracts || rc=$?
+    --test serial --test bounds --test api_contracts --test blocking_adapter \
+    --test next_deadline || rc=$?
 echo "wall time: $(($(date +%s) - start)) s"
 
 # cargo-mutants exits 2 for missed mutants and 3 for timeouts: the score decides here.
