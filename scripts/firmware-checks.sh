@@ -4,8 +4,9 @@
 #   2. the STM32F405 firmware, CAN, UART and MAVLink bridge, builds in release mode (sizes
 #      printed);
 #   3. the QEMU benchmarks and the size report must meet the budgets of issue 4;
-#   4. every board crate under boards/ (RP2040, ESP32-C3, STM32H743, …) builds in release
-#      mode and is clippy-clean (scripts/boards.sh; sizes printed).
+#   4. every board crate under boards/ (RP2040, ESP32-C3, STM32H743, embassy, …) builds in
+#      release mode and is clippy-clean (scripts/boards.sh; sizes printed);
+#   5. the embassy firmware's scripted session passes on QEMU (boards/embassy_qemu/run.sh).
 #
 # IDU_BUDGETS=report turns budget failures (step 3) into warnings; the default, enforce,
 # fails the run. Every QEMU run is bounded by QEMU_TIMEOUT seconds (default 120).
@@ -40,3 +41,6 @@ fi
 
 echo "--- firmware: board crates (boards/*: release builds, clippy, sizes)"
 scripts/boards.sh
+
+echo "--- firmware: embassy on QEMU (boards/embassy_qemu: the async link task, the scripted session)"
+CARGO_TARGET_DIR="$PWD/target/boards" boards/embassy_qemu/run.sh

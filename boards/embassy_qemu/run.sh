@@ -13,7 +13,9 @@ cd "$(dirname "$0")"
 ensure_target
 ensure_qemu
 cargo build --release
-elf="target/$TARGET/release/embassy-qemu"
+# CARGO_TARGET_DIR, when set, is honoured (scripts/firmware-checks.sh passes the board crates'
+# shared target/boards, where scripts/boards.sh has just built this).
+elf="${CARGO_TARGET_DIR:-target}/$TARGET/release/embassy-qemu"
 
 # The runner of .cargo/config.toml (`cargo run --release` here), with QEMU_TIMEOUT as the
 # bound. -icount shift=3,sleep=off: virtual time is 8 ns per guest instruction, and idle WFI
