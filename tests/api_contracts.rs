@@ -184,6 +184,36 @@ fn a_remote_frame_on_the_postback_id_is_ignored() {
     assert_eq!(gimbal.gimbal_type(), None);
 }
 
+/// A frame on the postback ID that is not 8 bytes long, between the frames of a postback,
+/// through the driver: counted as malformed, and it breaks the message (the two frames
+/// before it and itself discarded, the two after it too short to be a message).
+#[test]
+fn a_short_frame_on_the_postback_id_breaks_the_message_and_is_counted() {
+    let bus: Bus<2, 16> = Bus::new(5);
+    let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+    let mut other = bus.endpoint(1).unwrap();
+    let frames = a2000().to_can_frames();
+    for (i, d) in frames.iter().enumerate() {
+        if i == 2 {
+            let short = MockFrame::extended(ids::POSTBACK, &d[..5]).unwrap();
+            Can::transmit(&mut other, &short).unwrap();
+        }
+        Can::transmit(&mut other, &MockFrame::extended(ids::POSTBACK, d).unwrap()).unwrap();
+    }
+    gimbal.poll(t(0)).unwrap();
+    let s = gimbal.stats().link;
+    assert_eq!(s.frames_received, 5);
+    assert_eq!((s.malformed, s.dropped_partials, s.postbacks), (1, 1, 0));
+    assert!(!gimbal.is_link_up(), "no whole postback, no link");
+    // The next whole postback is taken.
+    for d in frames {
+        Can::transmit(&mut other, &MockFrame::extended(ids::POSTBACK, &d).unwrap()).unwrap();
+    }
+    gimbal.poll(t(100)).unwrap();
+    assert_eq!(gimbal.stats().link.postbacks, 1);
+    assert!(gimbal.is_link_up());
+}
+
 /// The driver's state queries and forwarders reach the link.
 #[test]
 fn the_driver_forwards_to_its_link() {
