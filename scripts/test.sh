@@ -47,7 +47,7 @@ bridge_msrv=$(msrv idu-gimbal-mavlink/Cargo.toml)
 for v in "$core_msrv" "$bridge_msrv"; do
     rustup toolchain install "$v" --profile minimal >/dev/null 2>&1
 done
-CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock
+CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock,fdcan
 CARGO_TARGET_DIR=target/msrv cargo "+$bridge_msrv" check -p idu-gimbal-mavlink
 
 # Firmware steps (QEMU demo, benchmarks, STM32F405 release build) run when present.
