@@ -24,8 +24,12 @@ use esp_hal::twai::{BaudRate, ExtendedId, TwaiConfiguration, TwaiMode};
 use esp_println::println;
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Event, Gimbal, Instant};
+
+/// The main loop shared with the other CAN firmware examples.
+#[path = "../../../examples/common/app.rs"]
+mod app;
+use app::{vehicle_stand_in, App, Report};
 
 esp_bootloader_esp_idf::esp_app_desc!();
 
@@ -38,17 +42,6 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 /// Milliseconds since boot from the system timer, wrapping as the driver's `Instant` expects.
 fn now() -> Instant {
     Instant::from_millis(EspInstant::now().duration_since_epoch().as_millis() as u32)
-}
-
-/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
-/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
-/// hovering over a fixed point while it yaws one degree every 100 ms.
-fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
-    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
-    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
-    let altitude = Altitude::new(488.0).ok()?;
-    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
-    Some((gps, altitude, attitude))
 }
 
 #[esp_hal::main]
@@ -82,45 +75,24 @@ fn main() -> ! {
         let _ = gimbal.send(GimbalCommand::Pitch(pitch));
     }
 
-    let mut next_vehicle = now();
-    let mut next_stats = now().add_millis(10_000);
+    // Busy polling: the TWAI's receive FIFO (64 bytes) holds the four frames of a
+    // postback, and it has one transmit buffer.
+    let mut app = App::new(now());
     loop {
-        let now = now();
-
-        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
-        if now.is_at_or_after(next_vehicle) {
-            next_vehicle = now.add_millis(100);
-            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
-                gimbal.set_gps(gps, now);
-                gimbal.set_altitude(altitude, now);
-                gimbal.set_attitude(attitude, now);
-            }
-        }
-
-        // Busy polling: the TWAI's receive FIFO (64 bytes) holds the four frames of a
-        // postback, and it has one transmit buffer.
-        if let Err(e) = gimbal.poll(now) {
-            println!("{}", e);
-        }
-
-        while let Some(event) = gimbal.next_event() {
-            match event {
-                Event::Postback => {
-                    if let Some((p, _age)) = gimbal.latest_postback(now) {
-                        println!(
-                            "postback: pitch {} deg, heading {} deg",
-                            p.pitch_deg(),
-                            p.heading_deg()
-                        );
-                    }
-                }
-                other => println!("event: {:?}", other),
-            }
-        }
-
-        if now.is_at_or_after(next_stats) {
-            next_stats = now.add_millis(10_000);
-            println!("stats: {:?}", gimbal.stats());
-        }
+        app.step(
+            &mut gimbal,
+            now(),
+            vehicle_stand_in,
+            |report| match report {
+                Report::Driver(e) => println!("{}", e),
+                Report::Event(Event::Postback, Some(p)) => println!(
+                    "postback: pitch {} deg, heading {} deg",
+                    p.pitch_deg(),
+                    p.heading_deg()
+                ),
+                Report::Event(event, _) => println!("event: {:?}", event),
+                Report::Stats(stats) => println!("stats: {:?}", stats),
+            },
+        );
     }
 }

@@ -38,8 +38,12 @@ use panic_halt as _;
 use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Gimbal, Instant};
+
+/// The main loop shared with the other CAN firmware examples.
+#[path = "../../../examples/common/app.rs"]
+mod app;
+use app::App;
 
 /// The second-stage bootloader for the Pico's W25Q080 flash (for other flash chips,
 /// `rp2040_boot2::BOOT_LOADER_GENERIC_03H` works with any).
@@ -50,21 +54,15 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// The Pico's crystal.
 const XTAL_FREQ_HZ: u32 = 12_000_000;
 
-/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
-/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
-/// hovering over a fixed point while it yaws one degree every 100 ms.
+// The stand-in vehicle data (replace with the autopilot's estimates): the shared loop's,
+// built from f32 degrees and metres.
 #[cfg(not(feature = "wire-units"))]
-fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
-    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
-    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
-    let altitude = Altitude::new(488.0).ok()?;
-    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
-    Some((gps, altitude, attitude))
-}
+use app::vehicle_stand_in;
 
 /// The same stand-in, built from wire units (1e-7 degree, cm, centi-degree): no floats.
 #[cfg(feature = "wire-units")]
-fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
+fn vehicle_stand_in(now: Instant) -> Option<app::Vehicle> {
+    use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
     let gps = Gps::from_e7(473_977_420, 85_455_940).ok()?;
     let altitude = Altitude::from_cm(48_800);
@@ -163,24 +161,11 @@ fn main() -> ! {
         let _ = gimbal.send(GimbalCommand::Pitch(pitch));
     }
 
-    let mut next_vehicle = now();
+    // A driver error (an SPI failure) is counted in gimbal.stats(); there is no log here,
+    // the LED shows the link.
+    let mut app = App::new(now());
     loop {
-        let now = now();
-
-        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
-        if now.is_at_or_after(next_vehicle) {
-            next_vehicle = now.add_millis(100);
-            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
-                gimbal.set_gps(gps, now);
-                gimbal.set_altitude(altitude, now);
-                gimbal.set_attitude(attitude, now);
-            }
-        }
-
-        // A driver error (an SPI failure) is counted in gimbal.stats(); the loop goes on.
-        let _ = gimbal.poll(now);
-        while gimbal.next_event().is_some() {}
-
+        app.step(&mut gimbal, now(), vehicle_stand_in, |_| {});
         let _ = if gimbal.is_link_up() {
             led.set_high()
         } else {

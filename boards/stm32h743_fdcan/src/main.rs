@@ -34,8 +34,12 @@ use stm32h7xx_hal::{pac, prelude::*};
 
 use idu_gimbal::driver::fdcan::FdCan;
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Event, Gimbal, Instant};
+
+/// The main loop shared with the other CAN firmware examples.
+#[path = "../../../examples/common/app.rs"]
+mod app;
+use app::{vehicle_stand_in, App, Report};
 
 /// The board's crystal.
 const HSE_HZ: u32 = 16_000_000;
@@ -76,17 +80,6 @@ fn now() -> Instant {
 }
 
 defmt::timestamp!("{=u32:ms}", TICKS_MS.load(Ordering::Relaxed));
-
-/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
-/// `GLOBAL_POSITION_INT` and `ATTITUDE`), each with the time it was measured. Here: a vehicle
-/// hovering over a fixed point while it yaws one degree every 100 ms.
-fn vehicle_stand_in(now: Instant) -> Option<(Gps, Altitude, Attitude)> {
-    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
-    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
-    let altitude = Altitude::new(488.0).ok()?;
-    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
-    Some((gps, altitude, attitude))
-}
 
 #[entry]
 fn main() -> ! {
@@ -153,47 +146,28 @@ fn main() -> ! {
         let _ = gimbal.send(GimbalCommand::Pitch(pitch));
     }
 
-    let mut next_vehicle = now();
-    let mut next_stats = now().add_millis(10_000);
+    // Busy polling: the adapter keeps one frame in flight, and the FIFO holds the four
+    // frames of a postback.
+    let mut app = App::new(now());
     loop {
-        let now = now();
-
-        // Vehicle data at 10 Hz; the driver pushes each at its own rate while fresh.
-        if now.is_at_or_after(next_vehicle) {
-            next_vehicle = now.add_millis(100);
-            if let Some((gps, altitude, attitude)) = vehicle_stand_in(now) {
-                gimbal.set_gps(gps, now);
-                gimbal.set_altitude(altitude, now);
-                gimbal.set_attitude(attitude, now);
-            }
-        }
-
-        // Busy polling: the adapter keeps one frame in flight, and the FIFO holds the four
-        // frames of a postback.
-        if let Err(e) = gimbal.poll(now) {
-            defmt::warn!("{}", defmt::Display2Format(&e));
-        }
-
-        while let Some(event) = gimbal.next_event() {
-            match event {
-                Event::Postback => {
-                    if let Some((p, _age)) = gimbal.latest_postback(now) {
-                        defmt::info!(
-                            "postback: pitch {=f32} deg, heading {=f32} deg",
-                            p.pitch_deg(),
-                            p.heading_deg()
-                        );
-                    }
+        app.step(
+            &mut gimbal,
+            now(),
+            vehicle_stand_in,
+            |report| match report {
+                Report::Driver(e) => defmt::warn!("{}", defmt::Display2Format(&e)),
+                Report::Event(Event::Postback, Some(p)) => defmt::info!(
+                    "postback: pitch {=f32} deg, heading {=f32} deg",
+                    p.pitch_deg(),
+                    p.heading_deg()
+                ),
+                Report::Event(Event::LinkUp, _) => defmt::info!("gimbal link up"),
+                Report::Event(Event::LinkDown, _) => {
+                    defmt::warn!("gimbal link down: no postback for 1.5 s")
                 }
-                Event::LinkUp => defmt::info!("gimbal link up"),
-                Event::LinkDown => defmt::warn!("gimbal link down: no postback for 1.5 s"),
-                other => defmt::info!("event: {}", other),
-            }
-        }
-
-        if now.is_at_or_after(next_stats) {
-            next_stats = now.add_millis(10_000);
-            defmt::info!("stats: {}", gimbal.stats());
-        }
+                Report::Event(event, _) => defmt::info!("event: {}", event),
+                Report::Stats(stats) => defmt::info!("stats: {}", stats),
+            },
+        );
     }
 }
