@@ -31,6 +31,10 @@
 #[macro_use]
 mod qemu;
 
+// The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
+#[cfg(target_os = "none")]
+use stm32f4xx_hal as _;
+
 #[cfg(target_os = "none")]
 #[path = "common/session.rs"]
 mod session;

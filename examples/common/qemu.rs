@@ -1,5 +1,7 @@
-//! Support shared by the QEMU examples (`qemu_demo`, `qemu_bench`): semihosting output and
-//! exit, a panic handler and a HardFault handler that both exit with status 1.
+//! Support shared by the QEMU firmware (`qemu_demo`, `qemu_bench`, the bridge's
+//! `qemu_mavlink` and `qemu_bench_mavlink`, `boards/embassy_qemu`): semihosting output and
+//! exit, a panic handler and a HardFault handler that both exit with status 1. Each
+//! includer brings the STM32F405's interrupt vector table if its cortex-m-rt needs one.
 //!
 //! QEMU's `netduinoplus2` machine is an STM32F405 without a CAN peripheral. Output goes to
 //! the host through ARM semihosting (`-semihosting-config enable=on,target=native`), and
@@ -9,8 +11,6 @@ use core::fmt::Write as _;
 
 use cortex_m_rt::{exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hio};
-// The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
-use stm32f4xx_hal as _;
 
 /// Ends the emulation: status 0 when `success`, 1 otherwise.
 pub fn exit(success: bool) -> ! {

@@ -42,11 +42,9 @@ mod time;
 mod time_driver;
 
 use core::cell::RefCell;
-use core::fmt::{self, Write as _};
 use core::sync::atomic::{AtomicBool, Ordering};
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
-use cortex_m_semihosting::{debug, hio};
+use cortex_m_rt::entry;
 use embassy_executor::{raw, Spawner};
 use embassy_futures::select::{select, select4, Either, Either4};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -65,62 +63,12 @@ use time::{embassy_at, tick};
 
 // ---- output and exit ----
 
-/// A line of output, sent to the host in one semihosting call.
-struct Line(heapless::String<192>);
-
-impl fmt::Write for Line {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        // Output is best effort: a line too long is cut, never a failure.
-        for c in s.chars() {
-            if self.0.push(c).is_err() {
-                break;
-            }
-        }
-        Ok(())
-    }
-}
-
-fn print(args: fmt::Arguments<'_>) {
-    let mut line = Line(heapless::String::new());
-    let _ = line.write_fmt(args);
-    let _ = line.0.push('\n');
-    if let Ok(mut out) = hio::hstdout() {
-        let _ = out.write_str(&line.0);
-    }
-}
-
-macro_rules! println {
-    ($($arg:tt)*) => { print(format_args!($($arg)*)) };
-}
-
-/// Ends the emulation: status 0 when `success`, 1 otherwise.
-fn exit(success: bool) -> ! {
-    debug::exit(if success {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    // Only reached when not running under a semihosting host.
-    loop {
-        cortex_m::asm::bkpt();
-    }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    if let Ok(mut err) = hio::hstderr() {
-        let _ = writeln!(err, "PANIC: {info}");
-    }
-    exit(false)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    if let Ok(mut err) = hio::hstderr() {
-        let _ = writeln!(err, "HARD FAULT at pc={:#010x}", frame.pc());
-    }
-    exit(false)
-}
+// Semihosting output (`println!`), `exit`, and the panic and HardFault handlers (status 1):
+// the support the crate's other QEMU firmware uses.
+#[path = "../../../examples/common/qemu.rs"]
+#[macro_use]
+mod qemu;
+use qemu::exit;
 
 // ---- what the tasks exchange ----
 
