@@ -844,4 +844,49 @@ mod tests {
         assert_eq!(gimbal.stats().link.frames_sent, 7);
         assert_eq!(gimbal.stats().driver_errors.total(), 0);
     }
+
+    #[test]
+    fn frames_say_what_they_are() {
+        let std_id = Id::Standard(StandardId::new(0x123).unwrap());
+        let standard = Frame::new(std_id, &[1, 2]).unwrap();
+        assert!(!standard.is_extended());
+        assert_eq!(
+            (standard.id(), standard.dlc(), standard.data()),
+            (std_id, 2, &[1u8, 2][..])
+        );
+        let extended = data_frame(ids::POSTBACK, &[9; 8]);
+        assert!(extended.is_extended());
+        assert!(!extended.is_remote_frame());
+        assert_eq!(
+            Frame::new(ext(1), &[0; 9]),
+            None,
+            "a classic frame carries 8 bytes at most"
+        );
+        // Remote frames: a length code of 0 to 8 and no data.
+        for dlc in 0..=8 {
+            let remote = Frame::new_remote(ext(ids::POSTBACK), dlc).unwrap();
+            assert!(remote.is_remote_frame() && remote.is_extended());
+            assert_eq!((remote.dlc(), remote.data()), (dlc, &[][..]), "dlc {dlc}");
+        }
+        assert_eq!(Frame::new_remote(ext(ids::POSTBACK), 9), None);
+    }
+
+    #[test]
+    fn errors_say_what_the_controller_saw() {
+        let texts = [
+            (Error::Stuff, "FDCAN: stuff error"),
+            (Error::Form, "FDCAN: form error"),
+            (Error::Acknowledge, "FDCAN: acknowledge error"),
+            (Error::Bit1, "FDCAN: bit 1 error"),
+            (Error::Bit0, "FDCAN: bit 0 error"),
+            (Error::Crc, "FDCAN: CRC error"),
+            (Error::Overrun, "FDCAN: receive FIFO overrun"),
+            (Error::BusOff, "FDCAN: bus-off"),
+            (Error::Unsupported, "FDCAN: frame not supported"),
+            (Error::NotClassic, "FDCAN: CAN FD frame received"),
+        ];
+        for (e, text) in texts {
+            assert_eq!(std::format!("{e}"), text);
+        }
+    }
 }
