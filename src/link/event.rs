@@ -192,6 +192,13 @@ mod tests {
         s.set_up(false);
         s.set_up(true);
         assert_eq!(drain(&mut s), [Event::LinkDown, Event::LinkUp]);
+        // From down (as told) with nothing else waiting: up and down again between two
+        // reads is both, in order.
+        let mut fresh = Status::new();
+        fresh.set_up(true);
+        fresh.set_up(false);
+        assert_eq!(drain(&mut fresh), [Event::LinkUp, Event::LinkDown]);
+        assert!(!fresh.is_up());
         // Down, up, down: the net change.
         s.set_up(false);
         s.set_up(true);
