@@ -223,8 +223,10 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                 (CONTROL_ID, data)
             } else if let Some(frame) = self.link.next_transmit() {
                 let Some(id) = ExtendedId::new(frame.id) else {
-                    // Every queued frame has a valid 29-bit extended ID.
-                    return Err(first_error.unwrap_or(self.unsendable()));
+                    // Every queued frame has a valid 29-bit extended ID. Counted whatever
+                    // the receive loop saw; its first error still wins.
+                    let e = self.unsendable();
+                    return Err(first_error.unwrap_or(e));
                 };
                 (id, frame.data)
             } else {

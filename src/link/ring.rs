@@ -53,17 +53,6 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         }
     }
 
-    /// `i`, for `i < N`: for a power of two masked, which changes nothing but shows the
-    /// compiler that the index is in bounds (no bounds check).
-    #[inline(always)]
-    fn index(i: usize) -> usize {
-        if N.is_power_of_two() {
-            i & (N - 1)
-        } else {
-            i
-        }
-    }
-
     /// Appends `x`; hands it back when the ring is full.
     pub(crate) fn push_back(&mut self, x: T) -> Result<(), T> {
         if self.len() >= N {
@@ -100,7 +89,9 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         if self.len == 0 {
             return None;
         }
-        let x = *self.slots.get(Self::index(usize::from(self.head)))?;
+        // `head < N`: `wrap` changes nothing, but for a power of two its mask shows the
+        // compiler that the index is in bounds (no bounds check).
+        let x = *self.slots.get(Self::wrap(usize::from(self.head)))?;
         self.head = Self::wrap(usize::from(self.head) + 1) as u8;
         self.len -= 1;
         Some(x)
