@@ -6,7 +6,7 @@
 //!
 //! The main loop (`examples/common/app.rs`, shared with the board crates under `boards/`)
 //! polls the driver, pushes vehicle data from a **stand-in source** (replace
-//! `app::vehicle_stand_in` with your autopilot's estimates) and logs postbacks, link events
+//! `vehicle_stand_in` in `examples/common/vehicle.rs` with your autopilot's estimates) and logs postbacks, link events
 //! and, every 10 s, the counters.
 //!
 //! Build: `cargo build --release --target thumbv7em-none-eabihf --example stm32f405`
@@ -24,14 +24,19 @@ mod board;
 mod app;
 
 #[cfg(target_os = "none")]
+#[path = "common/vehicle.rs"]
+mod vehicle;
+
+#[cfg(target_os = "none")]
 mod fw {
     use cortex_m_rt::entry;
     use defmt_rtt as _;
     use panic_probe as _;
     use stm32f4xx_hal::pac;
 
-    use crate::app::{vehicle_stand_in, App, Report};
+    use crate::app::{App, Report};
     use crate::board::{self, now};
+    use crate::vehicle::vehicle_stand_in;
     use idu_gimbal::{Config, Gimbal};
 
     #[entry]

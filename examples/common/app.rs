@@ -1,6 +1,7 @@
 //! The main loop of every CAN firmware example, whatever its HAL: `examples/stm32f405.rs`
 //! and the board crates `boards/rp2040_mcp2515`, `boards/esp32c3_twai` and
-//! `boards/stm32h743_fdcan` (through `#[path]`). A board sets up its clocks, its CAN
+//! `boards/stm32h743_fdcan` (through `#[path]`; the stand-in vehicle data is
+//! `examples/common/vehicle.rs`). A board sets up its clocks, its CAN
 //! controller and its tick, builds a [`Gimbal`], then calls [`App::step`] forever with the
 //! time and what it does with each [`Report`] (defmt, a serial console, nothing).
 //!
@@ -14,22 +15,6 @@ use idu_gimbal::driver::{DriverError, Stats};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, Gimbal, Instant};
-
-/// The vehicle's position, altitude and attitude, measured now.
-pub type Vehicle = (Gps, Altitude, Attitude);
-
-/// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates (for example MAVLink
-/// `GLOBAL_POSITION_INT` and `ATTITUDE`, or your EKF outputs), each with the time it was
-/// measured. Here: a vehicle hovering over a fixed point while it slowly yaws.
-#[allow(dead_code)] // A board without an FPU may build its own from wire units.
-pub fn vehicle_stand_in(now: Instant) -> Option<Vehicle> {
-    // One degree of yaw every 100 ms, in [-180, 180).
-    let heading = ((now.as_millis() / 100) % 360) as f32 - 180.0;
-    let gps = Gps::new(47.397_742, 8.545_594).ok()?;
-    let altitude = Altitude::new(488.0).ok()?;
-    let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
-    Some((gps, altitude, attitude))
-}
 
 /// What a turn of the loop has to tell.
 #[allow(dead_code)] // A board without a log (the RP2040's) reads none of it.
@@ -62,7 +47,7 @@ impl App {
         &mut self,
         gimbal: &mut Gimbal<C, Q, T>,
         now: Instant,
-        vehicle: impl FnOnce(Instant) -> Option<Vehicle>,
+        vehicle: impl FnOnce(Instant) -> Option<(Gps, Altitude, Attitude)>,
         mut report: impl FnMut(Report),
     ) {
         if now.is_at_or_after(self.next_vehicle) {

@@ -20,6 +20,9 @@
 #![no_main]
 
 mod time;
+/// The stand-in vehicle data shared with the other firmware examples.
+#[path = "../../../examples/common/vehicle.rs"]
+mod vehicle;
 
 use defmt::{info, unwrap, warn};
 use defmt_rtt as _;
@@ -47,6 +50,7 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
 use time::{embassy_at, tick};
+use vehicle::vehicle_stand_in;
 
 bind_interrupts!(struct Irqs {
     CAN1_TX => TxInterruptHandler<CAN1>;
@@ -233,22 +237,15 @@ async fn gimbal_task(
 
 // ---- the vehicle data ----
 
-/// STAND-IN VEHICLE DATA at 10 Hz. Replace with the autopilot's estimates (for example
-/// MAVLink `GLOBAL_POSITION_INT` and `ATTITUDE`, or your EKF outputs), each with the time it
-/// was measured. Here: a vehicle hovering over a fixed point while it slowly yaws.
+/// Vehicle data at 10 Hz, from the stand-in the other firmware examples use
+/// (`examples/common/vehicle.rs`: replace it with the autopilot's estimates).
 #[embassy_executor::task]
 async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, VehicleSample, 4>) {
     let mut ticker = embassy_time::Ticker::every(embassy_time::Duration::from_millis(100));
     loop {
         ticker.next().await;
         let stamp = tick(embassy_time::Instant::now());
-        // One degree of yaw every 100 ms, in [-180, 180).
-        let heading = ((stamp.as_millis() / 100) % 360) as f32 - 180.0;
-        let (Ok(gps), Ok(altitude), Ok(attitude)) = (
-            Gps::new(47.397_742, 8.545_594),
-            Altitude::new(488.0),
-            Attitude::new(1.5, -0.4, heading),
-        ) else {
+        let Some((gps, altitude, attitude)) = vehicle_stand_in(stamp) else {
             continue;
         };
         vehicle

@@ -54,14 +54,16 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// The Pico's crystal.
 const XTAL_FREQ_HZ: u32 = 12_000_000;
 
-// The stand-in vehicle data (replace with the autopilot's estimates): the shared loop's,
-// built from f32 degrees and metres.
+/// The stand-in vehicle data (replace with the autopilot's estimates) shared with the other
+/// firmware examples, built from f32 degrees and metres.
+#[path = "../../../examples/common/vehicle.rs"]
+mod vehicle;
 #[cfg(not(feature = "wire-units"))]
-use app::vehicle_stand_in;
+use vehicle::vehicle_stand_in;
 
 /// The same stand-in, built from wire units (1e-7 degree, cm, centi-degree): no floats.
 #[cfg(feature = "wire-units")]
-fn vehicle_stand_in(now: Instant) -> Option<app::Vehicle> {
+fn vehicle_stand_in(now: Instant) -> Option<vehicle::Vehicle> {
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
     let gps = Gps::from_e7(473_977_420, 85_455_940).ok()?;

@@ -39,7 +39,11 @@ use idu_gimbal::{Config, Event, Gimbal, Instant};
 /// The main loop shared with the other CAN firmware examples.
 #[path = "../../../examples/common/app.rs"]
 mod app;
-use app::{vehicle_stand_in, App, Report};
+use app::{App, Report};
+/// The stand-in vehicle data shared with the other firmware examples.
+#[path = "../../../examples/common/vehicle.rs"]
+mod vehicle;
+use vehicle::vehicle_stand_in;
 
 /// The board's crystal.
 const HSE_HZ: u32 = 16_000_000;
