@@ -258,6 +258,12 @@ mod fw {
     const GOAL_DRIVER_FOREIGN_FRAME: f32 = 25.0;
     const GOAL_DRIVER_RX_FRAME: f32 = 99.0;
     const GOAL_SEND_POLL: f32 = 100.0;
+    /// Issue 16's encode goal (the C's 15): met in this loop, which keeps the command's
+    /// prefix constant in a register (BENCHMARKS.md: 17 where a caller cannot). The
+    /// hundredth is the meter's resolution, not slack: two SysTick readings (6 instructions
+    /// each) over 4,096 calls, and the loop overhead measured alike, leave the amortized
+    /// figure up to 0.006 off the whole count.
+    const GOAL_ENCODE: f32 = 15.01;
 
     /// Messages per batch in the amortized postback measurements.
     const MESSAGES: u32 = 512;
@@ -686,7 +692,7 @@ mod fw {
         let cost = m.per_op(4096, |_| {
             black_box(black_box(&cmd).encode());
         });
-        table.add("encode one command (pitch -45 deg)", cost, "");
+        table.budget("encode one command (pitch -45 deg)", cost, "", GOAL_ENCODE);
     }
 
     fn bench_crc(m: &mut Meter, table: &mut Table) {
