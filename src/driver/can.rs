@@ -157,6 +157,18 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
     /// first error seen is returned at the end.
     pub fn poll(&mut self, now: Instant) -> Result<(), DriverError> {
+        let first_error = self.receive_all(now);
+        // Unless nothing is due and nothing waits to be sent (one compare for both).
+        if !self.link.is_idle(now) {
+            return self.poll_busy(now, first_error);
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+
+    /// [`Gimbal::poll`]'s receive loop: every frame the CAN driver has, up to the bound;
+    /// the first error it reported.
+    #[inline(always)]
+    fn receive_all(&mut self, now: Instant) -> Option<DriverError> {
         let mut first_error = None;
         // At least one receive (the bound is not zero): no guard before the first. One
         // call site only, so that the CAN driver's `receive` can be inlined.
@@ -185,11 +197,23 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                 break;
             }
         }
+        first_error
+    }
+
+    /// [`Gimbal::poll`] past its receive loop when the idle check did not hold: the link's
+    /// schedules, then whatever waits to be sent.
+    #[inline(always)]
+    fn poll_busy(
+        &mut self,
+        now: Instant,
+        first_error: Option<DriverError>,
+    ) -> Result<(), DriverError> {
         self.link.poll(now);
         if self.link.has_transmit() {
             // A tail call: the result is `transmit`'s.
             return self.transmit(first_error);
         }
+        self.link.release_idle();
         first_error.map_or(Ok(()), Err)
     }
 
@@ -527,6 +551,10 @@ where
         self.can.receive().map_err(|e| self.classify(e))
     }
 }
+
+#[cfg(all(test, feature = "mock"))]
+#[path = "can_idle_tests.rs"]
+mod idle_tests;
 
 #[cfg(test)]
 mod tests {

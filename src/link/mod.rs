@@ -34,6 +34,7 @@ mod event;
 mod point;
 pub mod postback;
 pub mod queue;
+mod quiet;
 mod ring;
 pub mod serial;
 pub mod text;
@@ -323,10 +324,10 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     steering: Steering<Q, T>,
     latest: Option<(Postback, Instant)>,
     status: event::Status,
-    /// Nothing is due within `quiet_ms` after `last_poll` (0: poll fully next time): the
-    /// idle poll's fast path, one load pair and a compare.
+    /// Nothing is due within `quiet` after `last_poll` (0: poll fully next time): the idle
+    /// fast paths, one load pair and a compare each. Kept next to each other.
     last_poll: Instant,
-    quiet_ms: u32,
+    quiet: quiet::Quiet,
     stats: Counters,
 }
 
@@ -357,7 +358,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             latest: None,
             status: event::Status::new(),
             last_poll: Instant::from_millis(0),
-            quiet_ms: 0,
+            quiet: quiet::Quiet::NONE,
             stats: Counters::default(),
         }
     }
@@ -484,6 +485,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             return Err(QueueFull(command));
         }
+        self.quiet.hold_idle();
         if command.is_pointing() {
             self.steering = Steering::Manual;
             // A zero-rate frame still waiting would arrive after this command and undo it.
@@ -522,7 +524,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         });
         // The new rate supersedes a zero-rate frame still waiting.
         self.tx.cancel_zero_rate();
-        self.quiet_ms = 0;
+        self.quiet = quiet::Quiet::NONE;
         Ok(())
     }
 
@@ -542,6 +544,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     fn end_rate_hold(&mut self) {
         self.steering = Steering::Manual;
         self.tx.mark_zero_rate();
+        self.quiet.hold_idle();
     }
 
     /// Queues a text message, all of it or nothing.
@@ -555,7 +558,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.tx.push_text(slots).map_err(|needed| {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             TextQueueError::NoRoom { needed, free }
-        })
+        })?;
+        self.quiet.hold_idle();
+        Ok(())
     }
 
     // ---- vehicle data ----
@@ -574,7 +579,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             .stamp(slot)
             .is_some_and(|old| !stamp.is_at_or_after(old));
         if self.vehicle.due(slot) || older {
-            self.quiet_ms = 0;
+            self.quiet = quiet::Quiet::NONE;
         }
         self.vehicle.stamped(slot, stamp);
     }
@@ -644,7 +649,23 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     #[inline]
     pub fn is_quiet(&self, now: Instant) -> bool {
         // A clock that went backwards reads as a huge interval: a full poll, never a skip.
-        now.millis_since(self.last_poll) < self.quiet_ms
+        now.millis_since(self.last_poll) < self.quiet.schedules()
+    }
+
+    /// Whether [`Link::poll`] at `now` would have nothing to do and no frame waits to be
+    /// sent: a driver's idle fast path, one compare for both. (Frames queued outside a
+    /// poll end it; the driver ends a poll that found nothing waiting with
+    /// [`Link::release_idle`].)
+    #[inline(always)]
+    pub(crate) fn is_idle(&self, now: Instant) -> bool {
+        now.millis_since(self.last_poll) < self.quiet.idle()
+    }
+
+    /// The driver found nothing waiting after a poll: [`Link::is_idle`] holds again until
+    /// the schedules' next deadline or the next frame queued.
+    #[inline(always)]
+    pub(crate) fn release_idle(&mut self) {
+        self.quiet.release_idle();
     }
 
     /// The instant by which [`Link::poll`] must next be called if nothing is received and
@@ -699,8 +720,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// ```
     pub fn next_deadline(&self, now: Instant) -> Instant {
         if self.is_quiet(now) {
-            // Quiet: `now` is within `quiet_ms` after the last poll, so this is after it.
-            self.last_poll.add_millis(self.quiet_ms)
+            // Quiet: `now` is within the interval after the last poll, so this is after it.
+            self.last_poll.add_millis(self.quiet.schedules())
         } else {
             now
         }
@@ -716,7 +737,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         } else {
             0
         };
-        self.quiet_ms = self.quiet_ms.min(ahead);
+        self.quiet.cut_to(ahead);
     }
 
     #[inline(never)]
@@ -743,7 +764,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             }
         }
         self.last_poll = now;
-        self.quiet_ms = earliest.ahead;
+        self.quiet.set(earliest.ahead);
     }
 
     fn poll_rate(&mut self, now: Instant, earliest: &mut Earliest) {
@@ -824,7 +845,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// [`point`](self#pointing-at-a-location). Ends a rate hold (the heading and pitch
     /// commands that follow replace it).
     pub fn point_at(&mut self, target: Position) {
-        self.quiet_ms = 0;
+        self.quiet = quiet::Quiet::NONE;
         // A zero-rate frame still waiting would arrive after the aim and could undo it.
         self.tx.cancel_zero_rate();
         self.steering = Steering::Point(point::PointAt::new(target));
@@ -1021,6 +1042,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 return Requeued::Foreign;
             }
         }
+        self.quiet.hold_idle();
         self.tx.requeue(frame.id, frame.data)
     }
 
