@@ -272,18 +272,44 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
     /// error seen is returned at the end.
     pub fn poll(&mut self, now: Instant) -> Result<(), PortError<P::ReadError, P::WriteError>> {
         let mut first_error = None;
-        // The first read inline, the rest out of line: an idle poll pays for one read.
+        self.receive_all(now, &mut first_error);
+        // Unless nothing is due and nothing waits to be written (one compare for both).
+        if !self.link.link().is_idle(now) {
+            self.poll_busy(now, &mut first_error);
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+
+    /// [`SerialGimbal::poll`]'s reads: the first inline, the rest out of line (an idle
+    /// poll pays for one read).
+    #[inline(always)]
+    fn receive_all(
+        &mut self,
+        now: Instant,
+        first_error: &mut Option<PortError<P::ReadError, P::WriteError>>,
+    ) {
         match self.port.read(&mut self.rx_buf) {
             Ok(0) => {}
-            first => self.receive(first, now, &mut first_error),
+            first => self.receive(first, now, first_error),
         }
+    }
+
+    /// [`SerialGimbal::poll`] past its reads when the idle check did not hold: the link's
+    /// schedules, then whatever waits to be written.
+    #[inline(always)]
+    fn poll_busy(
+        &mut self,
+        now: Instant,
+        first_error: &mut Option<PortError<P::ReadError, P::WriteError>>,
+    ) {
         self.link.poll(now);
         if self.link.has_transmit() {
             if let Some(e) = self.transmit() {
                 first_error.get_or_insert(e);
             }
+        } else {
+            self.link.link_mut().release_idle();
         }
-        first_error.map_or(Ok(()), Err)
     }
 
     /// The instant by which [`SerialGimbal::poll`] must next be called if no byte is
@@ -338,11 +364,15 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
             match self.port.write(bytes) {
                 Ok(0) => {
                     self.link.transmit_written(0);
+                    // Bytes wait (a frame part-written stays out of the link's queue):
+                    // the idle check must not skip the next poll.
+                    self.link.link_mut().hold_idle();
                     return None;
                 }
                 Ok(n) => self.link.transmit_written(n),
                 Err(e) => {
                     self.link.transmit_written(0);
+                    self.link.link_mut().hold_idle();
                     self.errors.write = self.errors.write.wrapping_add(1);
                     return Some(PortError::Write(e));
                 }
@@ -443,3 +473,7 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         self.port
     }
 }
+
+#[cfg(all(test, feature = "mock"))]
+#[path = "serial_idle_tests.rs"]
+mod idle_tests;

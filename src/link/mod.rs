@@ -668,6 +668,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.quiet.release_idle();
     }
 
+    /// Something waits to be sent outside the queue (a serial frame part-written): ends
+    /// the idle check until the driver finds nothing waiting.
+    #[inline]
+    pub(crate) fn hold_idle(&mut self) {
+        self.quiet.hold_idle();
+    }
+
     /// The instant by which [`Link::poll`] must next be called if nothing is received and
     /// nothing else is asked of the link before then, as seen from `now`, the caller's
     /// current time: smoltcp's `poll_at`.
