@@ -200,6 +200,19 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         first_error
     }
 
+    /// [`Gimbal::poll`] as if its idle check never held: what the check is tested against.
+    #[cfg(test)]
+    pub(super) fn poll_without_idle_check(&mut self, now: Instant) -> Result<(), DriverError> {
+        let first_error = self.receive_all(now);
+        self.poll_busy(now, first_error)
+    }
+
+    /// Whether the idle check would skip the poll at `now`.
+    #[cfg(test)]
+    pub(super) fn is_idle(&self, now: Instant) -> bool {
+        self.link.is_idle(now)
+    }
+
     /// [`Gimbal::poll`] past its receive loop when the idle check did not hold: the link's
     /// schedules, then whatever waits to be sent.
     #[inline(always)]
@@ -551,10 +564,6 @@ where
         self.can.receive().map_err(|e| self.classify(e))
     }
 }
-
-#[cfg(all(test, feature = "mock"))]
-#[path = "can_idle_tests.rs"]
-mod idle_tests;
 
 #[cfg(test)]
 mod tests {

@@ -20,5 +20,8 @@ pub mod can;
 pub mod fdcan;
 pub mod serial;
 
+#[cfg(all(test, feature = "mock"))]
+mod idle_tests;
+
 pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, Stats};
 pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialPort};

@@ -294,6 +294,25 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         }
     }
 
+    /// [`SerialGimbal::poll`] as if its idle check never held: what the check is tested
+    /// against.
+    #[cfg(test)]
+    pub(super) fn poll_without_idle_check(
+        &mut self,
+        now: Instant,
+    ) -> Result<(), PortError<P::ReadError, P::WriteError>> {
+        let mut first_error = None;
+        self.receive_all(now, &mut first_error);
+        self.poll_busy(now, &mut first_error);
+        first_error.map_or(Ok(()), Err)
+    }
+
+    /// Whether the idle check would skip the poll at `now`.
+    #[cfg(test)]
+    pub(super) fn is_idle(&self, now: Instant) -> bool {
+        self.link.link().is_idle(now)
+    }
+
     /// [`SerialGimbal::poll`] past its reads when the idle check did not hold: the link's
     /// schedules, then whatever waits to be written.
     #[inline(always)]
@@ -473,7 +492,3 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         self.port
     }
 }
-
-#[cfg(all(test, feature = "mock"))]
-#[path = "serial_idle_tests.rs"]
-mod idle_tests;

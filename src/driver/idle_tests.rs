@@ -1,0 +1,384 @@
+//! The drivers' idle check ("nothing due and nothing waiting to be sent", one compare)
+//! against polls that never take it: two drivers get the same operations and are polled
+//! every millisecond, one with the check and one without, and must put the same frames or
+//! bytes on the line, raise the same events, count the same and return the same.
+
+use super::*;
+use crate::geo::Position;
+use crate::link::serial::SerialStats;
+use crate::link::{Config, Event};
+use crate::mock::serial::{Pipe, Rx, SerialFaults, Tx};
+use crate::mock::{Bus, Endpoint, MockFrame};
+use crate::time::Instant;
+use crate::wire::control::{GimbalCommand, Pitch, Rate};
+use crate::wire::ids;
+use crate::wire::postback::Postback;
+use crate::wire::vehicle::{Altitude, Attitude, Gps};
+use core::fmt::Debug;
+use embedded_can::nb::Can as _;
+use embedded_can::{ExtendedId, Frame as _, Id};
+use proptest::prelude::*;
+use std::vec::Vec;
+
+#[derive(Clone, Debug)]
+enum Op {
+    Wait(u32),
+    Send,
+    Rate(i16),
+    StopRate,
+    PointAt,
+    /// CAN only (the serial link carries neither).
+    Text,
+    /// Pushed on CAN; kept for point-at on serial.
+    Vehicle {
+        stamp_back: u32,
+    },
+    /// The peer sends a whole postback.
+    Postback,
+    /// The peer sends a quarter of one (a CAN frame, 7 of the 27 stream bytes): a partial
+    /// postback expires.
+    PostbackPart(u8),
+    /// The line takes nothing (`true`: CAN delivery stops, with one mailbox; the serial
+    /// port stalls) or resumes: frames are refused and queued again, or wait part-written.
+    Stall(bool),
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    prop_oneof![
+        8 => (0u32..300).prop_map(Op::Wait),
+        2 => (300u32..3000).prop_map(Op::Wait),
+        3 => Just(Op::Send),
+        2 => (-500i16..500).prop_map(Op::Rate),
+        1 => Just(Op::StopRate),
+        1 => Just(Op::PointAt),
+        1 => Just(Op::Text),
+        2 => (0u32..1500).prop_map(|stamp_back| Op::Vehicle { stamp_back }),
+        2 => Just(Op::Postback),
+        1 => (0u8..4).prop_map(Op::PostbackPart),
+        2 => any::<bool>().prop_map(Op::Stall),
+    ]
+}
+
+fn pitch() -> GimbalCommand {
+    GimbalCommand::Pitch(Pitch::new(-10.0).unwrap())
+}
+
+/// One driver with its line and the peer at the other end.
+trait Side {
+    type Poll: PartialEq + Debug;
+    type Observed: PartialEq + Debug;
+    fn apply(&mut self, op: &Op, now: Instant);
+    /// A poll with the idle check, or one that never takes it.
+    fn poll(&mut self, now: Instant, idle_check: bool) -> Self::Poll;
+    /// What the peer received since the last call, the events taken, the counters.
+    fn observe(&mut self) -> Self::Observed;
+}
+
+/// The operations both drivers take alike; `false` for the others.
+macro_rules! apply_common {
+    ($gimbal:expr, $op:expr, $now:expr) => {
+        match *$op {
+            Op::Wait(_) => true,
+            Op::Send => {
+                let _ = $gimbal.send(pitch());
+                true
+            }
+            Op::Rate(r) => {
+                let _ = $gimbal.set_rate(Rate::from_centi(r, 0).unwrap(), $now);
+                true
+            }
+            Op::StopRate => {
+                $gimbal.stop_rate();
+                true
+            }
+            Op::PointAt => {
+                $gimbal.point_at(Position::new(47.001, 8.001, 400.0).unwrap());
+                true
+            }
+            _ => false,
+        }
+    };
+}
+
+/// `Side::poll` for a side whose driver is `self.gimbal` (both drivers name the two polls
+/// alike).
+macro_rules! poll_through_gimbal {
+    () => {
+        fn poll(&mut self, now: Instant, idle_check: bool) -> Self::Poll {
+            match idle_check {
+                true => self.gimbal.poll(now),
+                false => self.gimbal.poll_without_idle_check(now),
+            }
+        }
+    };
+}
+
+fn check<S: Side>(fast: &mut S, full: &mut S, ops: &[Op], start: u32) -> Result<(), TestCaseError> {
+    let mut t = start;
+    for op in ops {
+        let steps = if let Op::Wait(ms) = *op { ms } else { 1 };
+        fast.apply(op, Instant::from_millis(t));
+        full.apply(op, Instant::from_millis(t));
+        for _ in 0..steps {
+            let now = Instant::from_millis(t);
+            let a = fast.poll(now, true);
+            let b = full.poll(now, false);
+            prop_assert_eq!(a, b, "at {}", t);
+            prop_assert_eq!(fast.observe(), full.observe(), "at {}", t);
+            t = t.wrapping_add(1);
+        }
+    }
+    Ok(())
+}
+
+// ---- CAN ----
+
+type CanPort<'a> = Endpoint<'a, 2, 16>;
+
+struct CanSide<'a> {
+    bus: &'a Bus<2, 16>,
+    gimbal: Gimbal<CanPort<'a>>,
+    peer: CanPort<'a>,
+}
+
+impl<'a> CanSide<'a> {
+    fn new(bus: &'a Bus<2, 16>) -> Self {
+        assert!(bus.set_mailboxes(0, 1));
+        CanSide {
+            bus,
+            gimbal: Gimbal::new(bus.endpoint(0).unwrap(), Config::default()),
+            peer: bus.endpoint(1).unwrap(),
+        }
+    }
+
+    fn peer_sends(&mut self, data: &[u8; 8]) {
+        let id = ExtendedId::new(ids::POSTBACK).unwrap();
+        let frame = MockFrame::new(id, data).unwrap();
+        // The peer sends nothing else: when its mailboxes are full (delivery stopped), the
+        // bus delivers, the same on both sides.
+        loop {
+            match self.peer.transmit(&frame) {
+                Ok(None) => return,
+                Err(nb::Error::WouldBlock) => {
+                    self.bus.deliver();
+                }
+                other => panic!("peer transmit: {other:?}"),
+            }
+        }
+    }
+}
+
+impl Side for CanSide<'_> {
+    type Poll = Result<(), DriverError>;
+    type Observed = (Vec<(Id, Vec<u8>)>, Vec<Event>, Stats);
+
+    fn apply(&mut self, op: &Op, now: Instant) {
+        if apply_common!(self.gimbal, op, now) {
+            return;
+        }
+        let frames = Postback::default().to_can_frames();
+        match *op {
+            Op::Text => {
+                let _ = self.gimbal.send_text(b"HELLO");
+            }
+            Op::Vehicle { stamp_back } => {
+                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
+                self.gimbal
+                    .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
+                self.gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                self.gimbal
+                    .set_altitude(Altitude::new(500.0).unwrap(), stamp);
+            }
+            Op::Postback => frames.iter().for_each(|d| self.peer_sends(d)),
+            Op::PostbackPart(i) => self.peer_sends(&frames[usize::from(i)]),
+            Op::Stall(on) => self.bus.set_auto_deliver(!on),
+            _ => unreachable!("a common operation"),
+        }
+    }
+
+    poll_through_gimbal!();
+
+    fn observe(&mut self) -> Self::Observed {
+        let frames = core::iter::from_fn(|| self.peer.receive().ok())
+            .map(|f| (f.id(), f.data().to_vec()))
+            .collect();
+        let events = core::iter::from_fn(|| self.gimbal.next_event()).collect();
+        (frames, events, self.gimbal.stats())
+    }
+}
+
+// ---- serial ----
+
+const PIPE: usize = 256;
+type SerialPortOf<'a> = Io<Rx<'a, PIPE>, Tx<'a, PIPE>>;
+
+/// A slow writer that fails now and then: at most 5 bytes a write and one write in 20
+/// fails (PRNG draws per write call, so both sides draw alike as long as they write alike);
+/// `stall`: it takes nothing.
+fn port_faults(stall: bool) -> SerialFaults {
+    SerialFaults {
+        max_write: 5,
+        tx_error: 0.05,
+        write_stall: if stall { 1.0 } else { 0.0 },
+        ..SerialFaults::NONE
+    }
+}
+
+struct SerialSide<'a> {
+    pipe: &'a Pipe<PIPE>,
+    gimbal: SerialGimbal<SerialPortOf<'a>>,
+    peer: SerialPortOf<'a>,
+    stalled: bool,
+}
+
+impl<'a> SerialSide<'a> {
+    fn new(pipe: &'a Pipe<PIPE>) -> Self {
+        pipe.set_faults(port_faults(false));
+        let (rx, tx) = pipe.port(0).unwrap();
+        let (peer_rx, peer_tx) = pipe.port(1).unwrap();
+        SerialSide {
+            pipe,
+            gimbal: SerialGimbal::new(Io::new(rx, tx), Config::default()),
+            peer: Io::new(peer_rx, peer_tx),
+            stalled: false,
+        }
+    }
+
+    fn peer_writes(&mut self, bytes: &[u8]) {
+        // With no faults for the peer's own write, then the gimbal's port's back.
+        self.pipe.set_faults(SerialFaults::NONE);
+        let written = SerialPort::write(&mut self.peer, bytes);
+        assert_eq!(written.ok(), Some(bytes.len()));
+        self.pipe.set_faults(port_faults(self.stalled));
+    }
+}
+
+impl Side for SerialSide<'_> {
+    type Poll = Result<
+        (),
+        PortError<crate::mock::serial::MockSerialError, crate::mock::serial::MockSerialError>,
+    >;
+    type Observed = (Vec<u8>, Vec<Event>, SerialStats, PortErrors);
+
+    fn apply(&mut self, op: &Op, now: Instant) {
+        if apply_common!(self.gimbal, op, now) {
+            return;
+        }
+        let bytes = Postback::default().to_stream_bytes();
+        match *op {
+            Op::Text => {}
+            Op::Vehicle { stamp_back } => {
+                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
+                self.gimbal
+                    .observe_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
+                self.gimbal.observe_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                self.gimbal
+                    .observe_altitude(Altitude::new(500.0).unwrap(), stamp);
+            }
+            Op::Postback => self.peer_writes(&bytes),
+            Op::PostbackPart(i) => {
+                let from = usize::from(i) * 7;
+                self.peer_writes(&bytes[from..(from + 7).min(bytes.len())]);
+            }
+            Op::Stall(on) => {
+                self.stalled = on;
+                self.pipe.set_faults(port_faults(on));
+            }
+            _ => unreachable!("a common operation"),
+        }
+    }
+
+    poll_through_gimbal!();
+
+    fn observe(&mut self) -> Self::Observed {
+        let mut line = Vec::new();
+        let mut buf = [0u8; 64];
+        while let Ok(n @ 1..) = SerialPort::read(&mut self.peer, &mut buf) {
+            line.extend_from_slice(&buf[..n]);
+        }
+        let events = core::iter::from_fn(|| self.gimbal.next_event()).collect();
+        (line, events, self.gimbal.stats(), self.gimbal.port_errors())
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Over a bus that stops delivering at times (one mailbox: frames are refused and
+    /// queued again), the CAN driver's idle check skips nothing a full poll would do.
+    #[test]
+    fn can_idle_check_skips_nothing(ops in proptest::collection::vec(op(), 1..40), start: u32) {
+        let (bus_fast, bus_full): (Bus<2, 16>, Bus<2, 16>) = (Bus::new(1), Bus::new(1));
+        check(&mut CanSide::new(&bus_fast), &mut CanSide::new(&bus_full), &ops, start)?;
+    }
+
+    /// Over a slow port that stalls and fails at times (frames wait part-written), the
+    /// serial driver's idle check skips nothing a full poll would do.
+    #[test]
+    fn serial_idle_check_skips_nothing(ops in proptest::collection::vec(op(), 1..40), start: u32) {
+        let (pipe_fast, pipe_full): (Pipe<PIPE>, Pipe<PIPE>) = (Pipe::new(7), Pipe::new(7));
+        check(&mut SerialSide::new(&pipe_fast), &mut SerialSide::new(&pipe_full), &ops, start)?;
+    }
+}
+
+/// The check does skip: after a command is sent, the next poll finds the queue empty and
+/// releases it, and polls skip until the next deadline; a refused frame holds it.
+#[test]
+fn can_idle_check_holds_between_deadlines_and_ends_while_a_frame_waits() {
+    let bus: Bus<2, 16> = Bus::new(1);
+    let mut side = CanSide::new(&bus);
+    let at = Instant::from_millis;
+    side.gimbal.poll(at(0)).unwrap();
+    assert!(side.gimbal.is_idle(at(1)));
+    assert!(!side.gimbal.is_idle(at(60_000)), "the longest interval");
+    side.gimbal.send(pitch()).unwrap();
+    assert!(!side.gimbal.is_idle(at(1)), "a frame waits");
+    side.gimbal.poll(at(1)).unwrap();
+    assert_eq!(side.observe().0.len(), 1);
+    assert!(
+        !side.gimbal.is_idle(at(2)),
+        "released by the next poll only"
+    );
+    side.gimbal.poll(at(2)).unwrap();
+    assert!(side.gimbal.is_idle(at(3)));
+    // Delivery stops: with one mailbox the text frame is refused and queued again.
+    bus.set_auto_deliver(false);
+    side.gimbal.send(pitch()).unwrap();
+    side.gimbal.send_text(b"HI").unwrap();
+    side.gimbal.poll(at(3)).unwrap();
+    side.gimbal.poll(at(4)).unwrap();
+    assert!(side.gimbal.link().has_transmit());
+    assert!(!side.gimbal.is_idle(at(5)));
+}
+
+/// A frame part-written when the port stalls waits outside the link's queue: the idle
+/// check does not hold until it is written out.
+#[test]
+fn serial_a_part_written_frame_ends_the_idle_check() {
+    let pipe: Pipe<PIPE> = Pipe::new(7);
+    let mut side = SerialSide::new(&pipe);
+    let at = Instant::from_millis;
+    let slow = SerialFaults {
+        max_write: 5,
+        ..SerialFaults::NONE
+    };
+    pipe.set_faults(slow);
+    side.gimbal.poll(at(0)).unwrap();
+    assert!(side.gimbal.is_idle(at(1)));
+    side.gimbal.send(pitch()).unwrap();
+    side.gimbal.poll(at(1)).unwrap(); // at most 5 of its 24 bytes a write, then more
+    assert_eq!(side.observe().0.len(), 24);
+    pipe.set_faults(SerialFaults {
+        write_stall: 1.0,
+        ..SerialFaults::NONE
+    });
+    side.gimbal.send(pitch()).unwrap();
+    side.gimbal.poll(at(2)).unwrap();
+    assert!(side.gimbal.link().has_transmit());
+    assert!(!side.gimbal.is_idle(at(3)));
+    pipe.set_faults(slow);
+    side.gimbal.poll(at(3)).unwrap();
+    assert_eq!(side.observe().0.len(), 24);
+    side.gimbal.poll(at(4)).unwrap();
+    assert!(side.gimbal.is_idle(at(5)));
+}
