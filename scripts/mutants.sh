@@ -59,6 +59,7 @@ cargo mutants \
     --file 'src/driver/**' \
     --exclude src/link/tests.rs \
     --exclude src/link/deadline_tests.rs \
+    --exclude src/driver/idle_tests.rs \
     --timeout "$timeout" \
     --build-timeout 600 \
     --jobs "$jobs" \
