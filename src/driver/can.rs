@@ -255,10 +255,10 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     fn transmit(&mut self, first_error: Option<DriverError>) -> Result<(), DriverError> {
         loop {
             // A control frame (what most polls that send send) with its ID known valid;
-            // the others, in the order of `Link::next_transmit`, with theirs checked.
+            // then the others, in the order of `Link::next_transmit`, with theirs checked.
             let (id, data) = if let Some(data) = self.link.next_control() {
                 (CONTROL_ID, data)
-            } else if let Some(frame) = self.link.next_transmit() {
+            } else if let Some(frame) = self.link.next_transmit_after_control() {
                 let Some(id) = ExtendedId::new(frame.id) else {
                     // Every queued frame has a valid 29-bit extended ID. Counted whatever
                     // the receive loop saw; its first error still wins.

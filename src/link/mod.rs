@@ -962,10 +962,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         if let Some(data) = self.next_control() {
             return Some(Frame::new(ids::CONTROL, data));
         }
-        if !self.has_transmit() {
-            return None;
-        }
-        self.next_transmit_other()
+        self.next_transmit_after_control()
     }
 
     /// [`Link::next_transmit`] when it is a control frame (ID [`ids::CONTROL`]): its data.
@@ -976,6 +973,16 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             return None;
         }
         self.tx.pop_control()
+    }
+
+    /// [`Link::next_transmit`] once [`Link::next_control`] has found no control frame:
+    /// `None` in line when nothing waits, the other classes out of line.
+    #[inline]
+    pub(crate) fn next_transmit_after_control(&mut self) -> Option<Frame> {
+        if !self.has_transmit() {
+            return None;
+        }
+        self.next_transmit_other()
     }
 
     /// [`Link::next_transmit`] past the control frames, out of line: a driver's transmit
