@@ -1,26 +1,27 @@
 //! The bridge: MAVLink 2 bytes in and out, the gimbal driven through [`GimbalControl`], time
 //! passed in.
 
-use idu_gimbal::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
-use idu_gimbal::wire::postback::{GimbalType, Postback};
+use idu_gimbal::geo::Position;
+use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand};
+use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::{
-    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd,
-    MavModeFlag, MavResult, MavState, MavType,
+    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavCmd, MavFrame, MavModeFlag,
+    MavResult, MavState, MavType,
 };
 use mavio::dialects::common::messages::{
-    AutopilotStateForGimbalDevice, CommandAck, CommandLong, GimbalDeviceAttitudeStatus,
+    AutopilotStateForGimbalDevice, CommandAck, CommandInt, CommandLong, GimbalDeviceAttitudeStatus,
     GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::Message;
 
-use crate::attitude::{is_nan_quaternion, wrap_pi, YawPitch};
-use crate::camera::{self, Camera, CameraConfig, Tx};
-
+use crate::camera::{self, Camera, CameraConfig};
+use crate::command::Command;
 use crate::framing::{Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
+use crate::status::{self, Pose};
 
 /// The autopilot's component id (`MAV_COMP_ID_AUTOPILOT1`).
 pub const AUTOPILOT_COMPONENT: u8 = 1;
@@ -30,15 +31,52 @@ pub const GIMBAL_COMPONENT: u8 = 154;
 pub const OUTBOX_LEN: usize = 1024;
 
 /// The gimbal's pitch range, degrees (the wire's command range).
-const PITCH_MIN_DEG: f32 = -100.0;
-const PITCH_MAX_DEG: f32 = 60.0;
-/// The yaw motor's range either side of the nose, degrees (the postback's ±170.00°).
-const YAW_LIMIT_DEG: f32 = 170.0;
-/// `GLOBAL_POSITION_INT`'s message id, asked of the autopilot at [`POSITION_INTERVAL_US`].
-const GLOBAL_POSITION_INT_ID: u32 = 33;
-const POSITION_INTERVAL_US: f32 = 200_000.0;
-/// How often to ask again while no position arrives.
-const POSITION_RETRY_MS: u32 = 5_000;
+pub(crate) const PITCH_MIN_DEG: f32 = -100.0;
+pub(crate) const PITCH_MAX_DEG: f32 = 60.0;
+
+/// How often to ask the autopilot again for a stream that does not come.
+const STREAM_RETRY_MS: u32 = 5_000;
+/// A stream not heard for this long is asked for again (an autopilot that rebooted has
+/// forgotten the interval it was asked for).
+const STREAM_LOST_MS: u32 = 5_000;
+
+/// A stream the bridge asks the autopilot for with `MAV_CMD_SET_MESSAGE_INTERVAL`.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Wanted {
+    /// The message id.
+    id: u32,
+    /// The interval asked for, µs.
+    interval_us: u32,
+    /// Asked for once per autopilot, whether it comes or not (a stream that comes anyway,
+    /// but may come too slowly); otherwise until it comes.
+    once: bool,
+}
+
+/// `GLOBAL_POSITION_INT` at 5 Hz: the vehicle position for the gimbal, point-at and the
+/// captures. Neither autopilot sends it to a gimbal port unasked.
+const POSITION_STREAM: Wanted = Wanted {
+    id: 33,
+    interval_us: 200_000,
+    once: false,
+};
+/// `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` at 20 Hz: the vehicle attitude pushed to the
+/// gimbal and the yaw that relates the setpoint and status frames. ArduPilot sends it to
+/// a MAVLink gimbal by itself; PX4 streams it only on a port in mode Gimbal (its
+/// `configure_streams`), so on any other port it must be asked for.
+const AUTOPILOT_STATE_STREAM: Wanted = Wanted {
+    id: 286,
+    interval_us: 50_000,
+    once: false,
+};
+/// `GIMBAL_DEVICE_SET_ATTITUDE` at 20 Hz, asked once: PX4 re-sends its latest setpoint at
+/// the stream's rate, 5 Hz on a port in mode Normal (`configure_streams`), too slow for a
+/// smooth rate or ROI; ArduPilot sends its setpoints at 50 Hz unasked and refuses the
+/// request, which costs one command.
+const SETPOINT_STREAM: Wanted = Wanted {
+    id: 284,
+    interval_us: 50_000,
+    once: true,
+};
 
 /// How the bridge presents itself and paces what it sends.
 #[derive(Clone, PartialEq, Debug)]
@@ -81,14 +119,15 @@ pub struct BridgeStats {
     pub reader: ReaderStats,
     /// Messages for another system or component, not acted on.
     pub not_for_us: u32,
-    /// Commands answered (every COMMAND_LONG for us gets exactly one ACK).
+    /// Commands answered (every COMMAND_LONG and COMMAND_INT for us gets exactly one ACK).
     pub acks: u32,
     /// Angle setpoints turned into heading or pitch commands.
     pub angle_commands: u32,
     /// Rate setpoints passed to the core's rate hold.
     pub rate_setpoints: u32,
     /// Setpoints not followed: out of the gimbal's range, NaN without rates, a roll the
-    /// gimbal cannot do, or a yaw frame needing a vehicle heading the bridge does not have.
+    /// gimbal cannot do, or a yaw frame needing a vehicle heading (or, for a rate, a
+    /// vehicle yaw rate) the bridge does not have.
     pub refused_setpoints: u32,
     /// Commands the gimbal's queue had no room for.
     pub queue_full: u32,
@@ -106,9 +145,64 @@ pub struct Bridge<G: GimbalControl> {
     state: State,
 }
 
+/// A stream asked of the autopilot: when it was last asked for and last heard.
+#[derive(Clone, Copy, Debug, Default)]
+struct StreamState {
+    asked: Option<Instant>,
+    heard: Option<Instant>,
+}
+
+impl StreamState {
+    /// Whether to ask (again) at `now`: not heard lately, and not asked lately; a stream
+    /// asked for once, when never asked.
+    fn due(&self, wanted: &Wanted, now: Instant) -> bool {
+        if wanted.once {
+            return self.asked.is_none();
+        }
+        let lost = self
+            .heard
+            .is_none_or(|t| now.millis_since(t) >= STREAM_LOST_MS);
+        lost && self
+            .asked
+            .is_none_or(|t| now.millis_since(t) >= STREAM_RETRY_MS)
+    }
+}
+
+/// The vehicle, as the autopilot last described it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Vehicle {
+    /// Yaw (radians, NED: from north) and when it was measured.
+    pub(crate) yaw: Option<(f32, Instant)>,
+    /// Yaw rate (rad/s, about NED's down axis), when the autopilot gave one.
+    pub(crate) yaw_rate: Option<(f32, Instant)>,
+    /// From GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative alt (mm).
+    pub(crate) position: Option<[i32; 4]>,
+}
+
+/// A vehicle yaw older than this cannot convert a setpoint's yaw frame or be reported as
+/// `delta_yaw` (as the core's vehicle data staleness, 1 s).
+pub(crate) const VEHICLE_YAW_STALE_MS: u32 = 1_000;
+
+impl Vehicle {
+    /// The vehicle's yaw from north, radians, when fresh.
+    pub(crate) fn yaw(&self, now: Instant) -> Option<f32> {
+        fresh(self.yaw, now)
+    }
+
+    /// The vehicle's yaw rate, rad/s, when fresh.
+    pub(crate) fn yaw_rate(&self, now: Instant) -> Option<f32> {
+        fresh(self.yaw_rate, now)
+    }
+}
+
+fn fresh(v: Option<(f32, Instant)>, now: Instant) -> Option<f32> {
+    v.filter(|&(_, at)| now.millis_since(at) <= VEHICLE_YAW_STALE_MS)
+        .map(|(v, _)| v)
+}
+
 /// Everything but the gimbal and the reader, so that the reader's callback can borrow it.
-struct State {
-    config: BridgeConfig,
+pub(crate) struct State {
+    pub(crate) config: BridgeConfig,
     out: Outbox<OUTBOX_LEN>,
     system_id: u8,
     /// The autopilot's (system, component), from its heartbeat.
@@ -116,30 +210,53 @@ struct State {
     next_heartbeat: Option<Instant>,
     next_status: Option<Instant>,
     status_ms: u32,
-    /// When the position was last asked for; whether one arrived since.
-    position_asked: Option<Instant>,
-    position_seen: bool,
-    /// The vehicle's yaw (radians, NED) and when it was measured.
-    vehicle_yaw: Option<(f32, Instant)>,
+    position_stream: StreamState,
+    autopilot_state_stream: StreamState,
+    setpoint_stream: StreamState,
+    pub(crate) vehicle: Vehicle,
     /// The last angles commanded (heading, pitch), 0.1° units.
-    commanded: (Option<u16>, Option<i16>),
+    pub(crate) commanded: (Option<u16>, Option<i16>),
     /// The last setpoint's neutral/retract flags, to act on a change only.
-    last_flags: u16,
-    /// The vehicle's position from GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative
-    /// alt (mm), for the camera's captures.
-    position: Option<[i32; 4]>,
+    pub(crate) last_flags: u16,
+    /// The pose last commanded, for the status flags.
+    pub(crate) pose: Pose,
     camera: Option<Camera>,
-    stats: BridgeStats,
+    pub(crate) stats: BridgeStats,
 }
 
-/// A vehicle yaw older than this cannot convert a setpoint's yaw frame (as the core's
-/// vehicle data staleness, 1 s).
-const VEHICLE_YAW_STALE_MS: u32 = 1_000;
+/// What the camera is given to send with: the outbox, and what it reports from the
+/// bridge's state.
+pub(crate) struct Tx<'a> {
+    out: &'a mut Outbox<OUTBOX_LEN>,
+    system_id: u8,
+    outbox_full: &'a mut u32,
+    /// The vehicle position (lat, lon ×1e7, alt and relative alt in mm), for captures.
+    pub(crate) position: Option<[i32; 4]>,
+    /// The gimbal type from the latest postback.
+    pub(crate) gimbal_type: Option<GimbalType>,
+}
+
+impl Tx<'_> {
+    /// Queues `message` from `component`; a full outbox is counted.
+    pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
+        if self.out.push(self.system_id, component, message).is_err() {
+            bump(self.outbox_full);
+        }
+    }
+
+    /// Bytes the outbox has room for.
+    pub(crate) fn room(&self) -> usize {
+        OUTBOX_LEN - self.out.len()
+    }
+}
 
 impl<G: GimbalControl> Bridge<G> {
     /// A bridge in front of `gimbal`.
     pub fn new(gimbal: G, config: BridgeConfig) -> Self {
-        let camera = config.camera.clone().map(Camera::new);
+        let camera = config
+            .camera
+            .clone()
+            .map(|c| Camera::new(c, config.gimbal_component));
         let system_id = config.system_id.unwrap_or(1);
         let status_ms = config.attitude_status_ms;
         Bridge {
@@ -153,19 +270,20 @@ impl<G: GimbalControl> Bridge<G> {
                 next_heartbeat: None,
                 next_status: None,
                 status_ms,
-                position_asked: None,
-                position_seen: false,
-                vehicle_yaw: None,
+                position_stream: StreamState::default(),
+                autopilot_state_stream: StreamState::default(),
+                setpoint_stream: StreamState::default(),
+                vehicle: Vehicle::default(),
                 commanded: (None, None),
                 last_flags: 0,
-                position: None,
+                pose: Pose::Other,
                 camera,
                 stats: BridgeStats::default(),
             },
         }
     }
 
-    /// Takes MAVLink bytes from the autopilot or ground station, in any split.
+    /// Takes MAVLink bytes from a byte stream (a serial port), in any split.
     pub fn receive(&mut self, bytes: &[u8], now: Instant) {
         let Bridge {
             gimbal,
@@ -176,9 +294,34 @@ impl<G: GimbalControl> Bridge<G> {
         reader.feed(bytes, |frame| state.dispatch(gimbal, frame, now));
     }
 
-    /// Sends what is due at `now`: heartbeats, the attitude status, the position request.
+    /// Takes one UDP datagram: MAVLink on UDP carries whole frames, so a frame cut at the
+    /// datagram's end is dropped (its bytes counted as skipped) rather than joined to the
+    /// next datagram, which may come from another sender. Returns how many frames in it
+    /// were messages the bridge handles with a good CRC: a sender worth answering.
+    pub fn receive_datagram(&mut self, datagram: &[u8], now: Instant) -> u32 {
+        let Bridge {
+            gimbal,
+            reader,
+            state,
+            ..
+        } = self;
+        let mut good = 0u32;
+        let mut check = |frame: &ReceivedFrame<'_>| {
+            let verdict = state.dispatch(gimbal, frame, now);
+            if verdict == Check::Handled {
+                good = good.wrapping_add(1);
+            }
+            verdict
+        };
+        reader.feed(datagram, &mut check);
+        reader.end_datagram(&mut check);
+        good
+    }
+
+    /// Sends what is due at `now`: heartbeats, the attitude status, the stream requests,
+    /// scheduled images.
     pub fn poll(&mut self, now: Instant) {
-        self.state.poll(&self.gimbal, now);
+        self.state.poll(&mut self.gimbal, now);
     }
 
     /// The MAVLink bytes to write next; empty when nothing waits. Report with
@@ -235,15 +378,11 @@ where
 }
 
 /// A message's id.
-fn id_of<M: MessageSpecStatic>() -> u32 {
+pub(crate) fn id_of<M: MessageSpecStatic>() -> u32 {
     M::spec().id()
 }
 
-fn deg(rad: f32) -> f32 {
-    rad.to_degrees()
-}
-
-fn bump(counter: &mut u32) {
+pub(crate) fn bump(counter: &mut u32) {
     *counter = counter.wrapping_add(1);
 }
 
@@ -256,21 +395,17 @@ fn name<const N: usize>(s: &str) -> [u8; N] {
     out
 }
 
-fn model_name(t: Option<GimbalType>) -> &'static str {
+/// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
+/// ±325.00° on the 3.5× models (the document's Motor_psi scope).
+pub fn yaw_limit_deg(t: Option<GimbalType>) -> f32 {
     match t {
-        Some(GimbalType::X30) => "X30/X30GT",
-        Some(GimbalType::X30T) => "X30T",
-        Some(GimbalType::Zoom3_5x) => "3.5x",
-        Some(GimbalType::DualLight3_5x) => "3.5x dual light",
-        Some(GimbalType::LaserRanging) => "laser ranging",
-        Some(GimbalType::A2000) => "A2000",
-        Some(GimbalType::DualLight30x) => "30x dual light",
-        Some(GimbalType::Unknown(_)) | None => "IDU gimbal",
+        Some(GimbalType::Zoom3_5x | GimbalType::DualLight3_5x) => 325.0,
+        _ => 170.0,
     }
 }
 
 impl State {
-    fn send(&mut self, component: u8, message: &dyn Message) {
+    pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
         if self.out.push(self.system_id, component, message).is_err() {
             bump(&mut self.stats.outbox_full);
         }
@@ -305,19 +440,23 @@ impl State {
         now: Instant,
     ) -> Check {
         let id = frame.message_id();
+        let from = (frame.system_id(), frame.component_id());
         if id == id_of::<Heartbeat>() {
             // Decoded for its CRC; only who sent it matters.
             if decode::<Heartbeat>(frame).is_none() {
                 return Check::Bad;
             }
-            self.heartbeat(frame.system_id(), frame.component_id());
-            Check::Handled
+            self.heartbeat(from.0, from.1);
         } else if id == id_of::<CommandLong>() {
             let Some(cmd) = decode::<CommandLong>(frame) else {
                 return Check::Bad;
             };
-            self.command(gimbal, frame.system_id(), frame.component_id(), &cmd, now);
-            Check::Handled
+            self.command(gimbal, from, &Command::from(&cmd), now);
+        } else if id == id_of::<CommandInt>() {
+            let Some(cmd) = decode::<CommandInt>(frame) else {
+                return Check::Bad;
+            };
+            self.command(gimbal, from, &Command::from(&cmd), now);
         } else if id == id_of::<GimbalDeviceSetAttitude>() {
             let Some(set) = decode::<GimbalDeviceSetAttitude>(frame) else {
                 return Check::Bad;
@@ -327,7 +466,6 @@ impl State {
             } else {
                 bump(&mut self.stats.not_for_us);
             }
-            Check::Handled
         } else if id == id_of::<AutopilotStateForGimbalDevice>() {
             let Some(state) = decode::<AutopilotStateForGimbalDevice>(frame) else {
                 return Check::Bad;
@@ -337,27 +475,28 @@ impl State {
             } else {
                 bump(&mut self.stats.not_for_us);
             }
-            Check::Handled
         } else if id == id_of::<GlobalPositionInt>() {
             let Some(pos) = decode::<GlobalPositionInt>(frame) else {
                 return Check::Bad;
             };
-            if frame.component_id() == AUTOPILOT_COMPONENT {
+            if from.1 == AUTOPILOT_COMPONENT {
                 self.position(gimbal, &pos, now);
             }
-            Check::Handled
         } else {
-            Check::Unhandled
+            return Check::Unhandled;
         }
+        Check::Handled
     }
 
     fn heartbeat(&mut self, system: u8, component: u8) {
         if component != AUTOPILOT_COMPONENT {
             return;
         }
-        if self.autopilot.is_none() {
-            // A new autopilot: ask it for the position at once.
-            self.position_asked = None;
+        if self.autopilot != Some((system, component)) {
+            // A new autopilot: ask it for the streams at once.
+            self.position_stream.asked = None;
+            self.autopilot_state_stream.asked = None;
+            self.setpoint_stream.asked = None;
         }
         self.autopilot = Some((system, component));
         if self.config.system_id.is_none() {
@@ -365,7 +504,7 @@ impl State {
         }
     }
 
-    fn ack(&mut self, from: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
+    fn ack(&mut self, me: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
         bump(&mut self.stats.acks);
         let ack = CommandAck {
             command,
@@ -375,36 +514,34 @@ impl State {
             target_system: to.0,
             target_component: to.1,
         };
-        self.send(from, &ack);
+        self.send(me, &ack);
     }
 
     fn command<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
-        system: u8,
-        component: u8,
-        cmd: &CommandLong,
+        from: (u8, u8),
+        cmd: &Command,
         now: Instant,
     ) {
-        if !self.for_us(cmd.target_system, cmd.target_component) {
+        if !self.for_us(cmd.target.0, cmd.target.1) {
             bump(&mut self.stats.not_for_us);
             return;
         }
-        let from = (system, component);
         let gimbal_id = self.config.gimbal_component;
         let camera_id = self.camera_component();
         let camera_owns = camera_id.is_some() && camera::owns(cmd);
-        let gimbal_owns = Self::gimbal_owns(cmd);
+        let gimbal_owns = self.gimbal_owns(cmd);
         // Broadcast: the owner answers, or nobody (another component may own it).
         // Addressed: the addressee answers, UNSUPPORTED if it does not own the command.
-        let (me, owner) = match cmd.target_component {
+        let (me, owner) = match cmd.target.1 {
             0 if gimbal_owns => (gimbal_id, true),
             0 if camera_owns => (camera_id.unwrap_or(gimbal_id), true),
             0 => {
                 bump(&mut self.stats.not_for_us);
                 return;
             }
-            c if c == gimbal_id => (gimbal_id, gimbal_owns),
+            c if c == gimbal_id => (gimbal_id, gimbal_owns || self.gimbal_owns_addressed(cmd)),
             c => (c, camera_owns),
         };
         if !owner {
@@ -412,19 +549,20 @@ impl State {
             return;
         }
         if me == gimbal_id {
-            let result = self.gimbal_command(cmd, now);
+            let result = self.gimbal_command(gimbal, cmd, now);
             self.ack(me, from, cmd.command, result);
             // The information follows the ACK.
             if result == MavResult::Accepted && cmd.command == MavCmd::RequestMessage {
-                if cmd.param1 == id_of::<GimbalDeviceInformation>() as f32 {
+                if cmd.requests(id_of::<GimbalDeviceInformation>()) {
                     self.information(gimbal, now);
                 } else {
                     self.status(gimbal, now);
                 }
             }
         } else {
-            let acked = self.with_camera(|camera, tx| {
-                let (result, reply) = camera.command(gimbal, cmd, now);
+            let position = self.vehicle.position;
+            let acked = self.with_camera(gimbal, now, |camera, gimbal, tx| {
+                let (result, reply) = camera.command(gimbal, cmd, now, position);
                 // The ACK first, then what the command produced.
                 let ack = CommandAck {
                     command: cmd.command,
@@ -434,7 +572,7 @@ impl State {
                     target_system: from.0,
                     target_component: from.1,
                 };
-                (tx.send)(me, &ack);
+                tx.send(me, &ack);
                 camera.reply(reply, now, tx);
             });
             if acked.is_some() {
@@ -443,49 +581,112 @@ impl State {
         }
     }
 
-    /// Runs `f` with the camera and a sender into the outbox; `None` without a camera.
-    fn with_camera<R>(&mut self, f: impl FnOnce(&mut Camera, &mut Tx<'_>) -> R) -> Option<R> {
+    /// Runs `f` with the camera, the gimbal and a sender into the outbox; `None` without a
+    /// camera.
+    fn with_camera<G: GimbalControl, R>(
+        &mut self,
+        gimbal: &mut G,
+        now: Instant,
+        f: impl FnOnce(&mut Camera, &mut G, &mut Tx<'_>) -> R,
+    ) -> Option<R> {
         let State {
             camera,
             out,
             system_id,
             stats,
-            position,
+            vehicle,
             ..
         } = self;
         let camera = camera.as_mut()?;
-        let mut send = |c: u8, m: &dyn Message| {
-            if out.push(*system_id, c, m).is_err() {
-                bump(&mut stats.outbox_full);
-            }
-        };
         let mut tx = Tx {
-            send: &mut send,
-            position: *position,
+            out,
+            system_id: *system_id,
+            outbox_full: &mut stats.outbox_full,
+            position: vehicle.position,
+            gimbal_type: gimbal.latest_postback(now).map(|(p, _)| p.gimbal_type),
         };
-        Some(f(camera, &mut tx))
+        Some(f(camera, gimbal, &mut tx))
     }
 
-    fn gimbal_owns(cmd: &CommandLong) -> bool {
+    /// Commands the gimbal device answers, broadcast or addressed.
+    fn gimbal_owns(&self, cmd: &Command) -> bool {
         match cmd.command {
             MavCmd::RequestMessage => {
-                cmd.param1 == id_of::<GimbalDeviceInformation>() as f32
-                    || cmd.param1 == id_of::<GimbalDeviceAttitudeStatus>() as f32
+                cmd.requests(id_of::<GimbalDeviceInformation>())
+                    || cmd.requests(id_of::<GimbalDeviceAttitudeStatus>())
             }
             MavCmd::SetMessageInterval => {
-                cmd.param1 == id_of::<GimbalDeviceAttitudeStatus>() as f32
+                cmd.params[0] == id_of::<GimbalDeviceAttitudeStatus>() as f32
             }
             _ => false,
         }
     }
 
+    /// Commands the gimbal device acts on only when addressed to it: a region of interest
+    /// broadcast is the autopilot's (its gimbal manager's) to act on, and it hands the
+    /// device only what it decides.
+    fn gimbal_owns_addressed(&self, cmd: &Command) -> bool {
+        matches!(cmd.command, MavCmd::DoSetRoiLocation | MavCmd::DoSetRoiNone)
+    }
+
     /// A gimbal command's result (the gimbal owns it).
-    fn gimbal_command(&mut self, cmd: &CommandLong, now: Instant) -> MavResult {
+    fn gimbal_command<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        cmd: &Command,
+        now: Instant,
+    ) -> MavResult {
         match cmd.command {
-            MavCmd::SetMessageInterval => self.set_status_interval(cmd.param2, now),
+            MavCmd::SetMessageInterval => self.set_status_interval(cmd.params[1], now),
             MavCmd::RequestMessage => MavResult::Accepted,
+            MavCmd::DoSetRoiLocation => self.roi_location(gimbal, cmd),
+            MavCmd::DoSetRoiNone => {
+                if !self.addresses_this_gimbal(cmd.params[0]) {
+                    return MavResult::Denied;
+                }
+                gimbal.stop_pointing();
+                MavResult::Accepted
+            }
             _ => MavResult::Unsupported,
         }
+    }
+
+    /// Whether a ROI command's param1 (common.xml: "component ID of gimbal device to
+    /// address (or 1-6 for non-MAVLink gimbal), 0 for all gimbal device components")
+    /// names this gimbal.
+    fn addresses_this_gimbal(&self, param1: f32) -> bool {
+        param1 == 0.0 || param1 == f32::from(self.config.gimbal_component)
+    }
+
+    /// `MAV_CMD_DO_SET_ROI_LOCATION`: the core's point-at, at the location's height above
+    /// mean sea level (the height the vehicle's altitude is pushed in). A height relative
+    /// to home needs home's, from GLOBAL_POSITION_INT (alt − relative_alt); a height above
+    /// terrain cannot be known here and is refused.
+    fn roi_location<G: GimbalControl>(&mut self, gimbal: &mut G, cmd: &Command) -> MavResult {
+        if !self.addresses_this_gimbal(cmd.params[0]) {
+            return MavResult::Denied;
+        }
+        let Some((lat, lon)) = cmd.lat_lon_e7 else {
+            return MavResult::Denied;
+        };
+        let amsl_m = match cmd.frame {
+            MavFrame::Global | MavFrame::GlobalInt => f64::from(cmd.z),
+            MavFrame::GlobalRelativeAlt | MavFrame::GlobalRelativeAltInt => {
+                let Some([_, _, alt_mm, rel_mm]) = self.vehicle.position else {
+                    // Home's height comes with the position: not yet.
+                    return MavResult::TemporarilyRejected;
+                };
+                f64::from(cmd.z) + f64::from(alt_mm - rel_mm) / 1000.0
+            }
+            _ => return MavResult::Denied,
+        };
+        let Ok(target) = Position::new(f64::from(lat) * 1e-7, f64::from(lon) * 1e-7, amsl_m) else {
+            return MavResult::Denied;
+        };
+        gimbal.point_at(target);
+        self.pose = Pose::Other;
+        self.commanded = (None, None);
+        MavResult::Accepted
     }
 
     /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status: µs; −1 stops it, 0 restores
@@ -507,15 +708,21 @@ impl State {
 
     fn information<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
         let gimbal_type = gimbal.latest_postback(now).map(|(p, _)| p.gimbal_type);
+        let yaw_limit = yaw_limit_deg(gimbal_type).to_radians();
         let info = GimbalDeviceInformation {
             time_boot_ms: now.as_millis(),
             vendor_name: name("IDU"),
-            model_name: name(model_name(gimbal_type)),
+            model_name: name(
+                gimbal_type
+                    .and_then(GimbalType::model_name)
+                    .unwrap_or("IDU gimbal"),
+            ),
             custom_name: [0; 32],
             firmware_version: 0,
             hardware_version: 0,
             uid: 0,
             cap_flags: GimbalDeviceCapFlags::HAS_NEUTRAL
+                | GimbalDeviceCapFlags::HAS_RETRACT
                 | GimbalDeviceCapFlags::HAS_PITCH_AXIS
                 | GimbalDeviceCapFlags::HAS_PITCH_LOCK
                 | GimbalDeviceCapFlags::HAS_YAW_AXIS
@@ -528,130 +735,11 @@ impl State {
             roll_max: f32::NAN,
             pitch_min: PITCH_MIN_DEG.to_radians(),
             pitch_max: PITCH_MAX_DEG.to_radians(),
-            yaw_min: (-YAW_LIMIT_DEG).to_radians(),
-            yaw_max: YAW_LIMIT_DEG.to_radians(),
+            yaw_min: -yaw_limit,
+            yaw_max: yaw_limit,
             gimbal_device_id: 0,
         };
         self.send(self.config.gimbal_component, &info);
-    }
-
-    fn set_attitude<G: GimbalControl>(
-        &mut self,
-        gimbal: &mut G,
-        set: &GimbalDeviceSetAttitude,
-        now: Instant,
-    ) {
-        let flags = set.flags;
-        // Neutral and retract act once, when the flag appears.
-        let edge = |f: GimbalDeviceFlags| flags.contains(f) && self.last_flags & f.bits() == 0;
-        let neutral = edge(GimbalDeviceFlags::NEUTRAL);
-        // No retracted position: the gimbal's stowed pose is looking straight down.
-        let retract = edge(GimbalDeviceFlags::RETRACT);
-        self.last_flags = flags.bits();
-        if neutral || retract {
-            let c = if retract {
-                GimbalCommand::LookDown
-            } else {
-                GimbalCommand::Recenter
-            };
-            self.command_gimbal(gimbal, c);
-            self.commanded = (None, None);
-            return;
-        }
-        if flags.intersects(GimbalDeviceFlags::NEUTRAL | GimbalDeviceFlags::RETRACT) {
-            return;
-        }
-        if is_nan_quaternion(set.q) {
-            self.rate(gimbal, set, now);
-            return;
-        }
-        let Some(a) = YawPitch::from_quaternion(set.q) else {
-            bump(&mut self.stats.refused_setpoints);
-            return;
-        };
-        // The gimbal has no roll: a setpoint rolled by more than about a degree
-        // (sin(roll)·cos(pitch) over sin 1° = 0.01745) cannot be followed.
-        if libm::fabsf(YawPitch::roll_of(set.q)) > 0.017_45 {
-            bump(&mut self.stats.refused_setpoints);
-            return;
-        }
-        let earth_yaw = if flags.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME) {
-            false
-        } else {
-            flags.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME)
-                || flags.contains(GimbalDeviceFlags::YAW_LOCK)
-        };
-        let north = gimbal.north_referenced(now);
-        // The heading command's frame is the gimbal's reference: north while attitude is
-        // pushed, the nose otherwise.
-        let heading_rad = match (earth_yaw, north) {
-            (true, true) | (false, false) => Some(a.yaw_rad),
-            (false, true) => self.vehicle_yaw(now).map(|v| a.yaw_rad + v),
-            (true, false) => self.vehicle_yaw(now).map(|v| a.yaw_rad - v),
-        };
-        let pitch = Pitch::new(deg(a.pitch_rad));
-        let heading = heading_rad.map(|h| {
-            // (−180°, 180°] to the command's [0°, 360°].
-            let d = deg(wrap_pi(h));
-            Heading::new(if d < 0.0 { d + 360.0 } else { d })
-        });
-        let (Ok(pitch), Some(Ok(heading))) = (pitch, heading) else {
-            bump(&mut self.stats.refused_setpoints);
-            return;
-        };
-        let band = i32::from(self.config.deadband_deci);
-        let heading_moved = self.commanded.0.is_none_or(|h| {
-            let d = (i32::from(heading.deci()) - i32::from(h)).rem_euclid(3600);
-            d.min(3600 - d) > band
-        });
-        let pitch_moved = self
-            .commanded
-            .1
-            .is_none_or(|p| (i32::from(pitch.deci()) - i32::from(p)).abs() > band);
-        if heading_moved && self.command_gimbal(gimbal, GimbalCommand::Heading(heading)) {
-            self.commanded.0 = Some(heading.deci());
-        }
-        if pitch_moved && self.command_gimbal(gimbal, GimbalCommand::Pitch(pitch)) {
-            self.commanded.1 = Some(pitch.deci());
-        }
-    }
-
-    fn command_gimbal<G: GimbalControl>(&mut self, gimbal: &mut G, c: GimbalCommand) -> bool {
-        if gimbal.send(Command::from(c)) {
-            bump(&mut self.stats.angle_commands);
-            true
-        } else {
-            bump(&mut self.stats.queue_full);
-            false
-        }
-    }
-
-    fn rate<G: GimbalControl>(
-        &mut self,
-        gimbal: &mut G,
-        set: &GimbalDeviceSetAttitude,
-        now: Instant,
-    ) {
-        // Body rates in FRD: about y is pitch (positive raises the camera, as the wire's
-        // positive pitch rate), about z is yaw (positive to the right, as the wire's).
-        let (pitch_dps, yaw_dps) = (deg(set.angular_velocity_y), deg(set.angular_velocity_z));
-        let Ok(rate) = Rate::new(yaw_dps, pitch_dps) else {
-            bump(&mut self.stats.refused_setpoints);
-            return;
-        };
-        // A rate ends any angle: the next angle setpoint is sent whatever its value.
-        self.commanded = (None, None);
-        if gimbal.set_rate(rate, now) {
-            bump(&mut self.stats.rate_setpoints);
-        } else {
-            bump(&mut self.stats.queue_full);
-        }
-    }
-
-    fn vehicle_yaw(&self, now: Instant) -> Option<f32> {
-        self.vehicle_yaw
-            .filter(|&(_, at)| now.millis_since(at) <= VEHICLE_YAW_STALE_MS)
-            .map(|(yaw, _)| yaw)
     }
 
     fn autopilot_state<G: GimbalControl>(
@@ -660,6 +748,7 @@ impl State {
         state: &AutopilotStateForGimbalDevice,
         now: Instant,
     ) {
+        self.autopilot_state_stream.heard = Some(now);
         // The vehicle's attitude: 3-2-1 Euler is right here (a vehicle does not pitch past
         // ±90° in flight, and the frame carries roll).
         let [w, x, y, z] = state.q;
@@ -669,10 +758,16 @@ impl State {
         let roll = libm::atan2f(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y));
         let pitch = libm::asinf((2.0 * (w * y - z * x)).clamp(-1.0, 1.0));
         let yaw = libm::atan2f(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
-        self.vehicle_yaw = Some((yaw, now));
+        self.vehicle.yaw = Some((yaw, now));
+        // common.xml: "Z component of angular velocity in NED (North, East, Down). NaN if
+        // unknown".
+        self.vehicle.yaw_rate = state
+            .angular_velocity_z
+            .is_finite()
+            .then_some((state.angular_velocity_z, now));
         // The wire's heading is in [−180°, 180°).
-        let heading = deg(yaw).min(179.99);
-        if let Ok(a) = Attitude::new(deg(pitch), deg(roll), heading) {
+        let heading = yaw.to_degrees().min(179.99);
+        if let Ok(a) = Attitude::new(pitch.to_degrees(), roll.to_degrees(), heading) {
             gimbal.set_attitude(a, now);
             bump(&mut self.stats.vehicle_updates);
         }
@@ -684,8 +779,8 @@ impl State {
         pos: &GlobalPositionInt,
         now: Instant,
     ) {
-        self.position_seen = true;
-        self.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
+        self.position_stream.heard = Some(now);
+        self.vehicle.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
         if let Ok(g) = Gps::from_e7(pos.lat, pos.lon) {
             gimbal.set_gps(g, now);
             bump(&mut self.stats.vehicle_updates);
@@ -694,7 +789,7 @@ impl State {
         gimbal.set_altitude(Altitude::from_cm(pos.alt / 10), now);
     }
 
-    fn poll<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+    fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant) {
         if self.next_heartbeat.is_none_or(|t| now.is_at_or_after(t)) {
             self.next_heartbeat = Some(now.add_millis(self.config.heartbeat_ms.max(1)));
             let hb = Heartbeat {
@@ -716,41 +811,53 @@ impl State {
                 );
             }
         }
-        self.with_camera(|camera, tx| camera.poll(now, tx));
+        self.with_camera(gimbal, now, |camera, gimbal, tx| {
+            camera.poll(gimbal, now, tx)
+        });
         if self.status_ms > 0 && self.next_status.is_none_or(|t| now.is_at_or_after(t)) {
             self.next_status = Some(now.add_millis(self.status_ms));
             self.status(gimbal, now);
         }
         if let Some(ap) = self.autopilot {
-            let due = self
-                .position_asked
-                .is_none_or(|t| now.millis_since(t) >= POSITION_RETRY_MS);
-            if !self.position_seen && due {
-                self.position_asked = Some(now);
+            for (wanted, stream) in [
+                (AUTOPILOT_STATE_STREAM, &mut self.autopilot_state_stream),
+                (POSITION_STREAM, &mut self.position_stream),
+                (SETPOINT_STREAM, &mut self.setpoint_stream),
+            ] {
+                if !stream.due(&wanted, now) {
+                    continue;
+                }
+                stream.asked = Some(now);
                 let ask = CommandLong {
                     target_system: ap.0,
                     target_component: ap.1,
                     command: MavCmd::SetMessageInterval,
                     confirmation: 0,
-                    param1: GLOBAL_POSITION_INT_ID as f32,
-                    param2: POSITION_INTERVAL_US,
+                    param1: wanted.id as f32,
+                    param2: wanted.interval_us as f32,
                     param3: 0.0,
                     param4: 0.0,
                     param5: 0.0,
                     param6: 0.0,
                     param7: 0.0,
                 };
-                self.send(self.config.gimbal_component, &ask);
+                if self
+                    .out
+                    .push(self.system_id, self.config.gimbal_component, &ask)
+                    .is_err()
+                {
+                    bump(&mut self.stats.outbox_full);
+                }
             }
         }
     }
 
     fn status<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
         let latest = gimbal.latest_postback(now).map(|(p, _)| p);
-        let north = gimbal.north_referenced(now);
-        let (q, flags, delta_yaw) = match latest {
-            Some(p) => status_attitude(&p, north),
-            None => ([f32::NAN; 4], GimbalDeviceFlags::empty(), f32::NAN),
+        let vehicle_yaw = self.vehicle.yaw(now);
+        let (q, flags) = match latest {
+            Some(p) => status::attitude(&p, self.pose),
+            None => ([f32::NAN; 4], status::flags(None, self.pose)),
         };
         let mut failure = GimbalDeviceErrorFlags::empty();
         if !gimbal.is_link_up() {
@@ -766,35 +873,27 @@ impl State {
             angular_velocity_y: f32::NAN,
             angular_velocity_z: f32::NAN,
             failure_flags: failure,
-            delta_yaw,
-            delta_yaw_velocity: f32::NAN,
+            delta_yaw: vehicle_yaw.unwrap_or(f32::NAN),
+            delta_yaw_velocity: vehicle_yaw
+                .and(self.vehicle.yaw_rate(now))
+                .unwrap_or(f32::NAN),
             gimbal_device_id: 0,
         };
         self.send(self.config.gimbal_component, &status);
     }
-}
 
-/// The attitude status of a postback: pitch from the horizon; yaw north-referenced while
-/// attitude is pushed (the postback's heading is then the gimbal's bearing), the motor
-/// angle in the vehicle frame otherwise. `delta_yaw` is the motor angle in either case.
-pub fn status_attitude(p: &Postback, north: bool) -> ([f32; 4], GimbalDeviceFlags, f32) {
-    let motor = p.motor_heading_deg().to_radians();
-    let (yaw, frame) = if north {
-        (
-            wrap_pi(p.heading_deg().to_radians()),
-            GimbalDeviceFlags::YAW_IN_EARTH_FRAME,
-        )
-    } else {
-        (motor, GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME)
-    };
-    let q = YawPitch {
-        yaw_rad: yaw,
-        pitch_rad: p.pitch_deg().to_radians(),
+    /// Queues a command for the gimbal; a full queue is counted.
+    pub(crate) fn command_gimbal<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        c: GimbalCommand,
+    ) -> bool {
+        if gimbal.send(GimbalCmd::from(c)) {
+            bump(&mut self.stats.angle_commands);
+            true
+        } else {
+            bump(&mut self.stats.queue_full);
+            false
+        }
     }
-    .to_quaternion();
-    (
-        q,
-        frame | GimbalDeviceFlags::PITCH_LOCK | GimbalDeviceFlags::ROLL_LOCK,
-        motor,
-    )
 }

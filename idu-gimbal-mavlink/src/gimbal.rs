@@ -1,5 +1,6 @@
 //! The gimbal side of the bridge: what it needs of the core, over either transport.
 
+use idu_gimbal::geo::Position;
 use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::Link;
 use idu_gimbal::wire::control::{Command, Rate};
@@ -30,6 +31,11 @@ pub trait GimbalControl {
     fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)>;
     /// Whether the link to the gimbal is up.
     fn is_link_up(&self) -> bool;
+    /// Keeps the gimbal pointed at a ground location while the vehicle moves (the core's
+    /// point-at); any angle or rate command ends it.
+    fn point_at(&mut self, target: Position);
+    /// Stops pointing at a location; the gimbal keeps its aim.
+    fn stop_pointing(&mut self);
 }
 
 impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
@@ -56,6 +62,12 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
     }
     fn is_link_up(&self) -> bool {
         self.is_up()
+    }
+    fn point_at(&mut self, target: Position) {
+        Link::point_at(self, target)
+    }
+    fn stop_pointing(&mut self) {
+        Link::stop_pointing(self)
     }
 }
 
@@ -86,6 +98,12 @@ impl<const Q: usize> GimbalControl for SerialLink<Q> {
     fn is_link_up(&self) -> bool {
         self.link().is_up()
     }
+    fn point_at(&mut self, target: Position) {
+        self.link_mut().point_at(target)
+    }
+    fn stop_pointing(&mut self) {
+        self.link_mut().stop_pointing()
+    }
 }
 
 impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> GimbalControl for Gimbal<C, Q, T> {
@@ -113,6 +131,12 @@ impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> GimbalControl for
     fn is_link_up(&self) -> bool {
         Gimbal::is_link_up(self)
     }
+    fn point_at(&mut self, target: Position) {
+        Gimbal::point_at(self, target)
+    }
+    fn stop_pointing(&mut self) {
+        Gimbal::stop_pointing(self)
+    }
 }
 
 impl<P: idu_gimbal::driver::SerialPort, const Q: usize> GimbalControl for SerialGimbal<P, Q> {
@@ -139,5 +163,11 @@ impl<P: idu_gimbal::driver::SerialPort, const Q: usize> GimbalControl for Serial
     }
     fn is_link_up(&self) -> bool {
         SerialGimbal::is_link_up(self)
+    }
+    fn point_at(&mut self, target: Position) {
+        SerialGimbal::point_at(self, target)
+    }
+    fn stop_pointing(&mut self) {
+        SerialGimbal::stop_pointing(self)
     }
 }

@@ -64,8 +64,12 @@
 pub mod attitude;
 pub mod bridge;
 pub mod camera;
+pub mod capture;
+pub mod command;
 pub mod framing;
 pub mod gimbal;
+mod setpoint;
+pub mod status;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeStats};
 pub use gimbal::GimbalControl;

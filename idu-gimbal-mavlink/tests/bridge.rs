@@ -207,8 +207,25 @@ fn the_attitude_status_interval_is_honoured() {
     assert_eq!(of::<CommandAck>(&sent(&mut b))[0].result, MavResult::Denied);
 }
 
+/// The postback's frames into the link, and the status the bridge sends next.
+fn status_after(b: &mut Bridge<Link>, p: &Postback, ms: u32) -> GimbalDeviceAttitudeStatus {
+    for data in p.to_can_frames() {
+        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+    }
+    let _ = sent(b);
+    b.receive(
+        &frame(
+            GCS,
+            0,
+            &command((0, 154), MavCmd::RequestMessage, 285.0, 0.0),
+        ),
+        t(ms),
+    );
+    of::<GimbalDeviceAttitudeStatus>(&sent(b)).remove(0)
+}
+
 #[test]
-fn the_status_reports_the_postback_in_the_frame_of_the_gimbals_reference() {
+fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
     let mut b = bridge();
     let p = Postback {
         pitch: -9500,
@@ -216,34 +233,96 @@ fn the_status_reports_the_postback_in_the_frame_of_the_gimbals_reference() {
         motor_heading: 4_500,
         ..Postback::default()
     };
-    for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(0));
+    // No vehicle attitude yet: the motor angle, and delta_yaw unknown (NaN).
+    let s = status_after(&mut b, &p, 0);
+    assert!(s.flags.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME));
+    assert!(!s.flags.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME));
+    // By hand, yaw 45°, pitch −95°: w = cos22.5·cos(−47.5), x = −sin22.5·sin(−47.5),
+    // y = cos22.5·sin(−47.5), z = sin22.5·cos(−47.5).
+    let (c1, s1) = (0.923_879_5_f32, 0.382_683_43_f32);
+    let (c2, s2) = (0.675_590_2_f32, -0.737_277_3_f32);
+    let q = [c1 * c2, -s1 * s2, c1 * s2, s1 * c2];
+    for (a, e) in s.q.iter().zip(q) {
+        // f32 sin/cos of the exact angles: a few ulps (1e-6 is 8 ulps at 1.0).
+        assert!((a - e).abs() < 1e-6, "{:?} vs {q:?}", s.q);
     }
-    b.poll(t(0));
-    let s = &of::<GimbalDeviceAttitudeStatus>(&sent(&mut b))[0];
-    // No attitude pushed: nose-referenced, the yaw is the motor angle in the vehicle frame.
+    assert!(s.delta_yaw.is_nan() && s.delta_yaw_velocity.is_nan());
+    assert!(s.failure_flags.is_empty());
+    // The vehicle heads 225° (−135°) turning at 0.1 rad/s: attitude is pushed, the
+    // gimbal's heading is now north-referenced, and the status stays in the vehicle
+    // frame with the motor angle; delta_yaw is the vehicle's heading.
+    let mut state = autopilot_state(225.0 - 360.0);
+    state.angular_velocity_z = 0.1;
+    b.receive(&frame(AP, 0, &state), t(50));
+    b.gimbal_mut().poll(t(100));
+    let s = status_after(&mut b, &p, 100);
     assert!(s.flags.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME));
     let a = YawPitch::from_quaternion(s.q).unwrap();
-    assert!((a.pitch_rad.to_degrees() + 95.0).abs() < 1e-3);
-    assert!((a.yaw_rad.to_degrees() - 45.0).abs() < 1e-3);
-    assert!((s.delta_yaw.to_degrees() - 45.0).abs() < 1e-3);
-    assert!(s.failure_flags.is_empty());
-    // With attitude pushed the postback's heading is north-referenced: earth frame.
-    b.receive(&frame(AP, 0, &autopilot_state(225.0 - 360.0)), t(50));
-    b.gimbal_mut().poll(t(100));
-    let _ = sent(&mut b);
-    b.poll(t(100));
-    let s = &of::<GimbalDeviceAttitudeStatus>(&sent(&mut b))[0];
-    assert!(s.flags.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME));
-    let a = YawPitch::from_quaternion(s.q).unwrap();
-    assert!((a.yaw_rad.to_degrees() + 90.0).abs() < 1e-3, "{a:?}");
+    assert!((a.yaw_rad.to_degrees() - 45.0).abs() < 1e-3, "{a:?}");
+    assert!((s.delta_yaw.to_degrees() + 135.0).abs() < 1e-3);
+    assert_eq!(s.delta_yaw_velocity, 0.1);
+    // q_earth = q_delta_yaw ⊗ q_vehicle (common.xml): yaw 45° + (−135°) = −90°, the
+    // postback's north-referenced heading 270°.
+    let earth = YawPitch {
+        yaw_rad: a.yaw_rad + s.delta_yaw,
+        pitch_rad: a.pitch_rad,
+    };
+    assert!(
+        (idu_gimbal_mavlink::attitude::wrap_pi(earth.yaw_rad).to_degrees() + 90.0).abs() < 1e-3
+    );
+    // The vehicle heading goes stale after 1 s without AUTOPILOT_STATE: NaN again.
+    let s = status_after(&mut b, &p, 1_051);
+    assert!(s.delta_yaw.is_nan());
     // The link times out after 1.5 s without postbacks: COMMS_ERROR for pre-arm checks.
-    b.gimbal_mut().poll(t(1_600));
-    b.poll(t(1_600));
+    b.gimbal_mut().poll(t(3_000));
+    b.poll(t(3_000));
     let s = &of::<GimbalDeviceAttitudeStatus>(&sent(&mut b))[0];
     assert!(s
         .failure_flags
         .contains(GimbalDeviceErrorFlags::COMMS_ERROR));
+}
+
+#[test]
+fn the_status_flags_say_yaw_lock_neutral_and_retract_when_they_hold() {
+    use idu_gimbal::wire::postback::ControlMode;
+    let mut b = bridge();
+    let lock = Postback {
+        mode: ControlMode::Lock,
+        ..Postback::default()
+    };
+    let follow = Postback::default();
+    assert!(status_after(&mut b, &lock, 0)
+        .flags
+        .contains(GimbalDeviceFlags::YAW_LOCK));
+    assert!(!status_after(&mut b, &follow, 10)
+        .flags
+        .contains(GimbalDeviceFlags::YAW_LOCK));
+    b.receive(
+        &frame(AP, 1, &set_attitude(GimbalDeviceFlags::NEUTRAL, 0.0, 0.0)),
+        t(20),
+    );
+    let f = status_after(&mut b, &follow, 20).flags;
+    assert!(f.contains(GimbalDeviceFlags::NEUTRAL) && !f.contains(GimbalDeviceFlags::RETRACT));
+    // ArduPilot's retract: NaN quaternion, zero rates, RETRACT.
+    let mut retract = set_attitude(GimbalDeviceFlags::RETRACT, 0.0, 0.0);
+    retract.q = [f32::NAN; 4];
+    retract.angular_velocity_x = 0.0;
+    retract.angular_velocity_y = 0.0;
+    retract.angular_velocity_z = 0.0;
+    b.receive(&frame(AP, 2, &retract), t(30));
+    let f = status_after(&mut b, &follow, 30).flags;
+    assert!(f.contains(GimbalDeviceFlags::RETRACT) && !f.contains(GimbalDeviceFlags::NEUTRAL));
+    // An angle moves it: neither any more.
+    b.receive(
+        &frame(
+            AP,
+            3,
+            &set_attitude(GimbalDeviceFlags::empty(), 10.0, -10.0),
+        ),
+        t(40),
+    );
+    let f = status_after(&mut b, &follow, 40).flags;
+    assert!(!f.intersects(GimbalDeviceFlags::NEUTRAL | GimbalDeviceFlags::RETRACT));
 }
 
 #[test]
@@ -401,7 +480,8 @@ fn a_yaw_frame_needing_a_stale_vehicle_heading_is_refused() {
 #[test]
 fn rate_setpoints_hold_and_stop_with_the_core_dead_man() {
     let mut b = bridge();
-    let mut set = set_attitude(GimbalDeviceFlags::YAW_LOCK, 0.0, 0.0);
+    // ArduPilot's body-frame rate: flags 0.
+    let mut set = set_attitude(GimbalDeviceFlags::empty(), 0.0, 0.0);
     set.q = [f32::NAN; 4];
     set.angular_velocity_y = 5f32.to_radians();
     set.angular_velocity_z = (-10f32).to_radians();
@@ -447,28 +527,38 @@ fn neutral_recentres_and_retract_looks_down_once_each() {
 }
 
 #[test]
-fn the_position_is_asked_of_the_autopilot_until_it_comes() {
+fn streams_are_asked_of_the_autopilot_until_they_come() {
     let mut b = fresh();
     let asks = |b: &mut Bridge<Link>, from: u32, to: u32| {
         let mut n = Vec::new();
         for ms in from..to {
             b.poll(t(ms));
             for c in of::<CommandLong>(&sent(b)) {
-                n.push((ms, c));
+                assert_eq!(
+                    (c.target_system, c.target_component, c.command),
+                    (AP.0, AP.1, MavCmd::SetMessageInterval)
+                );
+                n.push((ms, c.param1 as u32, c.param2 as u32));
             }
         }
         n
     };
     assert!(asks(&mut b, 0, 100).is_empty(), "no autopilot yet");
     b.receive(&frame(AP, 0, &heartbeat()), t(100));
+    // At once: the autopilot state at 20 Hz (PX4 streams it only in mode Gimbal), the
+    // position at 5 Hz, and the setpoints at 20 Hz (once: PX4's Normal mode sends 5 Hz).
+    // Then again after 5 s for the two that did not come.
     let a = asks(&mut b, 100, 6_000);
-    assert_eq!(a.len(), 2, "at once, then after 5 s");
-    let c = &a[0].1;
     assert_eq!(
-        (c.target_system, c.target_component, c.command),
-        (AP.0, AP.1, MavCmd::SetMessageInterval)
+        a,
+        [
+            (100, 286, 50_000),
+            (100, 33, 200_000),
+            (100, 284, 50_000),
+            (5_100, 286, 50_000),
+            (5_100, 33, 200_000)
+        ]
     );
-    assert_eq!((c.param1, c.param2), (33.0, 200_000.0));
     let pos = GlobalPositionInt {
         time_boot_ms: 0,
         lat: 473_977_420,
@@ -481,9 +571,29 @@ fn the_position_is_asked_of_the_autopilot_until_it_comes() {
         hdg: 0,
     };
     b.receive(&frame(AP, 1, &pos), t(6_000));
-    assert!(asks(&mut b, 6_000, 20_000).is_empty());
-    // The core now holds and pushes it.
-    b.gimbal_mut().poll(t(20_000));
+    b.receive(&frame(AP, 2, &autopilot_state(10.0)), t(6_000));
+    // Both keep coming: nothing asked.
+    for s in 0..10u32 {
+        let ms = 6_000 + s * 1_000;
+        b.receive(&frame(AP, 3, &pos), t(ms));
+        b.receive(&frame(AP, 4, &autopilot_state(10.0)), t(ms));
+        assert!(asks(&mut b, ms, ms + 1_000).is_empty());
+    }
+    // The autopilot state stops (a rebooted autopilot forgets the interval): asked again
+    // 5 s after it was last heard (at 15 s), and every 5 s while it stays away.
+    for s in 0..10u32 {
+        let ms = 16_000 + s * 1_000;
+        b.receive(&frame(AP, 5, &pos), t(ms));
+        let a = asks(&mut b, ms, ms + 1_000);
+        let expect: &[(u32, u32, u32)] = match ms {
+            20_000 => &[(20_000, 286, 50_000)],
+            25_000 => &[(25_000, 286, 50_000)],
+            _ => &[],
+        };
+        assert_eq!(a, expect, "at {ms}");
+    }
+    // The core now holds and pushes the position.
+    b.gimbal_mut().poll(t(26_000));
     let _ = queued(b.gimbal_mut());
 }
 
@@ -581,4 +691,56 @@ fn a_million_garbage_bytes_into_the_bridge() {
     // header parses); the counters say how the bytes went either way.
     assert!(s.reader.bad_frames > 0 || s.reader.unsupported > 0);
     assert!(s.reader.skipped_bytes > 0);
+}
+
+#[test]
+fn an_angle_with_rates_beside_it_is_followed_as_an_angle() {
+    // MAVSDK's gimbal_device_tester and PX4's pass-through send both.
+    let mut b = bridge();
+    let mut set = set_attitude(GimbalDeviceFlags::empty(), 30.0, -20.0);
+    set.angular_velocity_y = 0.2;
+    set.angular_velocity_z = 0.0;
+    b.receive(&frame(AP, 0, &set), t(10));
+    let q = queued(b.gimbal_mut());
+    assert_eq!(q.len(), 2, "{q:?}");
+    assert!(matches!(q[0], GimbalCommand::Heading(h) if h.deci() == 300));
+    assert!(matches!(q[1], GimbalCommand::Pitch(p) if p.deci() == -200));
+    assert_eq!(b.stats().rate_setpoints, 0);
+}
+
+#[test]
+fn an_earth_frame_yaw_rate_becomes_a_motor_rate_or_is_refused() {
+    let mut b = bridge();
+    let mut set = set_attitude(GimbalDeviceFlags::YAW_LOCK, 0.0, 0.0);
+    set.q = [f32::NAN; 4];
+    set.angular_velocity_y = 0.0;
+    set.angular_velocity_z = 0.5;
+    // No vehicle yaw rate: refused, counted, nothing sent.
+    b.receive(&frame(AP, 0, &set), t(10));
+    assert!(queued(b.gimbal_mut()).is_empty());
+    assert_eq!(b.stats().refused_setpoints, 1);
+    // The vehicle turns right at 0.2 rad/s: the motor turns at 0.5 − 0.2 = 0.3 rad/s,
+    // 17.19°/s (the wire's 0.01°/s: 1718.87 rounds to 1719).
+    let mut state = autopilot_state(0.0);
+    state.angular_velocity_z = 0.2;
+    b.receive(&frame(AP, 1, &state), t(20));
+    b.receive(&frame(AP, 2, &set), t(30));
+    let rates: Vec<Rate> = queued(b.gimbal_mut())
+        .into_iter()
+        .filter_map(|c| match c {
+            GimbalCommand::Rate(r) => Some(r),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(rates, [Rate::new(0.3f32.to_degrees(), 0.0).unwrap()]);
+    // The same rate in the vehicle frame (YAW_IN_VEHICLE_FRAME wins over YAW_LOCK).
+    set.flags = GimbalDeviceFlags::YAW_LOCK | GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME;
+    b.receive(&frame(AP, 3, &set), t(40));
+    let rates: Vec<GimbalCommand> = queued(b.gimbal_mut());
+    assert_eq!(
+        rates,
+        [GimbalCommand::Rate(
+            Rate::new(0.5f32.to_degrees(), 0.0).unwrap()
+        )]
+    );
 }

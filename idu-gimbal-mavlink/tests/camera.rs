@@ -6,6 +6,8 @@ use common::*;
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
 use idu_gimbal::wire::control::{GimbalCommand, Photo, Video, Zoom};
+use idu_gimbal::wire::ids;
+use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{CameraConfig, UriTooLong};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{
@@ -14,7 +16,8 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings, CommandAck,
-    Heartbeat, StorageInformation, VideoStreamInformation, VideoStreamStatus,
+    GimbalDeviceInformation, Heartbeat, StorageInformation, VideoStreamInformation,
+    VideoStreamStatus,
 };
 use mavio::protocol::{Frame, V2};
 
@@ -48,8 +51,20 @@ fn ask(
     p: [f32; 3],
     ms: u32,
 ) -> (CommandAck, Vec<Frame<V2>>) {
+    ask4(b, to, cmd, [p[0], p[1], p[2], 0.0], ms)
+}
+
+/// [`ask`] with param4.
+fn ask4(
+    b: &mut Bridge<Link>,
+    to: u8,
+    cmd: MavCmd,
+    p: [f32; 4],
+    ms: u32,
+) -> (CommandAck, Vec<Frame<V2>>) {
     let mut c = command((AP.0, to), cmd, p[0], p[1]);
     c.param3 = p[2];
+    c.param4 = p[3];
     b.receive(&frame(GCS, 0, &c), t(ms));
     let frames = sent(b);
     let acks: Vec<(u8, CommandAck)> = frames
@@ -111,73 +126,197 @@ fn information_by_request_message_and_by_the_legacy_command() {
     assert_eq!(ack.result, MavResult::Unsupported);
 }
 
+/// The indexes of the CAMERA_IMAGE_CAPTURED in `frames`.
+fn indexes(frames: &[Frame<V2>]) -> Vec<i32> {
+    of::<CameraImageCaptured>(frames)
+        .iter()
+        .map(|c| c.image_index)
+        .collect()
+}
+
 #[test]
-fn single_burst_and_time_lapse_photos() {
+fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
     let mut b = bridge();
-    let (ack, frames) = ask(&mut b, 100, MavCmd::ImageStartCapture, [0.0, 0.0, 1.0], 10);
+    // ArduPilot's take_picture: interval 0, count 1, sequence image_index + 1.
+    let (ack, frames) = ask4(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.0, 1.0, 1.0],
+        10,
+    );
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(
         queued(b.gimbal_mut()),
         [GimbalCommand::Photo(Photo::Single)]
     );
-    let captured: Vec<CameraImageCaptured> = of(&frames);
-    assert_eq!(
-        captured.iter().map(|c| c.image_index).collect::<Vec<_>>(),
-        [0]
-    );
+    // The ACK, then the image, then the status.
+    let ids: Vec<u32> = frames.iter().map(|f| f.message_id()).collect();
+    assert_eq!(ids, [77, 263, 262]);
+    assert_eq!(indexes(&frames), [0]);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].image_count, 1);
-
-    let (_, frames) = ask(&mut b, 100, MavCmd::ImageStartCapture, [0.0, 0.0, 3.0], 20);
-    assert_eq!(
-        queued(b.gimbal_mut()),
-        [GimbalCommand::Photo(Photo::burst(3).unwrap())]
+    // The same command again (its ACK was lost): ACKed, no picture, no image message.
+    let (ack, frames) = ask4(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.0, 1.0, 1.0],
+        20,
     );
-    let captured: Vec<CameraImageCaptured> = of(&frames);
-    assert_eq!(
-        captured.iter().map(|c| c.image_index).collect::<Vec<_>>(),
-        [1, 2, 3]
-    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(indexes(&frames).is_empty());
+    // The next sequence number is a new picture; MAVSDK's first is 0 ("none"): always new.
+    for (ms, seq, index) in [(30, 2.0, 1), (40, 0.0, 2), (50, 0.0, 3)] {
+        let (_, frames) = ask4(
+            &mut b,
+            100,
+            MavCmd::ImageStartCapture,
+            [0.0, 0.0, 1.0, seq],
+            ms,
+        );
+        assert_eq!(
+            queued(b.gimbal_mut()),
+            [GimbalCommand::Photo(Photo::Single)]
+        );
+        assert_eq!(indexes(&frames), [index]);
+    }
+}
 
-    // Unlimited images every 2 s: a time-lapse, one capture message per interval.
+#[test]
+fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
+    let mut b = bridge();
+    // Three images 0.5 s apart (under a second: the gimbal's single shot on the bridge's
+    // schedule, not its time-lapse).
+    let (ack, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.5, 3.0],
+        1_000,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(indexes(&frames), [0]);
+    let status = &of::<CameraCaptureStatus>(&frames)[0];
+    assert_eq!((status.image_status, status.image_interval), (3, 0.5));
+    let mut shots = vec![(1_000, queued(b.gimbal_mut()))];
+    let mut images = Vec::new();
+    for ms in 1_001..4_000 {
+        b.poll(t(ms));
+        let q = queued(b.gimbal_mut());
+        if !q.is_empty() {
+            shots.push((ms, q));
+        }
+        for c in of::<CameraImageCaptured>(&sent(&mut b)) {
+            assert_eq!(c.time_boot_ms, ms, "reported when taken");
+            images.push((ms, c.image_index));
+        }
+    }
+    let single = vec![GimbalCommand::Photo(Photo::Single)];
+    assert_eq!(
+        shots,
+        [
+            (1_000, single.clone()),
+            (1_500, single.clone()),
+            (2_000, single.clone())
+        ]
+    );
+    assert_eq!(images, [(1_500, 1), (2_000, 2)]);
+    // Until stopped, every 2 s, from 5 s; stopped at 9.5 s.
     let (_, frames) = ask(
         &mut b,
         100,
         MavCmd::ImageStartCapture,
         [0.0, 2.0, 0.0],
-        1_000,
+        5_000,
     );
+    assert_eq!(indexes(&frames), [3]);
+    let _ = queued(b.gimbal_mut());
+    let mut images = Vec::new();
+    for ms in 5_001..12_000 {
+        if ms == 9_500 {
+            let (ack, frames) = ask(&mut b, 100, MavCmd::ImageStopCapture, [0.0; 3], ms);
+            assert_eq!(ack.result, MavResult::Accepted);
+            assert_eq!(of::<CameraCaptureStatus>(&frames)[0].image_status, 0);
+        }
+        b.poll(t(ms));
+        images.extend(indexes(&sent(&mut b)).into_iter().map(|i| (ms, i)));
+    }
+    assert_eq!(images, [(7_000, 4), (9_000, 5)]);
     assert_eq!(
         queued(b.gimbal_mut()),
-        [GimbalCommand::Photo(Photo::time_lapse(2).unwrap())]
+        [GimbalCommand::Photo(Photo::Single); 2]
     );
-    let status = &of::<CameraCaptureStatus>(&frames)[0];
-    assert_eq!((status.image_status, status.image_interval), (2, 2.0));
-    let mut indices = Vec::new();
-    for ms in 1_000..7_500 {
-        b.poll(t(ms));
-        indices.extend(
-            of::<CameraImageCaptured>(&sent(&mut b))
-                .iter()
-                .map(|c| c.image_index),
-        );
-        if ms == 6_000 {
-            let (_, _) = ask(&mut b, 100, MavCmd::ImageStopCapture, [0.0; 3], ms);
-            assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Photo(Photo::Stop)]);
-        }
-    }
-    // At 3, 5 s; stopped at 6 s.
-    assert_eq!(indices, [4, 5]);
-    // Nonsense is denied: 0 images at no interval, 1.5 images, 300 images.
+    // Out of common.xml's ranges: denied, nothing taken.
     for p in [
-        [0.0, 0.0, 0.0],
-        [0.0, 0.0, 1.5],
-        [0.0, 0.0, 300.0],
-        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 3.0],  // several images with no interval
+        [0.0, 0.05, 0.0], // under the 100 ms floor
+        [0.0, 0.0, 1.5],  // a fraction of an image
+        [0.0, -1.0, 0.0], // a negative interval
+        [0.0, f32::NAN, 1.0],
     ] {
-        let (ack, _) = ask(&mut b, 100, MavCmd::ImageStartCapture, p, 8_000);
+        let (ack, _) = ask(&mut b, 100, MavCmd::ImageStartCapture, p, 13_000);
         assert_eq!(ack.result, MavResult::Denied, "{p:?}");
     }
     assert!(queued(b.gimbal_mut()).is_empty());
+}
+
+#[test]
+fn images_are_sent_again_on_request_from_the_kept_history() {
+    let mut b = bridge();
+    for k in 0..20u32 {
+        let _ = ask4(
+            &mut b,
+            100,
+            MavCmd::ImageStartCapture,
+            [0.0, 0.0, 1.0, 0.0],
+            k * 10,
+        );
+        assert_eq!(queued(b.gimbal_mut()).len(), 1);
+    }
+    // By index (REQUEST_MESSAGE param2), and by the superseded command MAVSDK falls back to.
+    let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, 17.0, 0.0], 300);
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(indexes(&frames), [17]);
+    assert_eq!(of::<CameraImageCaptured>(&frames)[0].time_boot_ms, 170);
+    let (ack, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraImageCapture,
+        [5.0, 0.0, 0.0],
+        310,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(indexes(&frames), [5]);
+    // A range, and "all" (−1): the 16 kept, sent as the outbox makes room.
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestMessage,
+        [263.0, 10.0, 12.0],
+        320,
+    );
+    assert_eq!(indexes(&frames), [10, 11, 12]);
+    let (ack, mut frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, -1.0, 0.0], 330);
+    assert_eq!(ack.result, MavResult::Accepted);
+    for ms in 331..340 {
+        b.poll(t(ms));
+        frames.extend(sent(&mut b));
+    }
+    assert_eq!(indexes(&frames), (4..20).collect::<Vec<_>>());
+    assert_eq!(b.stats().outbox_full, 0);
+    // Not taken yet, no index given (MAVSDK's REQUEST_MESSAGE leaves param2 unset):
+    // denied; no longer kept: failed.
+    for (p, result) in [
+        ([263.0, 20.0, 0.0], MavResult::Denied),
+        ([263.0, f32::NAN, 0.0], MavResult::Denied),
+        ([263.0, 3.0, 0.0], MavResult::Failed),
+        ([263.0, 5.0, 2.0], MavResult::Denied),
+    ] {
+        let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, p, 400);
+        assert_eq!(ack.result, result, "{p:?}");
+        assert!(indexes(&frames).is_empty());
+    }
 }
 
 #[test]
@@ -207,9 +346,24 @@ fn video_start_and_stop_with_the_capture_status() {
     );
 }
 
+/// A postback from a gimbal of type `gimbal_type` into the bridge's link.
+fn postback(b: &mut Bridge<Link>, gimbal_type: GimbalType, ms: u32) {
+    let p = Postback {
+        gimbal_type,
+        ..Postback::default()
+    };
+    for data in p.to_can_frames() {
+        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+    }
+}
+
 #[test]
 fn zoom_by_range_continuous_and_step() {
     let mut b = bridge();
+    // No postback yet: the zoom range is not known.
+    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 5);
+    assert_eq!(ack.result, MavResult::TemporarilyRejected);
+    postback(&mut b, GimbalType::X30, 6);
     // 50 % of 1×..30×: 15.5×.
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 10);
     assert_eq!(ack.result, MavResult::Accepted);
@@ -218,19 +372,38 @@ fn zoom_by_range_continuous_and_step() {
         ref other => panic!("{other:?}"),
     }
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 50.0);
-    for (v, z) in [(1.0, Zoom::In), (0.0, Zoom::Stop), (-1.0, Zoom::Out)] {
-        let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [1.0, v, 0.0], 20);
-        assert_eq!(ack.result, MavResult::Accepted);
+    // Continuous zoom is a rate: its sign decides (common.xml: range −1..1).
+    for (v, z) in [
+        (1.0, Zoom::In),
+        (0.5, Zoom::In),
+        (0.0, Zoom::Stop),
+        (-0.25, Zoom::Out),
+        (-1.0, Zoom::Out),
+    ] {
+        let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [1.0, v, 0.0], 20);
+        assert_eq!(ack.result, MavResult::Accepted, "{v}");
         assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(z)]);
+        // Where a continuous zoom stops is not reported: the level is unknown.
+        assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
     }
-    let (_, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 30);
+    // A step after a continuous zoom: still unknown, not 1×.
+    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 30);
     assert_eq!(
         queued(b.gimbal_mut()),
         [GimbalCommand::Zoom(Zoom::Double); 2]
     );
+    assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
+    // From a known level, steps double and halve it within the range.
+    let _ = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 0.0, 0.0], 31);
+    let _ = queued(b.gimbal_mut());
+    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 32);
+    let _ = queued(b.gimbal_mut());
+    // 4× of 1×..30×: (4 − 1) / 29 = 10.34 %.
+    let level = of::<CameraSettings>(&frames)[0].zoom_level;
+    assert!((level - 300.0 / 29.0).abs() < 1e-4, "{level}");
     for (p, result) in [
         ([2.0, 150.0, 0.0], MavResult::Denied),
-        ([1.0, 0.5, 0.0], MavResult::Denied),
+        ([1.0, f32::NAN, 0.0], MavResult::Denied),
         ([0.0, 9.0, 0.0], MavResult::Denied),
         ([3.0, 24.0, 0.0], MavResult::Unsupported),
     ] {
@@ -238,6 +411,66 @@ fn zoom_by_range_continuous_and_step() {
         assert_eq!(ack.result, result, "{p:?}");
     }
     assert!(queued(b.gimbal_mut()).is_empty());
+}
+
+#[test]
+fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
+    let mut b = bridge();
+    postback(&mut b, GimbalType::Zoom3_5x, 0);
+    // 100 % of a 3.5× camera is 3.5×, not 30×.
+    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 100.0, 0.0], 10);
+    match queued(b.gimbal_mut())[..] {
+        [GimbalCommand::ZoomRatio(r)] => assert_eq!(r.centi(), 350),
+        ref other => panic!("{other:?}"),
+    }
+    assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraInformation,
+        [1.0, 0.0, 0.0],
+        20,
+    );
+    let info = &of::<CameraInformation>(&frames)[0];
+    assert_eq!(&info.model_name[..5], b"3.5x\0");
+    // The 3.5× yaw motor turns ±325° (the document's Motor_psi scope).
+    b.receive(
+        &frame(
+            GCS,
+            0,
+            &command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0),
+        ),
+        t(30),
+    );
+    let gi = &of::<GimbalDeviceInformation>(&sent(&mut b))[0];
+    assert!((gi.yaw_max - 325f32.to_radians()).abs() < 1e-6);
+    assert!((gi.yaw_min + 325f32.to_radians()).abs() < 1e-6);
+    // A model the document gives no zoom for, none configured: range zoom unsupported.
+    postback(&mut b, GimbalType::A2000, 40);
+    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 10.0, 0.0], 50);
+    assert_eq!(ack.result, MavResult::Unsupported);
+}
+
+#[test]
+fn the_camera_names_its_gimbal_by_the_configured_component() {
+    let camera = CameraConfig::new(URI).unwrap();
+    let mut b = Bridge::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            gimbal_component: 171,
+            camera: Some(camera),
+            ..BridgeConfig::default()
+        },
+    );
+    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraInformation,
+        [1.0, 0.0, 0.0],
+        20,
+    );
+    assert_eq!(of::<CameraInformation>(&frames)[0].gimbal_device_id, 171);
 }
 
 #[test]

@@ -265,3 +265,74 @@ fn garbage_after_a_frame_found_inside_a_bad_one_is_skipped() {
         "every byte is in a frame or skipped"
     );
 }
+
+/// The (system, message id) of each frame whose checksum held, reading `datagrams` each
+/// with `end_datagram` after it.
+fn read_datagrams(datagrams: &[Vec<u8>]) -> (Vec<(u8, u32)>, FrameReader) {
+    let mut good = Vec::new();
+    let mut reader = FrameReader::new();
+    let mut check = |f: &ReceivedFrame<'_>| {
+        if f.decode::<Heartbeat>().is_ok() {
+            good.push((f.system_id(), f.message_id()));
+            Check::Handled
+        } else {
+            Check::Unhandled
+        }
+    };
+    for d in datagrams {
+        reader.feed(d, &mut check);
+        reader.end_datagram(&mut check);
+        assert_eq!(
+            reader.pending(),
+            0,
+            "nothing carried into the next datagram"
+        );
+    }
+    (good, reader)
+}
+
+#[test]
+fn a_frame_cut_at_a_datagrams_end_never_swallows_the_next_datagram() {
+    let hb = |sys: u8| frame((sys, 190), 0, &heartbeat());
+    // Sender 1's datagram ends with half a heartbeat; sender 2's whole heartbeat follows.
+    let mut first = hb(1);
+    let half = hb(3);
+    first.extend_from_slice(&half[..half.len() / 2]);
+    let (good, reader) = read_datagrams(&[first, hb(2)]);
+    assert_eq!(good, [(1, 0), (2, 0)]);
+    // The half frame's bytes are counted, none silently lost.
+    assert_eq!(reader.stats().skipped_bytes as usize, half.len() / 2);
+    // A stray start byte claiming a long payload in front of a whole frame, in one
+    // datagram: the frame inside it is still found at the datagram's end.
+    let mut d = vec![0xFD, 200, 0, 0, 0, 1, 1, 0, 0, 0];
+    d.extend_from_slice(&hb(4));
+    let (good, reader) = read_datagrams(&[d]);
+    assert_eq!(good, [(4, 0)]);
+    assert_eq!(reader.stats().skipped_bytes, 10);
+}
+
+proptest! {
+    /// Whole frames in any number of datagrams, each maybe followed by a cut-off frame:
+    /// every whole frame is read, whatever the cut-off bytes were.
+    #[test]
+    fn every_whole_frame_of_every_datagram_is_read(
+        datagrams in proptest::collection::vec((1u8..4, 0usize..40), 1..12),
+    ) {
+        let mut bytes = Vec::new();
+        let mut expected = Vec::new();
+        let mut sys = 0u8;
+        for (whole, cut) in &datagrams {
+            let mut d = Vec::new();
+            for _ in 0..*whole {
+                sys = sys.wrapping_add(1);
+                d.extend_from_slice(&frame((sys, 190), 0, &heartbeat()));
+                expected.push((sys, 0));
+            }
+            let tail = frame((0xEE, 190), 0, &heartbeat());
+            d.extend_from_slice(&tail[..(*cut).min(tail.len() - 1)]);
+            bytes.push(d);
+        }
+        let (good, _) = read_datagrams(&bytes);
+        prop_assert_eq!(good, expected);
+    }
+}

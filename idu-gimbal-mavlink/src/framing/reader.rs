@@ -146,6 +146,21 @@ impl FrameReader {
         }
     }
 
+    /// Ends a datagram (MAVLink on UDP carries whole frames, one or more a datagram): a frame
+    /// still incomplete can never be finished, so its start byte is dropped and what
+    /// follows it is searched again, until nothing is held. Frames found in that tail are
+    /// handed to `check` as by [`FrameReader::feed`]; every dropped byte is counted in
+    /// [`ReaderStats::skipped_bytes`]. The next datagram then starts clean, whatever this
+    /// one held.
+    pub fn end_datagram(&mut self, mut check: impl FnMut(&ReceivedFrame<'_>) -> Check) {
+        while self.len > 0 {
+            self.resync();
+            if self.len > 0 {
+                self.complete(&mut check);
+            }
+        }
+    }
+
     /// How long the frame in hand is, as far as its header says (the header's length until
     /// it is all here), and where its checksummed bytes end.
     fn extent(&self) -> (usize, usize) {

@@ -1,0 +1,257 @@
+//! Commands as `COMMAND_INT` as well as `COMMAND_LONG`: every one addressed to the bridge
+//! acknowledged once, location commands read from x/y/z in their frame.
+
+mod common;
+use common::*;
+
+use idu_gimbal::link::{Config, Link};
+use idu_gimbal::wire::control::{GimbalCommand, Photo};
+use idu_gimbal_mavlink::camera::CameraConfig;
+use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use mavio::dialects::common::enums::{MavCmd, MavFrame, MavResult};
+use mavio::dialects::common::messages::{
+    CameraImageCaptured, CommandAck, CommandInt, GimbalDeviceInformation, GlobalPositionInt,
+};
+use mavio::protocol::{Frame, V2};
+
+fn bridge() -> Bridge<Link> {
+    let mut b = Bridge::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            camera: Some(CameraConfig::new("rtsp://192.168.42.108:554/live").unwrap()),
+            ..BridgeConfig::default()
+        },
+    );
+    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    let _ = sent(&mut b);
+    b
+}
+
+fn int(
+    target: (u8, u8),
+    command: MavCmd,
+    frame_: MavFrame,
+    p: [f32; 4],
+    xyz: (i32, i32, f32),
+) -> CommandInt {
+    CommandInt {
+        target_system: target.0,
+        target_component: target.1,
+        frame: frame_,
+        command,
+        current: 0,
+        autocontinue: 0,
+        param1: p[0],
+        param2: p[1],
+        param3: p[2],
+        param4: p[3],
+        x: xyz.0,
+        y: xyz.1,
+        z: xyz.2,
+    }
+}
+
+/// An ACK as (from component, command, result).
+type Ack = (u8, MavCmd, MavResult);
+
+/// The ACKs a message produced, and all frames.
+fn acks_of(b: &mut Bridge<Link>, bytes: &[u8], ms: u32) -> (Vec<Ack>, Vec<Frame<V2>>) {
+    b.receive(bytes, t(ms));
+    let frames = sent(b);
+    let acks = frames
+        .iter()
+        .filter(|f| f.message_id() == 77)
+        .map(|f| {
+            let a: CommandAck = f.decode_message().unwrap();
+            assert_eq!((a.target_system, a.target_component), GCS);
+            (f.component_id(), a.command, a.result)
+        })
+        .collect();
+    (acks, frames)
+}
+
+fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPositionInt {
+    GlobalPositionInt {
+        time_boot_ms: 0,
+        lat,
+        lon,
+        alt: alt_mm,
+        relative_alt: relative_mm,
+        vx: 0,
+        vy: 0,
+        vz: 0,
+        hdg: 0,
+    }
+}
+
+#[test]
+fn command_int_is_answered_for_both_components() {
+    let mut b = bridge();
+    // The gimbal's information, asked by COMMAND_INT.
+    let c = int(
+        (AP.0, 154),
+        MavCmd::RequestMessage,
+        MavFrame::Global,
+        [283.0, 0.0, 0.0, 0.0],
+        (0, 0, 0.0),
+    );
+    let (acks, frames) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
+    assert_eq!(acks, [(154, MavCmd::RequestMessage, MavResult::Accepted)]);
+    assert_eq!(of::<GimbalDeviceInformation>(&frames).len(), 1);
+    // A photo, by COMMAND_INT to the camera.
+    let c = int(
+        (AP.0, 100),
+        MavCmd::ImageStartCapture,
+        MavFrame::Global,
+        [0.0, 0.0, 1.0, 1.0],
+        (0, 0, 0.0),
+    );
+    let (acks, frames) = acks_of(&mut b, &frame(GCS, 1, &c), 20);
+    assert_eq!(
+        acks,
+        [(100, MavCmd::ImageStartCapture, MavResult::Accepted)]
+    );
+    assert_eq!(of::<CameraImageCaptured>(&frames).len(), 1);
+    assert_eq!(
+        queued(b.gimbal_mut()),
+        [GimbalCommand::Photo(Photo::Single)]
+    );
+    // Anything else addressed to either: UNSUPPORTED, never silence.
+    for to in [154, 100] {
+        let c = int(
+            (AP.0, to),
+            MavCmd::DoSetHome,
+            MavFrame::Global,
+            [0.0; 4],
+            (0, 0, 0.0),
+        );
+        let (acks, _) = acks_of(&mut b, &frame(GCS, 2, &c), 30);
+        assert_eq!(acks, [(to, MavCmd::DoSetHome, MavResult::Unsupported)]);
+    }
+    // Broadcast and not owned, or for another component: left alone.
+    for to in [(0, 0), (AP.0, 1)] {
+        let c = int(
+            to,
+            MavCmd::DoSetHome,
+            MavFrame::Global,
+            [0.0; 4],
+            (0, 0, 0.0),
+        );
+        assert!(acks_of(&mut b, &frame(GCS, 3, &c), 40).0.is_empty());
+    }
+}
+
+#[test]
+fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
+    let mut b = bridge();
+    // 47.3977420 N, 8.5455940 E, 488.123 m AMSL; home 400 m AMSL (relative_alt 88.123 m).
+    b.receive(
+        &frame(AP, 1, &position(473_977_420, 85_455_940, 488_123, 88_123)),
+        t(5),
+    );
+    // Absolute altitude (MAV_FRAME_GLOBAL_INT): as given.
+    let c = int(
+        (AP.0, 154),
+        MavCmd::DoSetRoiLocation,
+        MavFrame::GlobalInt,
+        [0.0; 4],
+        (473_987_420, 85_465_940, 420.5),
+    );
+    let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
+    assert_eq!(acks, [(154, MavCmd::DoSetRoiLocation, MavResult::Accepted)]);
+    let p = b.gimbal().pointing_target().unwrap();
+    assert!((p.lat_deg() - 47.398_742).abs() < 1e-7 && (p.lon_deg() - 8.546_594).abs() < 1e-7);
+    // Kept to 1 cm (the core's Position).
+    assert!((p.alt_m() - 420.5).abs() < 0.01, "{}", p.alt_m());
+    // Relative to home: + home's 400 m. COMMAND_LONG's altitude is relative (param5..7).
+    let c = int(
+        (AP.0, 154),
+        MavCmd::DoSetRoiLocation,
+        MavFrame::GlobalRelativeAltInt,
+        [154.0, 0.0, 0.0, 0.0],
+        (473_987_420, 85_465_940, 20.0),
+    );
+    assert_eq!(
+        acks_of(&mut b, &frame(GCS, 1, &c), 20).0[0].2,
+        MavResult::Accepted
+    );
+    assert!((b.gimbal().pointing_target().unwrap().alt_m() - 420.0).abs() < 0.01);
+    let mut long = command((AP.0, 154), MavCmd::DoSetRoiLocation, 0.0, 0.0);
+    long.param5 = 47.5;
+    long.param6 = -122.25;
+    long.param7 = 30.0;
+    assert_eq!(
+        acks_of(&mut b, &frame(GCS, 2, &long), 30).0[0].2,
+        MavResult::Accepted
+    );
+    let p = b.gimbal().pointing_target().unwrap();
+    assert!((p.lat_deg() - 47.5).abs() < 1e-7 && (p.lon_deg() + 122.25).abs() < 1e-7);
+    assert!((p.alt_m() - 430.0).abs() < 0.01);
+    // ROI none: the point-at ends, the gimbal keeps its aim.
+    let c = int(
+        (AP.0, 154),
+        MavCmd::DoSetRoiNone,
+        MavFrame::Global,
+        [0.0; 4],
+        (0, 0, 0.0),
+    );
+    assert_eq!(
+        acks_of(&mut b, &frame(GCS, 3, &c), 40).0,
+        [(154, MavCmd::DoSetRoiNone, MavResult::Accepted)]
+    );
+    assert!(b.gimbal().pointing_target().is_none());
+    // Refused, and nothing pointed at: above terrain (unknown here), another gimbal
+    // (param1), a latitude out of range.
+    for (frame_, p1, x) in [
+        (MavFrame::GlobalTerrainAltInt, 0.0, 473_987_420),
+        (MavFrame::GlobalInt, 155.0, 473_987_420),
+        (MavFrame::GlobalInt, 0.0, 910_000_000),
+    ] {
+        let c = int(
+            (AP.0, 154),
+            MavCmd::DoSetRoiLocation,
+            frame_,
+            [p1, 0.0, 0.0, 0.0],
+            (x, 85_465_940, 20.0),
+        );
+        assert_eq!(
+            acks_of(&mut b, &frame(GCS, 4, &c), 50).0[0].2,
+            MavResult::Denied,
+            "{frame_:?} {p1}"
+        );
+        assert!(b.gimbal().pointing_target().is_none());
+    }
+    // Broadcast: the autopilot's gimbal manager owns ROI (common.xml: "not to a gimbal
+    // device"); the device leaves it alone.
+    let c = int(
+        (0, 0),
+        MavCmd::DoSetRoiLocation,
+        MavFrame::GlobalInt,
+        [0.0; 4],
+        (473_987_420, 85_465_940, 20.0),
+    );
+    assert!(acks_of(&mut b, &frame(GCS, 5, &c), 60).0.is_empty());
+    assert!(b.gimbal().pointing_target().is_none());
+}
+
+#[test]
+fn a_relative_roi_waits_for_home_s_height() {
+    let mut b = bridge();
+    let c = int(
+        (AP.0, 154),
+        MavCmd::DoSetRoiLocation,
+        MavFrame::GlobalRelativeAltInt,
+        [0.0; 4],
+        (473_987_420, 85_465_940, 20.0),
+    );
+    let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
+    assert_eq!(
+        acks,
+        [(
+            154,
+            MavCmd::DoSetRoiLocation,
+            MavResult::TemporarilyRejected
+        )]
+    );
+    assert!(b.gimbal().pointing_target().is_none());
+}
