@@ -67,6 +67,9 @@ tmux -V
 step "cargo test --workspace --all-features"
 cargo test --workspace --all-features
 
+step "MAVLink bridge tests without its optional features (the firmware's build: ROI unsupported)"
+cargo test -p idu-gimbal-mavlink
+
 step "MAVLink end to end: pymavlink as the autopilot against gimbalctl mavlink --sim"
 if ! python3 -c "import pymavlink" 2>/dev/null; then
     python3 -m pip install --quiet --disable-pip-version-check pymavlink==2.4.50

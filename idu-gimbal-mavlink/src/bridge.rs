@@ -1,14 +1,17 @@
 //! The bridge: MAVLink 2 bytes in and out, the gimbal driven through [`GimbalControl`], time
 //! passed in.
 
+#[cfg(feature = "roi")]
 use idu_gimbal::geo::Position;
 use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand};
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
+#[cfg(feature = "roi")]
+use mavio::dialects::common::enums::MavFrame;
 use mavio::dialects::common::enums::{
-    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavCmd, MavFrame, MavModeFlag,
-    MavResult, MavState, MavType,
+    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavCmd, MavModeFlag, MavResult,
+    MavState, MavType,
 };
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandAck, CommandInt, CommandLong, GimbalDeviceAttitudeStatus,
@@ -630,6 +633,7 @@ impl State {
     }
 
     /// A gimbal command's result (the gimbal owns it).
+    #[cfg_attr(not(feature = "roi"), allow(unused_variables))]
     fn gimbal_command<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
@@ -639,7 +643,9 @@ impl State {
         match cmd.command {
             MavCmd::SetMessageInterval => self.set_status_interval(cmd.params[1], now),
             MavCmd::RequestMessage => MavResult::Accepted,
+            #[cfg(feature = "roi")]
             MavCmd::DoSetRoiLocation => self.roi_location(gimbal, cmd),
+            #[cfg(feature = "roi")]
             MavCmd::DoSetRoiNone => {
                 if !self.addresses_this_gimbal(cmd.params[0]) {
                     return MavResult::Denied;
@@ -651,6 +657,7 @@ impl State {
         }
     }
 
+    #[cfg(feature = "roi")]
     /// Whether a ROI command's param1 (common.xml: "component ID of gimbal device to
     /// address (or 1-6 for non-MAVLink gimbal), 0 for all gimbal device components")
     /// names this gimbal.
@@ -658,6 +665,7 @@ impl State {
         param1 == 0.0 || param1 == f32::from(self.config.gimbal_component)
     }
 
+    #[cfg(feature = "roi")]
     /// `MAV_CMD_DO_SET_ROI_LOCATION`: the core's point-at, at the location's height above
     /// mean sea level (the height the vehicle's altitude is pushed in). A height relative
     /// to home needs home's, from GLOBAL_POSITION_INT (alt − relative_alt); a height above
@@ -666,7 +674,7 @@ impl State {
         if !self.addresses_this_gimbal(cmd.params[0]) {
             return MavResult::Denied;
         }
-        let Some((lat, lon)) = cmd.lat_lon_e7 else {
+        let Some((lat, lon)) = cmd.xy.lat_lon_deg() else {
             return MavResult::Denied;
         };
         let amsl_m = match cmd.frame {
@@ -680,7 +688,7 @@ impl State {
             }
             _ => return MavResult::Denied,
         };
-        let Ok(target) = Position::new(f64::from(lat) * 1e-7, f64::from(lon) * 1e-7, amsl_m) else {
+        let Ok(target) = Position::new(lat, lon, amsl_m) else {
             return MavResult::Denied;
         };
         gimbal.point_at(target);

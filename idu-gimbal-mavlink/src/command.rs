@@ -17,10 +17,8 @@ pub struct Command {
     pub target: (u8, u8),
     /// param1 to param4.
     pub params: [f32; 4],
-    /// The location: latitude and longitude in 1e-7° (`COMMAND_INT`'s x and y; a
-    /// `COMMAND_LONG`'s param5 and param6 in degrees, scaled), `None` where not finite or
-    /// not a latitude/longitude.
-    pub lat_lon_e7: Option<(i32, i32)>,
+    /// x and y: `COMMAND_INT`'s integers or `COMMAND_LONG`'s param5 and param6.
+    pub xy: Xy,
     /// param7 / z: the altitude, metres, in [`Command::frame`].
     pub z: f32,
     /// The altitude's frame: `COMMAND_INT`'s, and `GLOBAL_RELATIVE_ALT` for a
@@ -29,11 +27,27 @@ pub struct Command {
     pub frame: MavFrame,
 }
 
-/// Degrees to 1e-7° when a valid latitude (`max` 90) or longitude (`max` 180).
-fn e7(deg: f32, max: f64) -> Option<i32> {
-    let d = f64::from(deg);
-    // In range: |d·1e7| <= 1.8e9 < 2^31, so the cast is exact after rounding.
-    (d.is_finite() && d.abs() <= max).then(|| libm::round(d * 1e7) as i32)
+/// A command's x and y as its message carries them; read as a location only by the
+/// commands that take one, so that the others never pay for the conversion.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub enum Xy {
+    /// `COMMAND_LONG`'s param5 and param6 (a latitude and longitude in degrees).
+    Float(f32, f32),
+    /// `COMMAND_INT`'s x and y (a latitude and longitude in 1e-7°).
+    Int(i32, i32),
+}
+
+impl Xy {
+    /// The latitude and longitude in degrees, when both are finite and in range
+    /// ([−90, 90], [−180, 180]).
+    pub fn lat_lon_deg(self) -> Option<(f64, f64)> {
+        let (lat, lon) = match self {
+            Xy::Float(lat, lon) => (f64::from(lat), f64::from(lon)),
+            Xy::Int(x, y) => (f64::from(x) * 1e-7, f64::from(y) * 1e-7),
+        };
+        let ok = lat.is_finite() && lon.is_finite() && lat.abs() <= 90.0 && lon.abs() <= 180.0;
+        ok.then_some((lat, lon))
+    }
 }
 
 impl From<&CommandLong> for Command {
@@ -42,7 +56,7 @@ impl From<&CommandLong> for Command {
             command: c.command,
             target: (c.target_system, c.target_component),
             params: [c.param1, c.param2, c.param3, c.param4],
-            lat_lon_e7: e7(c.param5, 90.0).zip(e7(c.param6, 180.0)),
+            xy: Xy::Float(c.param5, c.param6),
             z: c.param7,
             frame: MavFrame::GlobalRelativeAlt,
         }
@@ -51,13 +65,11 @@ impl From<&CommandLong> for Command {
 
 impl From<&CommandInt> for Command {
     fn from(c: &CommandInt) -> Self {
-        let valid = (-900_000_000..=900_000_000).contains(&c.x)
-            && (-1_800_000_000..=1_800_000_000).contains(&c.y);
         Command {
             command: c.command,
             target: (c.target_system, c.target_component),
             params: [c.param1, c.param2, c.param3, c.param4],
-            lat_lon_e7: valid.then_some((c.x, c.y)),
+            xy: Xy::Int(c.x, c.y),
             z: c.z,
             frame: c.frame,
         }

@@ -141,6 +141,7 @@ fn command_int_is_answered_for_both_components() {
     }
 }
 
+#[cfg(feature = "roi")]
 #[test]
 fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
     let mut b = bridge();
@@ -160,7 +161,10 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(acks, [(154, MavCmd::DoSetRoiLocation, MavResult::Accepted)]);
     let p = b.gimbal().pointing_target().unwrap();
-    assert!((p.lat_deg() - 47.398_742).abs() < 1e-7 && (p.lon_deg() - 8.546_594).abs() < 1e-7);
+    assert!(
+        (p.lat_deg() - 47.398_742).abs() < 1e-7 && (p.lon_deg() - 8.546_594).abs() < 1e-7,
+        "{p:?}"
+    );
     // Kept to 1 cm (the core's Position).
     assert!((p.alt_m() - 420.5).abs() < 0.01, "{}", p.alt_m());
     // Relative to home: + home's 400 m. COMMAND_LONG's altitude is relative (param5..7).
@@ -234,6 +238,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
     assert!(b.gimbal().pointing_target().is_none());
 }
 
+#[cfg(feature = "roi")]
 #[test]
 fn a_relative_roi_waits_for_home_s_height() {
     let mut b = bridge();
@@ -254,4 +259,24 @@ fn a_relative_roi_waits_for_home_s_height() {
         )]
     );
     assert!(b.gimbal().pointing_target().is_none());
+}
+
+#[cfg(not(feature = "roi"))]
+#[test]
+fn without_the_roi_feature_a_region_of_interest_is_unsupported() {
+    let mut b = bridge();
+    for cmd in [MavCmd::DoSetRoiLocation, MavCmd::DoSetRoiNone] {
+        let c = int(
+            (AP.0, 154),
+            cmd,
+            MavFrame::GlobalInt,
+            [0.0; 4],
+            (473_987_420, 85_465_940, 20.0),
+        );
+        assert_eq!(
+            acks_of(&mut b, &frame(GCS, 0, &c), 10).0,
+            [(154, cmd, MavResult::Unsupported)]
+        );
+        assert!(b.gimbal().pointing_target().is_none());
+    }
 }
