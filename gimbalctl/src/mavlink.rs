@@ -1,13 +1,24 @@
 //! `gimbalctl mavlink`: the library's MAVLink bridge (`idu-gimbal-mavlink`) on UDP, in front
 //! of the in-process simulated gimbal (`--sim`) or the serial server (`--tcp`).
 //!
-//! One thread, non-blocking sockets, a 1 ms tick on the host's monotonic clock. MAVLink 2
-//! datagrams from any peer go into the bridge; what the bridge sends goes to every peer
-//! heard from (at most [`MAX_PEERS`]) and to each `--to` address. With `--sim` the gimbal is
-//! the library's `Simulator` on an in-memory CAN link (the `Link` the firmware uses, so the
-//! vehicle attitude is pushed and headings are north-referenced as on a real CAN bus); with
-//! `--tcp` it is the serial server, through the core's `SerialLink` (nose-referenced: the
-//! serial link carries no vehicle frames).
+//! One thread, non-blocking sockets, a 1 ms tick on the host's monotonic clock. Each tick
+//! reads at most [`DATAGRAMS_PER_TICK`] datagrams, then moves the gimbal side, polls the
+//! bridge and sends, so a flood of datagrams cannot starve the bridge's own traffic.
+//!
+//! Each datagram is parsed on its own ([`Bridge::receive_datagram`]): MAVLink on UDP carries
+//! whole frames, so a frame cut at a datagram's end is dropped rather than joined to the next
+//! datagram, which may come from another sender. A source address becomes a peer when one
+//! of its datagrams held a frame the bridge handles with a good CRC (garbage never takes a
+//! slot); any datagram keeps it; it is dropped after [`peers::PEER_TIMEOUT`] (10 s, ten
+//! missed heartbeats) of silence. At most [`peers::PEER_CAPACITY`] (16) peers are kept: a new
+//! one replaces the peer heard least recently, so no client is ever locked out. What the
+//! bridge sends goes, one frame a datagram, to every peer and to each `--to` address (those
+//! are permanent and outside the table). Joins, departures and replacements go to stderr.
+//!
+//! With `--sim` the gimbal is the library's `Simulator` on an in-memory CAN link (the `Link`
+//! the firmware uses, so the vehicle attitude is pushed and headings are north-referenced as
+//! on a real CAN bus); with `--tcp` it is the serial server, through the core's `SerialLink`
+//! (nose-referenced: the serial link carries no vehicle frames).
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream, UdpSocket};
@@ -24,10 +35,19 @@ use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
 
-/// Peers remembered from their datagrams; more are not answered (said once each).
-pub const MAX_PEERS: usize = 8;
+mod peers;
+
+use peers::{Change, Peers, PEER_CAPACITY, PEER_TIMEOUT};
+
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(1);
+/// Datagrams read at most per tick before the bridge is polled and its frames sent: a
+/// flood delays the bridge's own output (heartbeats, status, answers) by one such batch,
+/// never indefinitely.
+pub const DATAGRAMS_PER_TICK: usize = 256;
+/// The receive buffer: the largest UDP payload (65,507 bytes over IPv4) fits, so no datagram
+/// is cut short, whatever number of frames it holds.
+const DATAGRAM_BUFFER: usize = 65_536;
 
 /// Where the gimbal is.
 pub enum Gimbal<'a> {
@@ -203,9 +223,9 @@ fn serve<S: Pump>(
     exit_after_ms: Option<u64>,
 ) -> Result<(), Failure> {
     let start = StdInstant::now();
-    let mut peers: Vec<SocketAddr> = Vec::new();
-    let mut refused: Vec<SocketAddr> = Vec::new();
-    let mut buf = [0u8; 2048];
+    let mut peers = Peers::new(PEER_CAPACITY, PEER_TIMEOUT);
+    // Allocated once; see DATAGRAM_BUFFER.
+    let mut buf = vec![0u8; DATAGRAM_BUFFER];
     let mut was_up = false;
     let mut splitter = FrameReader::new();
     loop {
@@ -217,28 +237,45 @@ fn serve<S: Pump>(
             return Ok(());
         }
         let t = now();
-        loop {
+        let clock = StdInstant::now();
+        peers.expire(clock, |gone| {
+            eprintln!(
+                "gimbalctl mavlink: peer {gone} left (silent {} s)",
+                PEER_TIMEOUT.as_secs()
+            );
+        });
+        let mut drained = false;
+        for _ in 0..DATAGRAMS_PER_TICK {
             match socket.recv_from(&mut buf) {
                 Ok((n, from)) => {
-                    if !peers.contains(&from) && !to.contains(&from) {
-                        if peers.len() < MAX_PEERS {
-                            eprintln!("gimbalctl mavlink: peer {from}");
-                            peers.push(from);
-                        } else if !refused.contains(&from) {
-                            eprintln!(
-                                "gimbalctl mavlink: ignoring {from}: {MAX_PEERS} peers already"
-                            );
-                            refused.push(from);
-                            continue;
-                        } else {
-                            continue;
-                        }
+                    let good = bridge.receive_datagram(&buf[..n], t);
+                    if to.contains(&from) {
+                        continue;
                     }
-                    bridge.receive(&buf[..n], t);
+                    match peers.heard(from, good, clock) {
+                        Some(Change::Joined(new)) => eprintln!(
+                            "gimbalctl mavlink: peer {new} joined ({} of {})",
+                            peers.len(),
+                            peers.capacity()
+                        ),
+                        Some(Change::Replaced { old, new }) => eprintln!(
+                            "gimbalctl mavlink: peer {new} joined, replacing {old} \
+                             (all {} slots taken; {old} heard least recently)",
+                            peers.capacity()
+                        ),
+                        None => {}
+                    }
                 }
-                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                    drained = true;
+                    break;
+                }
                 // A peer that went away (ICMP port unreachable) must not stop the bridge.
-                Err(e) if e.kind() == ErrorKind::ConnectionReset => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused
+                    ) => {}
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
                 Err(e) => return Err(Failure::io("UDP socket", e)),
             }
@@ -261,13 +298,16 @@ fn serve<S: Pump>(
             }
             bridge.transmit_written(bytes.len());
             splitter.feed(&bytes, |frame| {
-                for peer in peers.iter().chain(to.iter()) {
+                for peer in peers.addrs().chain(to.iter()) {
                     // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
                     let _ = socket.send_to(frame.bytes(), peer);
                 }
                 Check::Unhandled
             });
         }
-        std::thread::sleep(TICK);
+        // Datagrams still waiting: the next tick at once, so a burst is read at full speed.
+        if drained {
+            std::thread::sleep(TICK);
+        }
     }
 }
