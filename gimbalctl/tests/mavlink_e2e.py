@@ -1,13 +1,25 @@
 #!/usr/bin/env python3
-"""End-to-end test of `gimbalctl mavlink --sim` with pymavlink playing the autopilot.
+"""End-to-end test of `gimbalctl mavlink --sim` with pymavlink playing the autopilot and a
+ground station, in three sessions, each against a fresh bridge:
 
-It behaves as ArduPilot and PX4 do towards a MAVLink gimbal (gimbal protocol v2) and camera:
-heartbeats at 1 Hz, AUTOPILOT_STATE_FOR_GIMBAL_DEVICE at 50 Hz, GLOBAL_POSITION_INT when the
-gimbal asks for it, information requests (broadcast and addressed) every second until
-answered, setpoints at 20 Hz in both yaw frames and as rates, and the camera's commands. It
-checks that the attitude status stays fresh throughout, that setpoints reach the simulated
-gimbal and come back in the status within 2 degrees, that a rate stops within the dead-man
-once its stream stops, and that every command gets the right ACK.
+- PX4 on a port in mode Normal (PX4 src/modules/mavlink/mavlink_main.cpp, configure_streams):
+  no AUTOPILOT_STATE_FOR_GIMBAL_DEVICE until the gimbal asks for it (it is streamed only in
+  mode Gimbal), setpoints at 5 Hz until asked for more, GIMBAL_DEVICE_INFORMATION asked of
+  the broadcast component every second until answered (src/modules/gimbal/output_mavlink.cpp),
+  setpoint flags YAW_LOCK | YAW_IN_EARTH_FRAME or YAW_IN_VEHICLE_FRAME;
+- ArduPilot (libraries/AP_Mount/AP_Mount_Gremsy.cpp, the MAVLink gimbal v2 backend):
+  AUTOPILOT_STATE_FOR_GIMBAL_DEVICE at 50 Hz from the start, GIMBAL_DEVICE_INFORMATION asked of
+  component 154 every second and no setpoint before it, setpoints at 50 Hz with flags 0 (body
+  frame) or ROLL|PITCH|YAW_LOCK (earth frame), retract as a NaN quaternion with zero rates;
+  it reads the status the way AP_Mount does (3-2-1 Euler yaw taken as body frame, earth yaw
+  = that + the vehicle's) and needs it fresher than 1 s; take_picture with count 1 and
+  sequence numbers from 1 (libraries/AP_Camera/AP_Camera_MAVLinkCamV2.cpp);
+- a QGroundControl-like reader beside each (src/Gimbal/GimbalController.cc): earth yaw from
+  the status's frame flags and the vehicle heading (delta_yaw), checked against the heading
+  the simulated gimbal was steered to.
+
+It also checks the rate hold and its dead-man, image capture at an interval, and that every
+command gets the right ACK.
 
 Usage: mavlink_e2e.py PATH/TO/gimbalctl
 Ends with a line "N passed, M failed"; exit status 0 only if nothing failed.
@@ -24,8 +36,11 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
+GCS_SYSTEM, GCS_COMPONENT = 255, 190
 GIMBAL, CAMERA = 154, 100
 VEHICLE_YAW = 30.0  # degrees, what the "autopilot" says its heading is
+ID_AUTOPILOT_STATE = 286
+ID_SETPOINT = 284
 # The simulated gimbal slews at 60 deg/s and reports every 500 ms: 10 s is ample for any
 # move here; the status is expected every 100 ms.
 STEP_TIMEOUT = 10.0
@@ -62,17 +77,91 @@ def angle_diff(a, b):
     return (a - b + 180) % 360 - 180
 
 
-class Autopilot:
+
+def euler_yaw(q):
+    """ArduPilot's reading of a quaternion's yaw (Quaternion::to_euler, 3-2-1), degrees."""
+    w, x, y, z = q
+    return math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+
+
+class Results:
+    def __init__(self):
+        self.passed = 0
+        self.failed = 0
+
+    def check(self, ok, what):
+        print(("  ok   " if ok else "  FAIL ") + what, flush=True)
+        if ok:
+            self.passed += 1
+        else:
+            self.failed += 1
+        return ok
+
+
+class Gcs:
+    """A ground station beside the autopilot, reading the status as QGroundControl does
+    (GimbalController.cc): the yaw is in the vehicle frame when YAW_IN_VEHICLE_FRAME is set
+    (or neither frame flag nor YAW_LOCK), and the earth yaw is then that plus the vehicle
+    heading; here the heading is the status's own delta_yaw."""
+
     def __init__(self, port):
+        self.m = mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{port}", source_system=GCS_SYSTEM,
+            source_component=GCS_COMPONENT, dialect="common")
+        self.next_hb = 0.0
+        self.status = None
+
+    def tick(self, t):
+        if t >= self.next_hb:
+            self.next_hb = t + 1.0
+            self.m.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, mav.MAV_STATE_ACTIVE)
+        while True:
+            msg = self.m.recv_match(blocking=False)
+            if msg is None:
+                break
+            if msg.get_type() == "GIMBAL_DEVICE_ATTITUDE_STATUS":
+                self.status = msg
+
+    def earth_yaw(self):
+        s = self.status
+        if s is None or math.isnan(s.q[0]):
+            return None
+        f = s.flags
+        in_vehicle = bool(f & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME) or (
+            not f & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME and not f & mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK)
+        yaw = euler_yaw(s.q)
+        if not in_vehicle:
+            return yaw
+        if math.isnan(s.delta_yaw):
+            return None
+        return angle_diff(yaw + math.degrees(s.delta_yaw), 0)
+
+
+class Autopilot:
+    """An autopilot as `persona` ("px4-normal" or "ardupilot") behaves towards the gimbal."""
+
+    def __init__(self, port, persona, results):
+        self.persona = persona
+        self.r = results
         self.m = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{port}",
             source_system=AP_SYSTEM,
             source_component=AP_COMPONENT,
             dialect="common",
         )
+        self.gcs = Gcs(port)
         self.start = time.monotonic()
         self.next_hb = 0.0
+        # ArduPilot streams the autopilot state at 50 Hz to a MAVLink gimbal by itself
+        # (AP_Mount_Gremsy.cpp, set_message_interval 20000 us); PX4 in mode Normal only
+        # once asked.
+        self.state_interval = 0.02 if persona == "ardupilot" else None
         self.next_state = 0.0
+        self.state_asked = False
+        # Setpoints: ArduPilot 50 Hz; PX4 mode Normal 5 Hz until asked.
+        self.setpoint_interval = 0.02 if persona == "ardupilot" else 0.2
+        self.setpoint_asked = False
+        self.setpoint_times = []
         self.next_pos = None  # set once the gimbal asks for GLOBAL_POSITION_INT
         self.pos_interval = None
         self.setpoint = None  # a function returning (flags, q, rates) or None
@@ -81,8 +170,9 @@ class Autopilot:
         self.status = None
         self.status_gaps = []
         self.messages = []  # (time, msg) of everything received since the last clear
-        self.passed = 0
-        self.failed = 0
+
+    def check(self, ok, what):
+        return self.r.check(ok, f"[{self.persona}] {what}")
 
     def now(self):
         return time.monotonic() - self.start
@@ -92,16 +182,17 @@ class Autopilot:
 
     def tick(self):
         t = self.now()
+        self.gcs.tick(t)
         if t >= self.next_hb:
             self.next_hb = t + 1.0
-            self.m.mav.heartbeat_send(
-                mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, mav.MAV_STATE_ACTIVE
-            )
-        if t >= self.next_state:
-            self.next_state = t + 0.02
+            autopilot = mav.MAV_AUTOPILOT_ARDUPILOTMEGA if self.persona == "ardupilot" else mav.MAV_AUTOPILOT_PX4
+            self.m.mav.heartbeat_send(mav.MAV_TYPE_QUADROTOR, autopilot, 0, 0, mav.MAV_STATE_ACTIVE)
+        if self.state_interval is not None and t >= self.next_state:
+            self.next_state = t + self.state_interval
             half = math.radians(VEHICLE_YAW) / 2
+            # Both autopilots address it to the whole system (target component 0).
             self.m.mav.autopilot_state_for_gimbal_device_send(
-                AP_SYSTEM, GIMBAL, self.boot_ms() * 1000,
+                AP_SYSTEM, 0, self.boot_ms() * 1000,
                 [math.cos(half), 0, 0, math.sin(half)], 0, 0, 0, 0, 0, 0, 0, 4, 0,
             )
         if self.next_pos is not None and t >= self.next_pos:
@@ -110,8 +201,9 @@ class Autopilot:
                 self.boot_ms(), 473977420, 85455940, 488000, 38000, 0, 0, 0, int(VEHICLE_YAW * 100)
             )
         if self.setpoint is not None and t >= self.next_setpoint:
-            self.next_setpoint = t + 0.05
+            self.next_setpoint = t + self.setpoint_interval
             flags, q, rates = self.setpoint()
+            self.setpoint_times.append(t)
             self.m.mav.gimbal_device_set_attitude_send(AP_SYSTEM, GIMBAL, flags, q, *rates)
         while True:
             msg = self.m.recv_match(blocking=False)
@@ -128,12 +220,29 @@ class Autopilot:
                 self.last_status = t
                 self.status = msg
             elif kind == "COMMAND_LONG" and msg.command == mav.MAV_CMD_SET_MESSAGE_INTERVAL:
-                # The gimbal asks for our position.
-                self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
-                if int(msg.param1) == mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT and msg.param2 > 0:
-                    self.pos_interval = msg.param2 / 1e6
-                    self.next_pos = t
+                self.interval_asked(t, msg)
         time.sleep(0.002)
+
+    def interval_asked(self, t, msg):
+        """The gimbal asks for a stream; each autopilot answers as it would."""
+        what, interval = int(msg.param1), msg.param2 / 1e6
+        if what == mav.MAVLINK_MSG_ID_GLOBAL_POSITION_INT and interval > 0:
+            self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
+            self.pos_interval = interval
+            self.next_pos = t
+        elif what == ID_AUTOPILOT_STATE and interval > 0:
+            self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
+            self.state_asked = True
+            self.state_interval = interval
+        elif what == ID_SETPOINT and interval > 0 and self.persona == "px4-normal":
+            # PX4's GIMBAL_DEVICE_SET_ATTITUDE stream re-sends the latest setpoint at the
+            # rate asked for.
+            self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
+            self.setpoint_asked = True
+            self.setpoint_interval = interval
+        else:
+            # ArduPilot has no stream of its setpoints to re-time.
+            self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_FAILED)
 
     def wait(self, what, cond, timeout=STEP_TIMEOUT):
         deadline = self.now() + timeout
@@ -144,29 +253,24 @@ class Autopilot:
                 return found
         return None
 
-    def check(self, ok, what):
-        print(("  ok   " if ok else "  FAIL ") + what, flush=True)
-        if ok:
-            self.passed += 1
-        else:
-            self.failed += 1
-        return ok
-
     def find(self, kind, pred=lambda m: True, since=0.0):
         for t, m in self.messages:
             if t >= since and m.get_type() == kind and pred(m):
                 return m
         return None
 
-    def command(self, target_component, command, *params, expect=None, reply=None):
-        """COMMAND_LONG every second until its ACK arrives; returns (ack, reply message)."""
+    def find_all(self, kind, since=0.0):
+        return [m for t, m in self.messages if t >= since and m.get_type() == kind]
+
+    def command(self, target_component, command, *params, expect=None, reply=None, retry_s=1.0):
+        """COMMAND_LONG every `retry_s` until its ACK arrives; returns (ack, reply message)."""
         params = list(params) + [0.0] * (7 - len(params))
         sent_at = self.now()
         retry = 0.0
         ack = None
         while self.now() - sent_at < STEP_TIMEOUT:
             if self.now() >= retry:
-                retry = self.now() + 1.0
+                retry = self.now() + retry_s
                 self.m.mav.command_long_send(AP_SYSTEM, target_component, command, 0, *params)
             self.tick()
             ack = self.find("COMMAND_ACK", lambda m: m.command == command, since=sent_at)
@@ -183,6 +287,45 @@ class Autopilot:
             self.check(got is not None, f"{name} to {target_component}: {reply} received")
         return ack, got
 
+    def ask_information(self, target):
+        _, info = self.command(target, mav.MAV_CMD_REQUEST_MESSAGE,
+                               mav.MAVLINK_MSG_ID_GIMBAL_DEVICE_INFORMATION,
+                               expect=mav.MAV_RESULT_ACCEPTED, reply="GIMBAL_DEVICE_INFORMATION")
+        return info
+
+    def settle(self, what, flags, yaw, pitch, want_earth_yaw):
+        """Steers with angle setpoints until the status (read as this autopilot and as the
+        ground station read it) shows the gimbal there."""
+        q = axis_quaternion(yaw, pitch)
+        self.setpoint = lambda: (flags, q, [math.nan] * 3)
+
+        def reached():
+            a = status_angles(self)
+            if a is None or abs(a[1] - pitch) > ANGLE_TOL:
+                return None
+            # ArduPilot's reading: body-frame yaw + the vehicle's yaw.
+            ap_earth = angle_diff(euler_yaw(self.status.q) + VEHICLE_YAW, 0) if abs(pitch) < 90 else a[0] + VEHICLE_YAW
+            qgc_earth = self.gcs.earth_yaw()
+            if qgc_earth is None or abs(angle_diff(qgc_earth, want_earth_yaw)) > ANGLE_TOL:
+                return None
+            if abs(angle_diff(ap_earth, want_earth_yaw)) > ANGLE_TOL:
+                return None
+            return (a, ap_earth, qgc_earth)
+        got = self.wait(what, reached)
+        s = self.status
+        self.check(bool(got), f"{what}: earth yaw {want_earth_yaw} as AP_Mount and QGC read it: {got or status_angles(self)}")
+        self.check(s is not None and s.flags & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME
+                   and not s.flags & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME
+                   and abs(math.degrees(s.delta_yaw) - VEHICLE_YAW) < 0.01,
+                   f"{what}: vehicle frame, delta_yaw the vehicle heading "
+                   f"({math.degrees(s.delta_yaw) if s else None})")
+
+    def status_fresh(self):
+        gaps = self.status_gaps
+        worst = max(gaps) if gaps else math.inf
+        self.check(len(gaps) > 50 and worst < STATUS_MAX_GAP,
+                   f"attitude status fresh throughout: {len(gaps)} gaps, worst {worst * 1000:.0f} ms")
+
 
 def status_angles(ap):
     s = ap.status
@@ -194,123 +337,143 @@ def status_angles(ap):
         # Past vertical the forward axis's yaw is turned by 180: the gimbal's yaw is the
         # other way round.
         yaw = (yaw + 180) % 360
-    earth = bool(s.flags & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME)
-    return yaw, pitch, earth
+    return yaw, pitch
 
 
-def main():
-    gimbalctl = sys.argv[1]
+def px4_normal(ap):
+    # PX4 asks the broadcast component for the information every second until answered.
+    info = ap.ask_information(0)
+    if info is not None:
+        ap.check(abs(math.degrees(info.pitch_min) + 100) < 0.01
+                 and abs(math.degrees(info.pitch_max) - 60) < 0.01,
+                 f"pitch limits {math.degrees(info.pitch_min):.1f}..{math.degrees(info.pitch_max):.1f}")
+        ap.check(info.cap_flags & mav.GIMBAL_DEVICE_CAP_FLAGS_HAS_YAW_AXIS
+                 and not info.cap_flags & mav.GIMBAL_DEVICE_CAP_FLAGS_HAS_ROLL_AXIS,
+                 "yaw and pitch axes, no roll")
+    hb = ap.wait("heartbeats", lambda: ap.find("HEARTBEAT", lambda m: m.type == mav.MAV_TYPE_GIMBAL)
+                 and ap.find("HEARTBEAT", lambda m: m.type == mav.MAV_TYPE_CAMERA))
+    ap.check(hb is not None, "heartbeats from the gimbal (154) and the camera (100)")
+    # Mode Normal streams no autopilot state: the gimbal asks for it, and for the position.
+    ap.check(ap.wait("state asked", lambda: ap.state_asked) is not None,
+             "the gimbal asked for AUTOPILOT_STATE_FOR_GIMBAL_DEVICE")
+    ap.check(ap.wait("position asked", lambda: ap.next_pos is not None) is not None,
+             "the gimbal asked for GLOBAL_POSITION_INT")
+    # New PX4: YAW_LOCK | YAW_IN_EARTH_FRAME for ROI and yaw lock; refused without the
+    # vehicle's heading, followed with it.
+    earth = mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK | mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME
+    ap.settle("setpoint yaw 90 (earth) pitch -30", earth, 90, -30, 90)
+    ap.check(ap.setpoint_asked and ap.setpoint_interval <= 0.05,
+             f"the gimbal asked for setpoints at 20 Hz (now every {ap.setpoint_interval * 1000:.0f} ms)")
+    recent = [t for t in ap.setpoint_times if t > ap.now() - 1.0]
+    ap.check(len(recent) >= 15, f"setpoints now at {len(recent)} a second")
+    ap.settle("setpoint yaw 20 (vehicle) pitch -60", mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME, 20, -60, 50)
+
+    # Rate: 20 deg/s of yaw for 1 s, then the stream stops: the core's dead-man (250 ms)
+    # stops the gimbal.
+    ap.setpoint = lambda: (mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME, [math.nan] * 4,
+                           [0.0, 0.0, math.radians(20)])
+    before = status_angles(ap)
+    ap.wait("rate hold", lambda: False, timeout=1.5)
+    during = status_angles(ap)
+    ap.setpoint = None
+    ap.wait("dead-man", lambda: False, timeout=1.2)
+    stopped = status_angles(ap)
+    ap.wait("still", lambda: False, timeout=1.2)
+    still = status_angles(ap)
+    turned = angle_diff(during[0], before[0]) if before and during else 0
+    ap.check(turned > 10, f"rate setpoints turned the gimbal ({turned:.1f} deg)")
+    ap.check(stopped is not None and still is not None and abs(angle_diff(still[0], stopped[0])) < 0.5,
+             f"stopped after the stream stopped ({stopped} then {still})")
+    ap.status_fresh()
+
+    # The camera.
+    for target, cmd, p1 in ((0, mav.MAV_CMD_REQUEST_MESSAGE, mav.MAVLINK_MSG_ID_CAMERA_INFORMATION),
+                            (CAMERA, mav.MAV_CMD_REQUEST_CAMERA_INFORMATION, 1)):
+        _, info = ap.command(target, cmd, p1, expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_INFORMATION")
+    if info is not None:
+        ap.check(info.gimbal_device_id == GIMBAL
+                 and info.flags & mav.CAMERA_CAP_FLAGS_CAPTURE_IMAGE
+                 and info.flags & mav.CAMERA_CAP_FLAGS_HAS_VIDEO_STREAM,
+                 "camera information: images, video stream, gimbal 154")
+    _, status = ap.command(CAMERA, mav.MAV_CMD_VIDEO_START_CAPTURE, 0, 0,
+                           expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_CAPTURE_STATUS")
+    ap.check(status is not None and status.video_status == 1, "recording")
+    ap.command(CAMERA, mav.MAV_CMD_VIDEO_STOP_CAPTURE, 0, expect=mav.MAV_RESULT_ACCEPTED)
+    _, settings = ap.command(CAMERA, mav.MAV_CMD_SET_CAMERA_ZOOM, mav.ZOOM_TYPE_RANGE, 50,
+                             expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_SETTINGS")
+    ap.check(settings is not None and abs(settings.zoomLevel - 50) < 0.01, "zoom level 50 %")
+    # Continuous zoom is a rate: half speed in is accepted.
+    ap.command(CAMERA, mav.MAV_CMD_SET_CAMERA_ZOOM, mav.ZOOM_TYPE_CONTINUOUS, 0.5,
+               expect=mav.MAV_RESULT_ACCEPTED)
+    _, stream = ap.command(CAMERA, mav.MAV_CMD_REQUEST_VIDEO_STREAM_INFORMATION, 1,
+                           expect=mav.MAV_RESULT_ACCEPTED, reply="VIDEO_STREAM_INFORMATION")
+    ap.check(stream is not None and stream.uri.startswith("rtsp://") and stream.type == mav.VIDEO_STREAM_TYPE_RTSP,
+             f"stream URI {stream.uri if stream else None}")
+    # Images at an interval: 3 images 0.5 s apart, each reported when taken.
+    since = ap.now()
+    ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0.5, 3, 0, expect=mav.MAV_RESULT_ACCEPTED)
+    ap.wait("three images", lambda: len(ap.find_all("CAMERA_IMAGE_CAPTURED", since)) >= 3, timeout=3.0)
+    ap.wait("no fourth", lambda: False, timeout=1.0)
+    images = [(t, m.image_index) for t, m in ap.messages if t >= since and m.get_type() == "CAMERA_IMAGE_CAPTURED"]
+    spacing = [b[0] - a[0] for a, b in zip(images, images[1:])]
+    ap.check([i for _, i in images] == [0, 1, 2] and all(0.35 < d < 0.65 for d in spacing),
+             f"three images 0.5 s apart, consecutive indexes: {[(round(t - since, 2), i) for t, i in images]}")
+
+    # Bad commands get the right ACK, never silence.
+    ap.command(GIMBAL, mav.MAV_CMD_DO_SET_MODE, 1, expect=mav.MAV_RESULT_UNSUPPORTED)
+    ap.command(CAMERA, mav.MAV_CMD_SET_CAMERA_ZOOM, mav.ZOOM_TYPE_RANGE, 150, expect=mav.MAV_RESULT_DENIED)
+    ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 0, expect=mav.MAV_RESULT_DENIED)
+
+
+def ardupilot(ap):
+    # No setpoint before the information, asked of component 154 every second.
+    ap.ask_information(GIMBAL)
+    ap.check(ap.wait("state", lambda: ap.status is not None) is not None, "status streamed unasked")
+    # Flags 0: body frame. 20 right of a nose at 30 = 50 from north.
+    ap.settle("setpoint yaw 20 (flags 0) pitch -45", 0, 20, -45, 50)
+    locks = mav.GIMBAL_DEVICE_FLAGS_ROLL_LOCK | mav.GIMBAL_DEVICE_FLAGS_PITCH_LOCK | mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK
+    ap.settle("setpoint yaw 120 (ROLL|PITCH|YAW_LOCK: earth) pitch -10", locks, 120, -10, 120)
+    ap.settle("setpoint yaw -60 (earth, across north) pitch 20", locks, -60, 20, -60)
+    # Retract: a NaN quaternion, zero rates, RETRACT: the gimbal looks down, and says so.
+    ap.setpoint = lambda: (mav.GIMBAL_DEVICE_FLAGS_RETRACT, [math.nan] * 4, [0.0, 0.0, 0.0])
+    down = ap.wait("retracted", lambda: (a := status_angles(ap)) is not None and abs(a[1] + 90) < ANGLE_TOL
+                   and ap.status.flags & mav.GIMBAL_DEVICE_FLAGS_RETRACT)
+    ap.check(bool(down), f"retract: looking down, RETRACT in the status ({status_angles(ap)})")
+    ap.setpoint = None
+    ap.status_fresh()
+    # take_picture: count 1, sequence image_index + 1; a re-sent command takes no second.
+    since = ap.now()
+    for seq in (1, 1, 2):
+        ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1, seq, expect=mav.MAV_RESULT_ACCEPTED)
+    ap.wait("settle", lambda: False, timeout=0.5)
+    indexes = [m.image_index for m in ap.find_all("CAMERA_IMAGE_CAPTURED", since)]
+    ap.check(indexes == [0, 1], f"sequence 1, 1 again, 2: images {indexes}")
+
+
+def session(gimbalctl, persona, run, results):
     proc = subprocess.Popen(
         [gimbalctl, "mavlink", "--sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "120000"],
         stdout=subprocess.PIPE, stderr=sys.stderr, text=True,
     )
-    ap = None
     try:
         line = proc.stdout.readline()
         port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
-        ap = Autopilot(port)
-        print(f"mavlink_e2e: gimbalctl mavlink on UDP {port}", flush=True)
-
-        # Information: PX4 asks the broadcast component, ArduPilot the gimbal's, every second
-        # until answered. ArduPilot sends no setpoint before it.
-        for target in (0, GIMBAL):
-            _, info = ap.command(target, mav.MAV_CMD_REQUEST_MESSAGE,
-                                 mav.MAVLINK_MSG_ID_GIMBAL_DEVICE_INFORMATION,
-                                 expect=mav.MAV_RESULT_ACCEPTED, reply="GIMBAL_DEVICE_INFORMATION")
-        if info is not None:
-            ap.check(abs(math.degrees(info.pitch_min) + 100) < 0.01
-                     and abs(math.degrees(info.pitch_max) - 60) < 0.01,
-                     f"pitch limits {math.degrees(info.pitch_min):.1f}..{math.degrees(info.pitch_max):.1f}")
-            ap.check(info.cap_flags & mav.GIMBAL_DEVICE_CAP_FLAGS_HAS_YAW_AXIS
-                     and not info.cap_flags & mav.GIMBAL_DEVICE_CAP_FLAGS_HAS_ROLL_AXIS,
-                     "yaw and pitch axes, no roll")
-        hb = ap.wait("heartbeats", lambda: ap.find("HEARTBEAT", lambda m: m.type == mav.MAV_TYPE_GIMBAL)
-                     and ap.find("HEARTBEAT", lambda m: m.type == mav.MAV_TYPE_CAMERA))
-        ap.check(hb is not None, "heartbeats from the gimbal (154) and the camera (100)")
-        ap.check(ap.wait("position asked", lambda: ap.next_pos is not None) is not None,
-                 "the gimbal asked for GLOBAL_POSITION_INT")
-
-        def settle(what, flags, yaw, pitch, want_yaw, want_earth):
-            q = axis_quaternion(yaw, pitch)
-            ap.setpoint = lambda: (flags, q, [math.nan] * 3)
-
-            def reached():
-                a = status_angles(ap)
-                return a is not None and abs(a[1] - pitch) <= ANGLE_TOL \
-                    and abs(angle_diff(a[0], want_yaw)) <= ANGLE_TOL and a[2] == want_earth and a
-            got = ap.wait(what, reached)
-            ap.check(bool(got), f"{what}: status {status_angles(ap)}")
-
-        # Earth frame: yaw 90 (north-referenced on CAN while the autopilot state flows).
-        settle("setpoint yaw 90 (earth) pitch -30", mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_FRAME,
-               90, -30, 90, True)
-        # Vehicle frame: 20 right of a nose at 30 = 50 from north.
-        settle("setpoint yaw 20 (vehicle) pitch -60", mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME,
-               20, -60, 50, True)
-        # Flags 0, as ArduPilot sends: vehicle frame; pitch past vertical.
-        settle("setpoint yaw 0 (flags 0) pitch -100", 0, 0, -100, 30, True)
-        settle("setpoint yaw 45 (YAW_LOCK: earth) pitch 20", mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK,
-               45, 20, 45, True)
-
-        # Rate: 20 deg/s of yaw for 1 s, then the stream stops: the core's dead-man (250 ms)
-        # stops the gimbal.
-        ap.setpoint = lambda: (0, [math.nan] * 4, [0.0, 0.0, math.radians(20)])
-        before = status_angles(ap)
-        ap.wait("rate hold", lambda: False, timeout=1.5)
-        during = status_angles(ap)
-        ap.setpoint = None
-        ap.wait("dead-man", lambda: False, timeout=1.2)
-        stopped = status_angles(ap)
-        ap.wait("still", lambda: False, timeout=1.2)
-        still = status_angles(ap)
-        turned = angle_diff(during[0], before[0]) if before and during else 0
-        ap.check(turned > 10, f"rate setpoints turned the gimbal ({turned:.1f} deg)")
-        ap.check(stopped is not None and still is not None and abs(angle_diff(still[0], stopped[0])) < 0.5,
-                 f"stopped after the stream stopped ({stopped} then {still})")
-
-        gaps = ap.status_gaps
-        worst = max(gaps) if gaps else math.inf
-        ap.check(len(gaps) > 50 and worst < STATUS_MAX_GAP,
-                 f"attitude status fresh throughout: {len(gaps)} gaps, worst {worst * 1000:.0f} ms")
-
-        # The camera.
-        for target, cmd, p1 in ((0, mav.MAV_CMD_REQUEST_MESSAGE, mav.MAVLINK_MSG_ID_CAMERA_INFORMATION),
-                                (CAMERA, mav.MAV_CMD_REQUEST_CAMERA_INFORMATION, 1)):
-            _, info = ap.command(target, cmd, p1, expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_INFORMATION")
-        if info is not None:
-            ap.check(info.gimbal_device_id == GIMBAL
-                     and info.flags & mav.CAMERA_CAP_FLAGS_CAPTURE_IMAGE
-                     and info.flags & mav.CAMERA_CAP_FLAGS_HAS_VIDEO_STREAM,
-                     "camera information: images, video stream, gimbal 154")
-        ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 1, 1,
-                   expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_IMAGE_CAPTURED")
-        _, status = ap.command(CAMERA, mav.MAV_CMD_VIDEO_START_CAPTURE, 0, 0,
-                               expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_CAPTURE_STATUS")
-        ap.check(status is not None and status.video_status == 1, "recording")
-        ap.command(CAMERA, mav.MAV_CMD_VIDEO_STOP_CAPTURE, 0, expect=mav.MAV_RESULT_ACCEPTED)
-        _, settings = ap.command(CAMERA, mav.MAV_CMD_SET_CAMERA_ZOOM, mav.ZOOM_TYPE_RANGE, 50,
-                                 expect=mav.MAV_RESULT_ACCEPTED, reply="CAMERA_SETTINGS")
-        ap.check(settings is not None and abs(settings.zoomLevel - 50) < 0.01, "zoom level 50 %")
-        _, stream = ap.command(CAMERA, mav.MAV_CMD_REQUEST_VIDEO_STREAM_INFORMATION, 1,
-                               expect=mav.MAV_RESULT_ACCEPTED, reply="VIDEO_STREAM_INFORMATION")
-        ap.check(stream is not None and stream.uri.startswith("rtsp://") and stream.type == mav.VIDEO_STREAM_TYPE_RTSP,
-                 f"stream URI {stream.uri if stream else None}")
-
-        # Bad commands get the right ACK, never silence.
-        ap.command(GIMBAL, mav.MAV_CMD_DO_SET_MODE, 1, expect=mav.MAV_RESULT_UNSUPPORTED)
-        ap.command(CAMERA, mav.MAV_CMD_SET_CAMERA_ZOOM, mav.ZOOM_TYPE_RANGE, 150, expect=mav.MAV_RESULT_DENIED)
-        ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0, 0, expect=mav.MAV_RESULT_DENIED)
+        print(f"mavlink_e2e: {persona} against gimbalctl mavlink on UDP {port}", flush=True)
+        run(Autopilot(port, persona, results))
     except Exception as e:  # a crash is a failure with its reason, not a traceback only
-        print(f"  FAIL mavlink_e2e crashed: {e!r}", flush=True)
-        if ap is None:
-            ap = type("R", (), {"passed": 0, "failed": 1})()
-        else:
-            ap.failed += 1
+        results.check(False, f"[{persona}] crashed: {e!r}")
     finally:
         proc.kill()
         proc.wait()
-    print(f"mavlink_e2e: {ap.passed} passed, {ap.failed} failed")
-    return 0 if ap.failed == 0 else 1
+
+
+def main():
+    gimbalctl = sys.argv[1]
+    results = Results()
+    session(gimbalctl, "px4-normal", px4_normal, results)
+    session(gimbalctl, "ardupilot", ardupilot, results)
+    print(f"mavlink_e2e: {results.passed} passed, {results.failed} failed")
+    return 0 if results.failed == 0 else 1
 
 
 if __name__ == "__main__":
