@@ -5,9 +5,12 @@ wheel) as a ground station against `gimbalctl mavlink --sim`, on UDP loopback.
     python3 gimbalctl/tests/mavsdk_camera.py target/debug/gimbalctl
 
 MAVSDK finds the camera component by its heartbeat and CAMERA_INFORMATION, then drives it
-with its own commands: a photo, video start and stop, zoom by range; and it reads the
-video stream's URI, which it asks for on its own (VIDEO_STREAM_INFORMATION every 20 s,
-VIDEO_STREAM_STATUS every 5 s).
+with its own commands: photos (MAV_CMD_IMAGE_START_CAPTURE with count 1 and its capture
+sequence number, 0 first, then 1: camera_impl.cpp make_command_take_photo), photos at an
+interval (start_photo_interval: the interval and count 0, until stop_photo_interval), video
+start and stop, zoom by range; every image must reach MAVSDK's capture_info once, with
+consecutive indexes, the interval's at its pace. It reads the video stream's URI, which it
+asks for on its own (VIDEO_STREAM_INFORMATION every 20 s, VIDEO_STREAM_STATUS every 5 s).
 
 Ends with a line "N passed, M failed"; exit status 0 only if nothing failed.
 """
@@ -98,7 +101,35 @@ async def run(gimbalctl):
             except CameraError as e:
                 check(False, f"{what}: {e}")
 
-        await succeeds("take_photo", camera.take_photo(CAMERA))
+        # Every image MAVSDK reports, with when it came.
+        images = []
+
+        async def collect():
+            async for info in camera.subscribe_capture_info():
+                images.append((time.monotonic(), info.index, info.is_success))
+
+        collector = asyncio.ensure_future(collect())
+        await asyncio.sleep(0.5)
+        await succeeds("take_photo (sequence 0)", camera.take_photo(CAMERA))
+        await succeeds("take_photo (sequence 1)", camera.take_photo(CAMERA))
+        await wait_for("two images", lambda: asyncio.sleep(0, len(images) >= 2), 5.0)
+        check([i for _, i, ok in images if ok] == [0, 1],
+              f"one image for each take_photo, indexes {[i for _, i, _ in images]}")
+        start = time.monotonic()
+        await succeeds("start_photo_interval 0.5 s", camera.start_photo_interval(CAMERA, 0.5))
+        await asyncio.sleep(2.2)
+        await succeeds("stop_photo_interval", camera.stop_photo_interval(CAMERA))
+        stopped = len(images)
+        await asyncio.sleep(1.0)
+        collector.cancel()
+        timed = [(round(t - start, 2), i) for t, i, _ in images if t >= start]
+        # Taken at 0, 0.5, 1.0, 1.5, 2.0 s; the bridge's tick is 1 ms and the loopback's
+        # delay a few ms, so 0.35..0.65 s between reports holds with a wide margin.
+        spacing = [b[0] - a[0] for a, b in zip(timed, timed[1:])]
+        check([i for _, i in timed] == list(range(2, 2 + len(timed))) and 4 <= len(timed) <= 6
+              and all(0.35 < d < 0.65 for d in spacing),
+              f"images every 0.5 s with consecutive indexes: {timed}")
+        check(len(images) == stopped, f"none after stop_photo_interval ({len(images) - stopped})")
         await succeeds("zoom_range 50 %", camera.zoom_range(CAMERA, 50.0))
         await succeeds("start_video", camera.start_video(CAMERA))
         await succeeds("stop_video", camera.stop_video(CAMERA))
