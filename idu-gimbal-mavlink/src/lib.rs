@@ -15,21 +15,32 @@
 //!   (configurable); system id configured, or the autopilot's from its HEARTBEAT.
 //! - `MAV_CMD_REQUEST_MESSAGE` → `GIMBAL_DEVICE_INFORMATION` (model from the postback's
 //!   gimbal type; pitch and yaw axes, no roll; limits in radians) or an attitude status;
-//!   `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status. Every `COMMAND_LONG` addressed
-//!   to the gimbal component gets one `COMMAND_ACK` (`UNSUPPORTED` for what it does not do);
-//!   a broadcast command another component owns is left to it.
-//! - `GIMBAL_DEVICE_SET_ATTITUDE`: a quaternion becomes heading and pitch commands (re-sent
-//!   only past a dead-band), converted from the setpoint's yaw frame to the gimbal's
-//!   reference (north while vehicle attitude is pushed, nose otherwise); a NaN quaternion
-//!   with angular velocities becomes the core's rate hold, whose dead-man stops the gimbal
-//!   when the stream stops; NEUTRAL re-centres, RETRACT looks down (the gimbal has no
-//!   retracted pose).
-//! - `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` → the core's attitude push; `GLOBAL_POSITION_INT`
-//!   (asked of the autopilot with `MAV_CMD_SET_MESSAGE_INTERVAL`) → GPS and altitude.
-//! - `GIMBAL_DEVICE_ATTITUDE_STATUS` at 10 Hz from the latest postback, with
+//!   `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status. Every `COMMAND_LONG` and
+//!   `COMMAND_INT` addressed to one of its components gets one `COMMAND_ACK`
+//!   (`UNSUPPORTED` for what it does not do); a broadcast command another component owns
+//!   is left to it (see [`command`]).
+//! - `GIMBAL_DEVICE_SET_ATTITUDE`: angles, rates, neutral and retract in the yaw frame the
+//!   flags name (see [Setpoints](crate#setpoints) below).
+//! - `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` → the core's attitude push and the vehicle's
+//!   heading; `GLOBAL_POSITION_INT` → GPS and altitude. Both are asked of the autopilot with
+//!   `MAV_CMD_SET_MESSAGE_INTERVAL` until they come (PX4 streams neither to a port in mode
+//!   Normal), and the setpoints at 20 Hz once.
+//! - `GIMBAL_DEVICE_ATTITUDE_STATUS` at 10 Hz from the latest postback, in the vehicle
+//!   frame with `delta_yaw` the vehicle's heading (see [`status`] for why), with
 //!   `COMMS_ERROR` while the gimbal link is down.
+//! - With the `roi` feature, `MAV_CMD_DO_SET_ROI_LOCATION` / `DO_SET_ROI_NONE` addressed to
+//!   the gimbal component drive the core's point-at.
+//! - The camera (component 100, when configured): see [`camera`] and [`capture`].
+//! - On UDP, [`Bridge::receive_datagram`] reads each datagram on its own.
 //!
-//! - The camera (component 100, when configured): see [`camera`] for what maps to what.
+//! # Setpoints
+//!
+//! A quaternion becomes heading and pitch commands (re-sent only past a dead-band),
+//! converted from the setpoint's yaw frame to the gimbal's reference (north while vehicle
+//! attitude is pushed, nose otherwise); angular velocities beside it are not followed. A NaN
+//! quaternion with angular velocities becomes the core's rate hold, whose dead-man stops the
+//! gimbal when the stream stops; an earth-frame yaw rate is taken less the vehicle's yaw
+//! rate. NEUTRAL re-centres, RETRACT looks down (the gimbal has no retracted pose).
 //!
 //! Quaternions are built and read from the gimbal's axis rotations (see [`attitude`]), so
 //! the whole pitch range, past −90° down to −100°, is exact.

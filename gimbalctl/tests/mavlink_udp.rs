@@ -1,0 +1,508 @@
+//! `gimbalctl mavlink --sim` over real UDP sockets: clients that reconnect from new ports
+//! are always answered, garbage senders never become peers nor hide a good client, and each
+//! datagram is parsed on its own.
+//!
+//! Frames are built with `mavio` (re-exported by the bridge) and every reply is checked to be
+//! exactly one valid MAVLink 2 frame. Answers normally come within ~10 ms (the attitude
+//! status within 100 ms); the deadlines are 2 to 3 s so that a loaded machine does not fail
+//! the test. Every wait is bounded, and the bridge is killed when a test ends.
+
+mod common;
+
+use common::{hex, Guard, BIN};
+
+use std::collections::HashSet;
+use std::io::{BufRead, BufReader, ErrorKind, Read};
+use std::net::{SocketAddr, UdpSocket};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use idu_gimbal_mavlink::framing::{Check, FrameReader};
+use idu_gimbal_mavlink::mavio;
+use mavio::dialects::common::enums::{
+    MavAutopilot, MavCmd, MavModeFlag, MavResult, MavState, MavType,
+};
+use mavio::dialects::common::messages::{
+    CommandAck, CommandLong, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
+};
+use mavio::dialects::common::Common;
+use mavio::protocol::{Frame, V2};
+use mavio::Message;
+
+/// The gimbal device's component id.
+const GIMBAL: u8 = 154;
+/// A ground station: system 255, component 190 (MAV_COMP_ID_MISSIONPLANNER).
+const GCS: (u8, u8) = (255, 190);
+/// GIMBAL_DEVICE_INFORMATION's message id, as MAV_CMD_REQUEST_MESSAGE's param1.
+const GIMBAL_DEVICE_INFORMATION: f32 = 283.0;
+/// How long a client waits for the bridge's heartbeat or status (sent every 100 ms).
+const TRAFFIC: Duration = Duration::from_secs(3);
+/// How long a client waits for the answers to a request (normally ~10 ms).
+const ANSWERS: Duration = Duration::from_secs(2);
+/// The bridge's own limit on a run: far beyond any test, in case a kill were missed.
+const RUN_LIMIT_MS: &str = "60000";
+
+/// `gimbalctl mavlink --sim` on an ephemeral loopback port, killed when dropped.
+struct Bridge {
+    guard: Guard,
+    addr: SocketAddr,
+    stderr: thread::JoinHandle<String>,
+}
+
+impl Bridge {
+    fn start() -> Bridge {
+        let mut child = Command::new(BIN)
+            .args([
+                "mavlink",
+                "--sim",
+                "--listen",
+                "127.0.0.1:0",
+                "--exit-after-ms",
+                RUN_LIMIT_MS,
+            ])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn gimbalctl mavlink");
+        let stdout = child.stdout.take().expect("stdout");
+        let mut err = child.stderr.take().expect("stderr");
+        let guard = Guard(child);
+        let (tx, rx) = mpsc::channel();
+        thread::spawn(move || {
+            let mut lines = BufReader::new(stdout).lines();
+            if let Some(Ok(line)) = lines.next() {
+                let _ = tx.send(line);
+            }
+            // Drained to the end so the bridge never blocks on a full pipe.
+            for _ in lines {}
+        });
+        let stderr = thread::spawn(move || {
+            let mut s = String::new();
+            let _ = err.read_to_string(&mut s);
+            s
+        });
+        let line = rx
+            .recv_timeout(Duration::from_secs(10))
+            .expect("the bridge says where it listens");
+        let addr = line
+            .split("listening on ")
+            .nth(1)
+            .and_then(|rest| rest.split(',').next())
+            .and_then(|a| a.parse().ok())
+            .unwrap_or_else(|| panic!("no address in {line:?}"));
+        Bridge {
+            guard,
+            addr,
+            stderr,
+        }
+    }
+
+    /// Kills the bridge; what it wrote on stderr.
+    fn stop(self) -> String {
+        let Bridge { guard, stderr, .. } = self;
+        drop(guard);
+        stderr.join().expect("stderr reader")
+    }
+}
+
+fn socket() -> UdpSocket {
+    UdpSocket::bind("127.0.0.1:0").expect("bind a client socket")
+}
+
+/// One MAVLink 2 frame from `(system, component)`.
+fn frame(from: (u8, u8), seq: u8, message: &dyn Message) -> Vec<u8> {
+    let f = Frame::builder()
+        .version(V2)
+        .sequence(seq)
+        .system_id(from.0)
+        .component_id(from.1)
+        .message(message)
+        .expect("a message mavio encodes")
+        .build();
+    let mut buf = [0u8; 300];
+    let n = f.serialize(&mut buf).expect("serialize");
+    buf[..n].to_vec()
+}
+
+/// A ground station's heartbeat.
+fn gcs_heartbeat() -> Heartbeat {
+    Heartbeat {
+        type_: MavType::Gcs,
+        autopilot: MavAutopilot::Invalid,
+        base_mode: MavModeFlag::empty(),
+        custom_mode: 0,
+        system_status: MavState::Active,
+        mavlink_version: 3,
+    }
+}
+
+/// MAV_CMD_REQUEST_MESSAGE for GIMBAL_DEVICE_INFORMATION, to the gimbal of any system.
+fn request_information() -> CommandLong {
+    CommandLong {
+        target_system: 0,
+        target_component: GIMBAL,
+        command: MavCmd::RequestMessage,
+        confirmation: 0,
+        param1: GIMBAL_DEVICE_INFORMATION,
+        param2: 0.0,
+        param3: 0.0,
+        param4: 0.0,
+        param5: 0.0,
+        param6: 0.0,
+        param7: 0.0,
+    }
+}
+
+/// The one frame a datagram from the bridge must hold: whole, and valid in the common
+/// dialect (CRC included).
+fn one_frame(datagram: &[u8]) -> Frame<V2> {
+    let mut frames = Vec::new();
+    let mut reader = FrameReader::new();
+    reader.feed(datagram, |f| {
+        frames.push(f.to_frame());
+        Check::Unhandled
+    });
+    assert_eq!(reader.pending(), 0, "a cut frame: {}", hex(datagram));
+    assert_eq!(
+        reader.stats().skipped_bytes,
+        0,
+        "garbage: {}",
+        hex(datagram)
+    );
+    assert_eq!(frames.len(), 1, "one frame a datagram: {}", hex(datagram));
+    let f = frames
+        .pop()
+        .flatten()
+        .unwrap_or_else(|| panic!("mavio refuses {}", hex(datagram)));
+    if let Err(e) = f.decode::<Common>() {
+        panic!("not a valid MAVLink 2 frame ({e:?}): {}", hex(datagram));
+    }
+    f
+}
+
+/// The next frame sent to `sock`, or `None` once `deadline` has passed.
+fn recv_frame(sock: &UdpSocket, deadline: Instant) -> Option<Frame<V2>> {
+    let mut buf = [0u8; 2048];
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return None;
+        }
+        sock.set_read_timeout(Some(left)).expect("read timeout");
+        match sock.recv(&mut buf) {
+            Ok(n) => return Some(one_frame(&buf[..n])),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                ) => {}
+            Err(e) => panic!("recv: {e}"),
+        }
+    }
+}
+
+/// Whether `sock` hears anything from the gimbal component before `deadline`.
+fn hears_gimbal(sock: &UdpSocket, deadline: Instant) -> bool {
+    while let Some(f) = recv_frame(sock, deadline) {
+        if f.component_id() == GIMBAL {
+            return true;
+        }
+    }
+    false
+}
+
+/// What a client has of the answers to [`request_information`].
+#[derive(Default, Debug)]
+struct Answers {
+    /// COMMAND_ACK, MAV_RESULT_ACCEPTED, addressed to the client.
+    ack: bool,
+    /// GIMBAL_DEVICE_INFORMATION from the gimbal.
+    information: bool,
+}
+
+impl Answers {
+    fn all(&self) -> bool {
+        self.ack && self.information
+    }
+
+    /// Takes the frames sent to `sock` (client `me`) until both answers are in or
+    /// `deadline` has passed.
+    fn collect(&mut self, sock: &UdpSocket, me: (u8, u8), deadline: Instant) {
+        while !self.all() {
+            let Some(f) = recv_frame(sock, deadline) else {
+                return;
+            };
+            if f.component_id() != GIMBAL {
+                continue;
+            }
+            if f.message_id() == CommandAck::ID {
+                let ack: CommandAck = f.decode_message().expect("COMMAND_ACK");
+                if ack.command == MavCmd::RequestMessage
+                    && (ack.target_system, ack.target_component) == me
+                {
+                    assert_eq!(ack.result, MavResult::Accepted, "{ack:?}");
+                    self.ack = true;
+                }
+            } else if f.message_id() == GimbalDeviceInformation::ID {
+                let info: GimbalDeviceInformation =
+                    f.decode_message().expect("GIMBAL_DEVICE_INFORMATION");
+                assert_eq!(&info.vendor_name[..3], b"IDU", "{info:?}");
+                self.information = true;
+            }
+        }
+    }
+}
+
+/// The table holds 16 peers and keeps a silent one 10 s: 20 clients in a row, each from a
+/// new port and gone after its answer, fill it and go beyond. Each must still be answered
+/// (the old fixed list of 8 ignored the ninth on).
+#[test]
+fn twenty_clients_in_a_row_from_new_ports_are_all_answered() {
+    let bridge = Bridge::start();
+    let mut ports = Vec::new();
+    let mut waits = Vec::new();
+    for i in 1..=20 {
+        let client = socket();
+        ports.push(client.local_addr().expect("local address").port());
+        let sent = Instant::now();
+        client
+            .send_to(&frame(GCS, 0, &gcs_heartbeat()), bridge.addr)
+            .expect("send");
+        assert!(
+            hears_gimbal(&client, sent + TRAFFIC),
+            "client {i} heard nothing from the gimbal within {TRAFFIC:?}"
+        );
+        waits.push(sent.elapsed());
+        // Gone: its port closed, as a ground station that reconnects leaves it.
+        drop(client);
+    }
+    let stderr = bridge.stop();
+    assert_eq!(waits.len(), 20, "{waits:?}");
+    // The kernel may hand a closed port out again; only with 20 distinct ports are the
+    // joins exactly countable: 16 into free slots, 4 replacing the least recently heard.
+    if ports.iter().collect::<HashSet<_>>().len() == ports.len() {
+        assert_eq!(stderr.matches(" joined").count(), 20, "{stderr}");
+        assert_eq!(stderr.matches("replacing").count(), 4, "{stderr}");
+        // All within the 10 s a silent peer is kept.
+        assert_eq!(stderr.matches(" left").count(), 0, "{stderr}");
+    }
+}
+
+/// A tiny deterministic generator (xorshift64*): the flood is the same on every run.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+
+    fn bytes(&mut self, n: usize) -> Vec<u8> {
+        (0..n).map(|_| self.next() as u8).collect()
+    }
+}
+
+/// One datagram of garbage, never a frame the bridge would take: random bytes; a MAVLink 2
+/// start (0xFD, a length, a header) cut short of that length; a real frame cut short; a
+/// real frame with a damaged CRC.
+fn garbage(rng: &mut Rng, seq: u8) -> Vec<u8> {
+    let real = |rng: &mut Rng| {
+        if rng.below(2) == 0 {
+            frame(GCS, seq, &gcs_heartbeat())
+        } else {
+            frame(GCS, seq, &request_information())
+        }
+    };
+    match rng.below(4) {
+        0 => {
+            let n = 1 + rng.below(300);
+            rng.bytes(n)
+        }
+        1 => {
+            let len = 20 + rng.below(236);
+            // Message ids the bridge handles among others: HEARTBEAT, COMMAND_LONG,
+            // GIMBAL_DEVICE_SET_ATTITUDE, AUTOPILOT_STATE_FOR_GIMBAL_DEVICE, random.
+            let id = [0u32, 76, 284, 286, rng.next() as u32 & 0xFF_FFFF][rng.below(5)];
+            let mut d = vec![
+                0xFD,
+                len as u8,
+                0,
+                0,
+                seq,
+                rng.next() as u8,
+                rng.next() as u8,
+            ];
+            d.extend_from_slice(&id.to_le_bytes()[..3]);
+            // At most the payload: the CRC and some payload are always missing.
+            let have = rng.below(len);
+            d.extend(rng.bytes(have));
+            d
+        }
+        2 => {
+            let mut f = real(rng);
+            let cut = 1 + rng.below(f.len() - 1);
+            f.truncate(cut);
+            f
+        }
+        _ => {
+            let mut f = real(rng);
+            let last = f.len() - 1;
+            f[last] ^= 0xA5;
+            f
+        }
+    }
+}
+
+/// 50 sockets flood the bridge with garbage while a good client asks for the gimbal's
+/// information: the client gets its COMMAND_ACK and GIMBAL_DEVICE_INFORMATION within 2 s,
+/// during the flood, and no garbage socket ever hears anything (none became a peer).
+#[test]
+fn garbage_floods_never_become_peers_nor_hide_a_good_client() {
+    /// Datagrams per socket between pauses: 50 sockets make a burst of 50 a millisecond,
+    /// several times what a busy MAVLink link carries, yet below what the bridge's socket
+    /// buffer holds, so the kernel seldom has to drop the good client's datagrams.
+    const SOCKETS: usize = 50;
+    /// The flood goes on at least this long (in datagrams) and at most this long.
+    const FLOOD_MIN: usize = 2_000;
+    const FLOOD_MAX: usize = 200_000;
+    const FLOOD_TIME: Duration = Duration::from_secs(4);
+    /// A ground station resends an unanswered command; here after 250 ms, only because
+    /// the kernel may drop a datagram when the flood fills the bridge's socket buffer.
+    const RESEND: Duration = Duration::from_millis(250);
+
+    let bridge = Bridge::start();
+    let flooders: Vec<UdpSocket> = (0..SOCKETS).map(|_| socket()).collect();
+    let client = socket();
+    let answered = AtomicBool::new(false);
+    let sent = AtomicUsize::new(0);
+    let (started_tx, started) = mpsc::channel();
+    let (at_answer, flood_total, answers, waited) = thread::scope(|s| {
+        let flood = s.spawn(|| {
+            let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+            let begin = Instant::now();
+            let mut n = 0usize;
+            while n < FLOOD_MAX && begin.elapsed() < FLOOD_TIME {
+                if n >= FLOOD_MIN && answered.load(Ordering::Acquire) {
+                    break;
+                }
+                for sock in &flooders {
+                    // UDP: a datagram the kernel drops is as good as sent.
+                    let _ = sock.send_to(&garbage(&mut rng, n as u8), bridge.addr);
+                    n += 1;
+                }
+                sent.store(n, Ordering::Release);
+                if n == 10 * SOCKETS {
+                    let _ = started_tx.send(());
+                }
+                thread::sleep(Duration::from_millis(1));
+            }
+            n
+        });
+        started
+            .recv_timeout(Duration::from_secs(10))
+            .expect("the flood started");
+        let begin = Instant::now();
+        let deadline = begin + ANSWERS;
+        let mut answers = Answers::default();
+        let mut seq = 0u8;
+        while !answers.all() && Instant::now() < deadline {
+            for m in [&gcs_heartbeat() as &dyn Message, &request_information()] {
+                client
+                    .send_to(&frame(GCS, seq, m), bridge.addr)
+                    .expect("send");
+                seq = seq.wrapping_add(1);
+            }
+            answers.collect(&client, GCS, (Instant::now() + RESEND).min(deadline));
+        }
+        let waited = begin.elapsed();
+        let at_answer = sent.load(Ordering::Acquire);
+        answered.store(true, Ordering::Release);
+        let total = flood.join().expect("flood thread");
+        (at_answer, total, answers, waited)
+    });
+    assert!(
+        answers.all(),
+        "within {ANSWERS:?} during the flood: {answers:?}"
+    );
+    assert!(waited < ANSWERS, "{waited:?}");
+    assert!(
+        flood_total > at_answer && flood_total >= FLOOD_MIN,
+        "the flood went on past the answers: {at_answer} then {flood_total} datagrams"
+    );
+    // A peer is sent the attitude status every 100 ms: had any garbage socket become one,
+    // 300 ms after the flood its buffer would hold frames (whatever it was sent earlier
+    // is still there too).
+    thread::sleep(Duration::from_millis(300));
+    let mut buf = [0u8; 2048];
+    for (i, sock) in flooders.iter().enumerate() {
+        sock.set_nonblocking(true).expect("non-blocking");
+        match sock.recv(&mut buf) {
+            Err(e) if e.kind() == ErrorKind::WouldBlock => {}
+            other => panic!("garbage socket {i} was sent something: {other:?}"),
+        }
+    }
+    let stderr = bridge.stop();
+    assert_eq!(
+        stderr.matches(" joined").count(),
+        1,
+        "only the good client joined: {stderr}"
+    );
+}
+
+/// A datagram ending in half a frame, then a datagram from another sender with a whole
+/// HEARTBEAT and REQUEST_MESSAGE, shorter than what the half frame lacks: parsed as one
+/// byte stream, the second datagram would go to finish the first's frame and be lost.
+/// Parsed each on its own, the second sender is answered, and the first one's whole
+/// heartbeat still counts.
+#[test]
+fn each_datagram_is_parsed_on_its_own() {
+    let bridge = Bridge::start();
+    let first = socket();
+    let second = socket();
+    let (a, b) = ((250, 190), (251, 190));
+    // A whole heartbeat, then the first half of a 266-byte FILE_TRANSFER_PROTOCOL frame.
+    let ftp = frame(
+        a,
+        1,
+        &FileTransferProtocol {
+            target_network: 0,
+            target_system: 1,
+            target_component: 1,
+            payload: [0x55; 251],
+        },
+    );
+    let half = ftp.len() / 2;
+    let mut cut = frame(a, 0, &gcs_heartbeat());
+    cut.extend_from_slice(&ftp[..half]);
+    let mut whole = frame(b, 0, &gcs_heartbeat());
+    whole.extend(frame(b, 1, &request_information()));
+    assert!(
+        whole.len() < ftp.len() - half,
+        "{} bytes would all go into the cut frame ({} missing)",
+        whole.len(),
+        ftp.len() - half
+    );
+    first.send_to(&cut, bridge.addr).expect("send");
+    second.send_to(&whole, bridge.addr).expect("send");
+    // No resend here: on an idle loopback two datagrams are not lost, and a resend would
+    // hide a byte stream that swallowed the first.
+    let mut answers = Answers::default();
+    answers.collect(&second, b, Instant::now() + ANSWERS);
+    assert!(answers.all(), "the second sender: {answers:?}");
+    assert!(
+        hears_gimbal(&first, Instant::now() + TRAFFIC),
+        "the first sender's whole heartbeat made it a peer"
+    );
+    let stderr = bridge.stop();
+    assert_eq!(stderr.matches(" joined").count(), 2, "{stderr}");
+}
