@@ -58,7 +58,8 @@ mod fw {
     struct Seen {
         acks: [Option<MavResult>; 8],
         info: bool,
-        /// Yaw and pitch of the latest status, degrees, and whether yaw is in the earth frame.
+        /// The earth-frame yaw (the status's yaw plus delta_yaw) and pitch of the latest
+        /// status, degrees, and whether it was in the vehicle frame.
         status: Option<(f32, f32, bool)>,
         last_status: Option<u32>,
         worst_gap: u32,
@@ -190,11 +191,14 @@ mod fw {
                             seen.worst_gap = seen.worst_gap.max(ms - last);
                         }
                         seen.last_status = Some(ms);
+                        // As a ground station reads it: the vehicle-frame yaw plus
+                        // delta_yaw, the vehicle's heading (common.xml: q_earth =
+                        // q_delta_yaw * q_vehicle).
                         seen.status = YawPitch::from_quaternion(s.q).map(|a| {
                             (
-                                a.yaw_rad.to_degrees(),
+                                (a.yaw_rad + s.delta_yaw).to_degrees(),
                                 a.pitch_rad.to_degrees(),
-                                s.flags.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME),
+                                s.flags.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME),
                             )
                         });
                     }
@@ -271,9 +275,9 @@ mod fw {
         }
 
         fn status_near(&self, yaw: f32, pitch: f32) -> bool {
-            self.ap.seen.status.is_some_and(|(y, p, earth)| {
+            self.ap.seen.status.is_some_and(|(y, p, vehicle_frame)| {
                 let dy = (y - yaw + 540.0) % 360.0 - 180.0;
-                earth && dy.abs() < 0.5 && (p - pitch).abs() < 0.5
+                vehicle_frame && dy.abs() < 0.5 && (p - pitch).abs() < 0.5
             })
         }
     }
@@ -321,7 +325,7 @@ mod fw {
             |w| w.ap.seen.info && w.ap.seen.acks[0] == Some(MavResult::Accepted),
         );
         w.until(
-            "setpoint yaw 90 (earth frame) pitch -30 reached, status earth-referenced",
+            "setpoint yaw 90 (earth frame) pitch -30 reached, status in the vehicle frame + delta_yaw",
             6_000,
             |w| {
                 if w.ms.is_multiple_of(50) {
