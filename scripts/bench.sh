@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Deterministic cost benchmarks on an emulated STM32F405: guest instructions counted under
 # QEMU `-icount shift=0` (examples/qemu_bench.rs), then the flash cost of each CRC variant
-# (nm) and the driver's flash and static RAM (scripts/size-report.sh).
+# (nm) and the driver's flash and static RAM (scripts/size-report.sh). Built with the pinned
+# toolchain BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
 #
-# Exit status 1 if a budget is exceeded. Installs the target, qemu-system-arm and the ARM
-# binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds (default 120).
+# Exit status 1 if a budget is exceeded. Installs the bench toolchain, the target,
+# qemu-system-arm and the ARM binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds
+# (default 120).
 #
 #   scripts/bench.sh                 this tree's numbers
 #   scripts/bench.sh --compare REV   the same for REV (built in a scratch worktree, removed
@@ -66,13 +68,15 @@ fi
 . scripts/firmware-env.sh
 
 ensure_target
+ensure_bench_toolchain
 ensure_qemu
 ensure_binutils
 
+echo "bench toolchain: $(rustc "+$BENCH_TOOLCHAIN" --version)"
 status=0
-cargo run --release --target "$TARGET" --example qemu_bench || status=$?
+cargo "+$BENCH_TOOLCHAIN" run --release --target "$TARGET" --example qemu_bench || status=$?
 echo
-cargo run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_bench_mavlink || status=$?
+cargo "+$BENCH_TOOLCHAIN" run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_bench_mavlink || status=$?
 
 echo
 echo "Flash cost of the CRC variants (bytes; arm-none-eabi-nm --size-sort, qemu_bench build):"

@@ -51,6 +51,27 @@ ensure_binutils() {
     fi
 }
 
+# The toolchain the instruction-count and size budgets are measured and enforced with
+# (BENCHMARKS.md, "Method"). A new stable rustc can move a count by an instruction or two, so
+# the budgets are checked with this one, not with whatever stable is; moving it is a change
+# of its own that re-measures every table. The library's MSRV builds are checked apart.
+BENCH_TOOLCHAIN="${BENCH_TOOLCHAIN:-1.95.0}"
+
+ensure_bench_toolchain() {
+    if ! command -v rustup >/dev/null 2>&1; then
+        echo "error: rustup is needed to install the bench toolchain $BENCH_TOOLCHAIN" >&2
+        return 1
+    fi
+    if ! rustup toolchain list | grep -q "^$BENCH_TOOLCHAIN-"; then
+        echo "installing the Rust $BENCH_TOOLCHAIN toolchain (minimal profile) for the budgets" >&2
+        rustup toolchain install "$BENCH_TOOLCHAIN" --profile minimal
+    fi
+    if ! rustup target list --installed --toolchain "$BENCH_TOOLCHAIN" | grep -qx "$TARGET"; then
+        echo "installing the $TARGET target for Rust $BENCH_TOOLCHAIN" >&2
+        rustup target add --toolchain "$BENCH_TOOLCHAIN" "$TARGET"
+    fi
+}
+
 # The path of a release example ELF for the target.
 example_elf() {
     echo "target/$TARGET/release/examples/$1"

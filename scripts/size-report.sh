@@ -34,10 +34,11 @@ TX_SLOTS=136
 BRIDGE_FLASH_BUDGET=32768
 BRIDGE_RAM_BUDGET=4096
 
-cargo build --release --target "$TARGET" \
+ensure_bench_toolchain
+cargo "+$BENCH_TOOLCHAIN" build --release --target "$TARGET" \
     --example footprint_base --example footprint_driver --example footprint_serial \
     --example stm32f405 --example stm32f405_uart --example qemu_demo --example qemu_bench
-cargo build --release --target "$TARGET" -p idu-gimbal-mavlink \
+cargo "+$BENCH_TOOLCHAIN" build --release --target "$TARGET" -p idu-gimbal-mavlink \
     --example footprint_bridge --example stm32f405_mavlink
 
 # "flash ram" of an ELF, from its section sizes.

@@ -7,12 +7,16 @@
 //! q_vehicle", so a reader gets the earth-frame yaw as motor + delta_yaw.
 //!
 //! Why not the earth frame, though the gimbal knows its bearing while attitude is
-//! pushed: released ArduPilot (`AP_Mount_MAVLink`) takes the device's quaternion as
-//! body-frame yaw whatever the flags say and re-publishes it labelled
-//! `YAW_IN_VEHICLE_FRAME`, so an earth-frame status puts its point-of-interest, RC
-//! yaw-lock capture and logs off by the vehicle heading. The vehicle-frame status reads
-//! right everywhere: ArduPilot as it is, PX4, and QGroundControl, which adds `delta_yaw`
-//! to a vehicle-frame yaw for the heading it shows.
+//! pushed: ArduPilot's MAVLink gimbal v2 backend (`MNT1_TYPE` 6,
+//! `libraries/AP_Mount/AP_Mount_Gremsy.cpp`, master 2598e9d) copies the device's quaternion
+//! unchanged (`get_attitude_quaternion`, :123-127) and reads its yaw as body frame whatever
+//! the flags say (`AP_Mount.cpp`:656-671), then re-publishes it labelled
+//! `YAW_IN_VEHICLE_FRAME` (`AP_Mount_Backend.cpp`:806-849); its logs and points of
+//! interest add the vehicle's yaw (`AP_Mount_Backend.cpp`:431-433, :538). An earth-frame
+//! status puts all of those off by the vehicle heading. The vehicle-frame status reads
+//! right everywhere: ArduPilot as it is, PX4 (which passes the flags through), and
+//! QGroundControl, which adds the vehicle heading to a vehicle-frame yaw
+//! (`src/Gimbal/GimbalController.cc`).
 //!
 //! Flags: `ROLL_LOCK` and `PITCH_LOCK` always (no roll axis; pitch is held to the
 //! horizon), `YAW_LOCK` while the postback's control mode holds the heading against the
