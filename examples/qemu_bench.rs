@@ -237,7 +237,7 @@ mod fw {
     use idu_gimbal::Instant;
 
     use bxcan::{ExtendedId, Frame as CanFrame};
-    use idu_gimbal::{Config, Event, Gimbal};
+    use idu_gimbal::{Config, Event, Gimbal, GimbalControl};
 
     use crate::crcs;
     use crate::meter::Meter;

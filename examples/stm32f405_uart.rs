@@ -47,7 +47,7 @@ mod fw {
     use idu_gimbal::interface::UART_BAUD;
     use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Config, SerialGimbal};
+    use idu_gimbal::{Config, GimbalControl, SerialGimbal};
 
     /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates, each with the time it
     /// was measured. Used for point-at only: the serial link carries no vehicle frames.
@@ -99,9 +99,9 @@ mod fw {
             if now.is_at_or_after(next_vehicle) {
                 next_vehicle = now.add_millis(100);
                 if let Some((gps, altitude, attitude)) = vehicle_stand_in() {
-                    gimbal.observe_gps(gps, now);
-                    gimbal.observe_altitude(altitude, now);
-                    gimbal.observe_attitude(attitude, now);
+                    gimbal.set_gps(gps, now);
+                    gimbal.set_altitude(altitude, now);
+                    gimbal.set_attitude(attitude, now);
                 }
             }
 

@@ -10,7 +10,7 @@ use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, MAX_FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::{ids, postback::Postback, Frame};
-use idu_gimbal::Instant;
+use idu_gimbal::{Instant, Transport};
 
 /// Any bytes: decoding never panics, and whatever decodes re-encodes to the same bytes.
 pub fn command_decode(data: &[u8]) {

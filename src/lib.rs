@@ -37,7 +37,7 @@
 //! use idu_gimbal::mock::Bus;
 //! use idu_gimbal::wire::control::{GimbalCommand, Heading};
 //! use idu_gimbal::wire::vehicle::Gps;
-//! use idu_gimbal::{Config, Event, Gimbal, Instant};
+//! use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
 //!
 //! // On a real board `can` is the HAL's CAN peripheral (e.g. bxcan on an STM32F4).
 //! let bus: Bus<2, 32> = Bus::new(7);
@@ -76,6 +76,7 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod control;
 pub mod driver;
 pub mod geo;
 pub mod interface;
@@ -87,6 +88,7 @@ pub mod time;
 pub mod video;
 pub mod wire;
 
+pub use control::{GimbalControl, Transport};
 pub use driver::{Blocking, Gimbal, SerialGimbal};
 
 // The README's examples are compiled and run as doctests.

@@ -13,6 +13,7 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal::wire::text::TextError;
 use idu_gimbal::wire::vehicle::{Attitude, VehicleError};
+use idu_gimbal::GimbalControl;
 use idu_gimbal::{Gimbal, Instant};
 
 fn t(ms: u32) -> Instant {

@@ -4,6 +4,7 @@
 //! `Other`. With a classifier these are "would block", not faults: nothing is counted, every
 //! frame goes out, in order. Real faults are still counted.
 
+use idu_gimbal::{GimbalControl, Transport};
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::rc::Rc;

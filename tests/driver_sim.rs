@@ -10,6 +10,7 @@ use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::{ids, Frame};
 use idu_gimbal::{Event, Gimbal, Instant};
+use idu_gimbal::{GimbalControl, Transport};
 
 const E: usize = 3;
 const RXQ: usize = 256;

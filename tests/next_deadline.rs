@@ -8,6 +8,7 @@ use idu_gimbal::mock::Bus;
 use idu_gimbal::wire::control::{GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::vehicle::Gps;
 use idu_gimbal::{Config, Gimbal, Instant, SerialGimbal};
+use idu_gimbal::{GimbalControl, Transport};
 
 fn at(ms: u32) -> Instant {
     Instant::from_millis(ms)

@@ -9,6 +9,7 @@ use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::GimbalControl;
 use idu_gimbal::{Gimbal, Instant};
 
 const TARGET: (f64, f64, f64) = (47.397_742, 8.545_594, 410.0);

@@ -13,6 +13,7 @@ use idu_gimbal::wire::postback::{Postback, MESSAGE_LEN};
 use idu_gimbal::wire::serial::{StreamItem, StreamParser, FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, Instant, SerialGimbal};
+use idu_gimbal::{GimbalControl, Transport};
 
 const N: usize = 256;
 
@@ -322,10 +323,9 @@ fn headings_are_nose_referenced_and_point_at_aims_from_the_vehicle_heading() {
     let observe = |b: &mut Bench<_>| {
         let now = b.instant();
         b.gimbal
-            .observe_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
-        b.gimbal.observe_gps(Gps::new(here.0, here.1).unwrap(), now);
-        b.gimbal
-            .observe_altitude(Altitude::new(here.2).unwrap(), now);
+            .set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
+        b.gimbal.set_gps(Gps::new(here.0, here.1).unwrap(), now);
+        b.gimbal.set_altitude(Altitude::new(here.2).unwrap(), now);
     };
     observe(&mut b);
     b.gimbal.point_at(east);

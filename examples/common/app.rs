@@ -14,7 +14,7 @@ use embedded_can::nb::Can;
 use idu_gimbal::driver::{DriverError, Stats};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Event, Gimbal, Instant};
+use idu_gimbal::{Event, Gimbal, GimbalControl, Instant};
 
 /// What a turn of the loop has to tell.
 #[allow(dead_code)] // A board without a log (the RP2040's) reads none of it.

@@ -177,11 +177,25 @@ fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
 #[allow(dead_code)] // not every build drives the CAN driver
 #[inline(never)]
 pub fn drive(gimbal: &mut idu_gimbal::Gimbal<RegCan>) {
+    let now = idu_gimbal::Instant::from_millis(input(4));
+    command_surface(gimbal, now, |g| g.send_text(b"survey leg 3 done").is_ok());
+    output(u32::from(gimbal.poll(now).is_ok()));
+    events(gimbal, now);
+    output(gimbal.stats().link.postbacks);
+}
+
+/// Every kind of call of the command surface, the same on every transport (`send_text`
+/// where the transport carries text), chosen by an opaque input.
+#[allow(dead_code)] // not every build uses it
+#[inline(always)]
+pub fn command_surface<G: idu_gimbal::GimbalControl>(
+    gimbal: &mut G,
+    now: idu_gimbal::Instant,
+    send_text: impl FnOnce(&mut G) -> bool,
+) {
     use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Event, Instant};
 
-    let now = Instant::from_millis(input(4));
     let arg = input(6);
     let a = arg as i16;
     let b = (arg >> 16) as i16;
@@ -199,7 +213,7 @@ pub fn drive(gimbal: &mut idu_gimbal::Gimbal<RegCan>) {
             gimbal.stop_rate();
             Ok(true)
         }
-        9 => Ok(gimbal.send_text(b"survey leg 3 done").is_ok()),
+        9 => Ok(send_text(gimbal)),
         10 => Attitude::from_centideg(a, b, 0).map(|att| {
             gimbal.set_attitude(att, now);
             true
@@ -215,8 +229,13 @@ pub fn drive(gimbal: &mut idu_gimbal::Gimbal<RegCan>) {
         _ => Ok(false),
     };
     output(u32::from(sent == Ok(true)));
+}
 
-    output(u32::from(gimbal.poll(now).is_ok()));
+/// The events and the link's state after a poll, the same on every transport.
+#[allow(dead_code)] // not every build uses it
+#[inline(always)]
+pub fn events<G: idu_gimbal::GimbalControl>(gimbal: &mut G, now: idu_gimbal::Instant) {
+    use idu_gimbal::Event;
     while let Some(event) = gimbal.next_event() {
         output(match event {
             Event::Postback => gimbal
@@ -228,6 +247,5 @@ pub fn drive(gimbal: &mut idu_gimbal::Gimbal<RegCan>) {
             Event::TargetUnreachable { elevation_cdeg } => elevation_cdeg as u32,
         });
     }
-    output(gimbal.stats().link.postbacks);
     output(u32::from(gimbal.is_link_up()));
 }

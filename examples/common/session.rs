@@ -20,7 +20,7 @@ use idu_gimbal::sim::{SimConfig, SimState, SimStats, Simulator};
 use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Config, Event, Gimbal, Instant, SerialGimbal};
+use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant, SerialGimbal};
 
 /// Endpoints and receive FIFO depth of the in-memory bus.
 pub type DemoBus = Bus<2, 32>;
@@ -188,9 +188,9 @@ impl Rig for SerialRig<'_> {
         let _ = self.gimbal.set_rate(rate, now);
     }
     fn vehicle(&mut self, attitude: Attitude, gps: Gps, altitude: Altitude, now: Instant) {
-        self.gimbal.observe_attitude(attitude, now);
-        self.gimbal.observe_gps(gps, now);
-        self.gimbal.observe_altitude(altitude, now);
+        self.gimbal.set_attitude(attitude, now);
+        self.gimbal.set_gps(gps, now);
+        self.gimbal.set_altitude(altitude, now);
     }
     fn send_text(&mut self, _text: &[u8]) -> Option<bool> {
         None

@@ -25,6 +25,7 @@ use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{Config, Event};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Photo, Rate, Video, Zoom};
 use idu_gimbal::Instant;
+use idu_gimbal::Transport;
 use ratatui::crossterm::event::{self, Event as TermEvent, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::crossterm::{cursor, execute, terminal};
 use ratatui::layout::{Constraint, Layout};

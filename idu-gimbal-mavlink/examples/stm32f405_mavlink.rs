@@ -38,7 +38,7 @@ mod fw {
     use crate::usart2_ring::{self, RingRx};
     use idu_gimbal::driver::{Nb, SerialPort};
     use idu_gimbal::video::{Camera, Family, Stream};
-    use idu_gimbal::{Config, Gimbal};
+    use idu_gimbal::{Config, Gimbal, GimbalControl};
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 

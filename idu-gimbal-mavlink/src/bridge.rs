@@ -39,6 +39,8 @@ pub(crate) const PITCH_MAX_DEG: f32 = 60.0;
 
 /// How often to ask the autopilot again for a stream that does not come.
 const STREAM_RETRY_MS: u32 = 5_000;
+/// How often the streams are looked at, ms: an ask is at most this late.
+const STREAM_CHECK_MS: u32 = 100;
 /// A stream not heard for this long is asked for again (an autopilot that rebooted has
 /// forgotten the interval it was asked for).
 const STREAM_LOST_MS: u32 = 5_000;
@@ -216,6 +218,9 @@ pub(crate) struct State {
     position_stream: StreamState,
     autopilot_state_stream: StreamState,
     setpoint_stream: StreamState,
+    /// When to look at the streams again (`None`: at the next poll). The asks are due at
+    /// whole seconds; looking every [`STREAM_CHECK_MS`] keeps the idle poll short.
+    next_stream_check: Option<Instant>,
     pub(crate) vehicle: Vehicle,
     /// The last angles commanded (heading, pitch), 0.1° units.
     pub(crate) commanded: (Option<u16>, Option<i16>),
@@ -276,6 +281,7 @@ impl<G: GimbalControl> Bridge<G> {
                 position_stream: StreamState::default(),
                 autopilot_state_stream: StreamState::default(),
                 setpoint_stream: StreamState::default(),
+                next_stream_check: None,
                 vehicle: Vehicle::default(),
                 commanded: (None, None),
                 last_flags: 0,
@@ -500,6 +506,7 @@ impl State {
             self.position_stream.asked = None;
             self.autopilot_state_stream.asked = None;
             self.setpoint_stream.asked = None;
+            self.next_stream_check = None;
         }
         self.autopilot = Some((system, component));
         if self.config.system_id.is_none() {
@@ -564,7 +571,7 @@ impl State {
             }
         } else {
             let position = self.vehicle.position;
-            let acked = self.with_camera(gimbal, now, |camera, gimbal, tx| {
+            let acked = self.with_camera(gimbal, |camera, gimbal, tx| {
                 let (result, reply) = camera.command(gimbal, cmd, now, position);
                 // The ACK first, then what the command produced.
                 let ack = CommandAck {
@@ -589,7 +596,6 @@ impl State {
     fn with_camera<G: GimbalControl, R>(
         &mut self,
         gimbal: &mut G,
-        now: Instant,
         f: impl FnOnce(&mut Camera, &mut G, &mut Tx<'_>) -> R,
     ) -> Option<R> {
         let State {
@@ -606,7 +612,7 @@ impl State {
             system_id: *system_id,
             outbox_full: &mut stats.outbox_full,
             position: vehicle.position,
-            gimbal_type: gimbal.latest_postback(now).map(|(p, _)| p.gimbal_type),
+            gimbal_type: gimbal.gimbal_type(),
         };
         Some(f(camera, gimbal, &mut tx))
     }
@@ -715,7 +721,7 @@ impl State {
     }
 
     fn information<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
-        let gimbal_type = gimbal.latest_postback(now).map(|(p, _)| p.gimbal_type);
+        let gimbal_type = gimbal.gimbal_type();
         let yaw_limit = yaw_limit_deg(gimbal_type).to_radians();
         let info = GimbalDeviceInformation {
             time_boot_ms: now.as_millis(),
@@ -819,14 +825,16 @@ impl State {
                 );
             }
         }
-        self.with_camera(gimbal, now, |camera, gimbal, tx| {
-            camera.poll(gimbal, now, tx)
-        });
+        if self.camera.as_ref().is_some_and(|c| c.has_work(now)) {
+            self.with_camera(gimbal, |camera, gimbal, tx| camera.poll(gimbal, now, tx));
+        }
         if self.status_ms > 0 && self.next_status.is_none_or(|t| now.is_at_or_after(t)) {
             self.next_status = Some(now.add_millis(self.status_ms));
             self.status(gimbal, now);
         }
-        if let Some(ap) = self.autopilot {
+        let check_streams = self.next_stream_check.is_none_or(|t| now.is_at_or_after(t));
+        if let (Some(ap), true) = (self.autopilot, check_streams) {
+            self.next_stream_check = Some(now.add_millis(STREAM_CHECK_MS));
             for (wanted, stream) in [
                 (AUTOPILOT_STATE_STREAM, &mut self.autopilot_state_stream),
                 (POSITION_STREAM, &mut self.position_stream),
@@ -896,7 +904,7 @@ impl State {
         gimbal: &mut G,
         c: GimbalCommand,
     ) -> bool {
-        if gimbal.send(GimbalCmd::from(c)) {
+        if gimbal.send(GimbalCmd::from(c)).is_ok() {
             bump(&mut self.stats.angle_commands);
             true
         } else {

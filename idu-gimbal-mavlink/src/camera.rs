@@ -258,14 +258,17 @@ impl Camera {
             MavCmd::VideoStartCapture | MavCmd::VideoStopCapture => {
                 let start = cmd.command == MavCmd::VideoStartCapture;
                 let v = if start { Video::Start } else { Video::Stop };
-                if !gimbal.send(GimbalCmd::from(GimbalCommand::Video(v))) {
+                if gimbal
+                    .send(GimbalCmd::from(GimbalCommand::Video(v)))
+                    .is_err()
+                {
                     return (MavResult::TemporarilyRejected, Reply::Nothing);
                 }
                 self.recording_since = start.then_some(now);
                 Reply::CaptureStatus
             }
             MavCmd::SetCameraZoom => {
-                let t = gimbal.latest_postback(now).map(|(p, _)| p.gimbal_type);
+                let t = gimbal.gimbal_type();
                 return (self.zoom(gimbal, cmd, t), Reply::Settings);
             }
             _ => return (MavResult::Unsupported, Reply::Nothing),
@@ -314,7 +317,10 @@ impl Camera {
             return (MavResult::Accepted, Reply::Nothing);
         }
         // The first image now, or the command is refused whole.
-        if !gimbal.send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single))) {
+        if gimbal
+            .send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single)))
+            .is_err()
+        {
             return (MavResult::TemporarilyRejected, Reply::Nothing);
         }
         self.capture.start(request, now);
@@ -392,7 +398,7 @@ impl Camera {
                 return MavResult::Unsupported;
             };
         for c in commands.into_iter().flatten() {
-            if !gimbal.send(GimbalCmd::from(c)) {
+            if gimbal.send(GimbalCmd::from(c)).is_err() {
                 return MavResult::TemporarilyRejected;
             }
         }
@@ -439,6 +445,11 @@ impl Camera {
         }
     }
 
+    /// Whether [`Camera::poll`] has anything to do at `now`: images due or asked for again.
+    pub(crate) fn has_work(&self, now: Instant) -> bool {
+        self.resend.is_some() || self.capture.due(now)
+    }
+
     /// Images as they fall due, and images asked for again.
     pub(crate) fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant, tx: &mut Tx<'_>) {
         self.resend_images(tx);
@@ -446,7 +457,9 @@ impl Camera {
         // poll: late, never lost.
         if self.capture.due(now)
             && tx.room() >= MAX_FRAME_LEN
-            && gimbal.send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single)))
+            && gimbal
+                .send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single)))
+                .is_ok()
         {
             let image = self.capture.taken(now, tx.position);
             self.send_captured(&image, tx);

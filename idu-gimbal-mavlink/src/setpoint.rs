@@ -140,7 +140,7 @@ impl State {
         // A rate ends any angle: the next angle setpoint is sent whatever its value.
         self.commanded = (None, None);
         self.pose = Pose::Other;
-        if gimbal.set_rate(rate, now) {
+        if gimbal.set_rate(rate, now).is_ok() {
             bump(&mut self.stats.rate_setpoints);
         } else {
             bump(&mut self.stats.queue_full);

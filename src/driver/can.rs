@@ -7,11 +7,8 @@ use core::fmt;
 
 use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _, Id};
 
-use crate::link::{Config, Event, Link, LinkStats, QueueFull, TextQueueError};
+use crate::link::{Config, Link, LinkStats, TextQueueError};
 use crate::time::Instant;
-use crate::wire::control::{Command, Rate};
-use crate::wire::postback::{GimbalType, Postback};
-use crate::wire::vehicle::{Altitude, Attitude, Gps};
 use crate::wire::Frame;
 
 /// The one ID the driver takes frames on; every other frame is counted as ignored.
@@ -126,7 +123,7 @@ impl std::error::Error for DriverError {}
 /// # #[cfg(feature = "mock")] {
 /// use idu_gimbal::mock::Bus;
 /// use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-/// use idu_gimbal::{Config, Gimbal, Instant};
+/// use idu_gimbal::{Config, Gimbal, GimbalControl, Instant};
 ///
 /// let bus: Bus<2, 16> = Bus::new(1);
 /// let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
@@ -322,71 +319,10 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         DriverError(ErrorKind::Other)
     }
 
-    /// Queues a command (see [`Link::send`]).
-    pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
-        self.link.send(command)
-    }
-
-    /// Starts, changes or refreshes a rate hold (see [`Link::set_rate`]).
-    pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        self.link.set_rate(rate, now)
-    }
-
-    /// Ends a rate hold with one zero-rate command (see [`Link::stop_rate`]).
-    pub fn stop_rate(&mut self) {
-        self.link.stop_rate()
-    }
-
-    /// Keeps the gimbal pointed at a ground target while the vehicle moves (see
-    /// [`Link::point_at`]).
-    pub fn point_at(&mut self, target: crate::geo::Position) {
-        self.link.point_at(target)
-    }
-
-    /// Stops pointing at a target (see [`Link::stop_pointing`]).
-    pub fn stop_pointing(&mut self) {
-        self.link.stop_pointing()
-    }
-
-    /// Queues a text message, all or nothing (see [`Link::send_text`]).
+    /// Queues a text message, all or nothing (see [`Link::send_text`]): CAN carries the
+    /// text stream, the UART does not.
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
         self.link.send_text(text)
-    }
-
-    /// Sets the latest vehicle attitude, measured at `stamp`.
-    pub fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
-        self.link.set_attitude(attitude, stamp)
-    }
-
-    /// Sets the latest vehicle position, measured at `stamp`.
-    pub fn set_gps(&mut self, gps: Gps, stamp: Instant) {
-        self.link.set_gps(gps, stamp)
-    }
-
-    /// Sets the latest vehicle altitude, measured at `stamp`.
-    pub fn set_altitude(&mut self, altitude: Altitude, stamp: Instant) {
-        self.link.set_altitude(altitude, stamp)
-    }
-
-    /// The next event (see [`Event`] for how events wait).
-    #[inline]
-    pub fn next_event(&mut self) -> Option<Event> {
-        self.link.next_event()
-    }
-
-    /// Whether the link is up (a valid postback within the link timeout).
-    pub fn is_link_up(&self) -> bool {
-        self.link.is_up()
-    }
-
-    /// The latest valid postback and its age in milliseconds.
-    pub fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)> {
-        self.link.latest_postback(now)
-    }
-
-    /// The gimbal model as last reported.
-    pub fn gimbal_type(&self) -> Option<GimbalType> {
-        self.link.gimbal_type()
     }
 
     /// All counters.
@@ -397,19 +333,26 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         }
     }
 
-    /// The link, for what the driver does not wrap.
-    pub fn link(&self) -> &Link<Q, T> {
-        &self.link
-    }
-
-    /// The link, mutably.
-    pub fn link_mut(&mut self) -> &mut Link<Q, T> {
-        &mut self.link
-    }
-
     /// Gives back the CAN driver.
     pub fn release(self) -> C {
         self.can
+    }
+}
+
+/// The command surface ([`GimbalControl`](crate::GimbalControl)) is the link's.
+impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::Transport
+    for Gimbal<C, Q, T>
+{
+    type Link = Link<Q, T>;
+
+    #[inline]
+    fn link(&self) -> &Link<Q, T> {
+        &self.link
+    }
+
+    #[inline]
+    fn link_mut(&mut self) -> &mut Link<Q, T> {
+        &mut self.link
     }
 }
 

@@ -436,6 +436,7 @@ mod tests {
     use crate::wire::control::{GimbalCommand, Pitch};
     use crate::wire::ids;
     use crate::{Config, Gimbal, Instant};
+    use crate::{GimbalControl, Transport};
     use embedded_can::nb::Can;
     use embedded_can::{Error as _, Frame as _};
     use std::cell::RefCell;

@@ -14,6 +14,7 @@ use crate::wire::control::{GimbalCommand, Pitch, Rate};
 use crate::wire::ids;
 use crate::wire::postback::Postback;
 use crate::wire::vehicle::{Altitude, Attitude, Gps};
+use crate::{GimbalControl, Transport};
 use core::fmt::Debug;
 use embedded_can::nb::Can as _;
 use embedded_can::{ExtendedId, Frame as _, Id};
@@ -270,10 +271,10 @@ impl Side for SerialSide<'_> {
             Op::Vehicle { stamp_back } => {
                 let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
                 self.gimbal
-                    .observe_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                self.gimbal.observe_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                    .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
+                self.gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
                 self.gimbal
-                    .observe_altitude(Altitude::new(500.0).unwrap(), stamp);
+                    .set_altitude(Altitude::new(500.0).unwrap(), stamp);
             }
             Op::Postback => self.peer_writes(&bytes),
             Op::PostbackPart(i) => {

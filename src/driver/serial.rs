@@ -21,9 +21,10 @@
 //!
 //! Control commands and postbacks only: [`SerialGimbal`] has no vehicle push and no text,
 //! and the gimbal references headings to the nose (see [`link::serial`](crate::link::serial)).
-//! [`SerialGimbal::observe_attitude`], [`observe_gps`](SerialGimbal::observe_gps) and
-//! [`observe_altitude`](SerialGimbal::observe_altitude) give [`point_at`](SerialGimbal::point_at)
-//! the vehicle state it aims from; none of it is sent.
+//! Through the command surface ([`GimbalControl`](crate::GimbalControl)) the vehicle's
+//! attitude, GPS and altitude give [`point_at`](crate::GimbalControl::point_at) the state
+//! it aims from; none of it is sent ([`GimbalControl::north_referenced`](crate::GimbalControl::north_referenced)
+//! is always false here).
 //!
 //! ```
 //! # #[cfg(feature = "mock")] {
@@ -31,7 +32,7 @@
 //! use idu_gimbal::mock::serial::Pipe;
 //! use idu_gimbal::wire::control::{GimbalCommand, Pitch};
 //! use idu_gimbal::wire::serial::{StreamItem, StreamParser};
-//! use idu_gimbal::{Config, Instant};
+//! use idu_gimbal::{Config, GimbalControl, Instant};
 //!
 //! // On a board: the HAL's UART halves (or your interrupt-driven ring buffer).
 //! let pipe: Pipe<64> = Pipe::new(1);
@@ -53,12 +54,10 @@
 
 use core::fmt;
 
+use crate::control::Transport;
 use crate::link::serial::{SerialLink, SerialStats};
-use crate::link::{Config, Event, QueueFull};
+use crate::link::Config;
 use crate::time::Instant;
-use crate::wire::control::{Command, Rate};
-use crate::wire::postback::{GimbalType, Postback};
-use crate::wire::vehicle::{Altitude, Attitude, Gps};
 
 /// A byte stream that never blocks: the contract [`SerialGimbal`] needs of a UART.
 pub trait SerialPort {
@@ -399,74 +398,6 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         }
     }
 
-    /// Queues a command (see [`Link::send`](crate::link::Link::send)).
-    pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
-        self.link.link_mut().send(command)
-    }
-
-    /// Starts, changes or refreshes a rate hold (see
-    /// [`Link::set_rate`](crate::link::Link::set_rate)).
-    pub fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
-        self.link.link_mut().set_rate(rate, now)
-    }
-
-    /// Ends a rate hold with one zero-rate command (see
-    /// [`Link::stop_rate`](crate::link::Link::stop_rate)).
-    pub fn stop_rate(&mut self) {
-        self.link.link_mut().stop_rate()
-    }
-
-    /// Keeps the gimbal pointed at a ground target while the vehicle moves (see
-    /// [`Link::point_at`](crate::link::Link::point_at)). Over serial the aim is
-    /// nose-referenced: it needs the vehicle attitude, GPS and altitude observed with
-    /// [`SerialGimbal::observe_attitude`] and its siblings, fresh.
-    pub fn point_at(&mut self, target: crate::geo::Position) {
-        self.link.link_mut().point_at(target)
-    }
-
-    /// Stops pointing at a target (see
-    /// [`Link::stop_pointing`](crate::link::Link::stop_pointing)).
-    pub fn stop_pointing(&mut self) {
-        self.link.link_mut().stop_pointing()
-    }
-
-    /// The vehicle attitude measured at `stamp`, for [`SerialGimbal::point_at`] only: the
-    /// serial link carries no vehicle frames, so the gimbal never receives it.
-    pub fn observe_attitude(&mut self, attitude: Attitude, stamp: Instant) {
-        self.link.link_mut().set_attitude(attitude, stamp)
-    }
-
-    /// The vehicle position measured at `stamp`, for [`SerialGimbal::point_at`] only.
-    pub fn observe_gps(&mut self, gps: Gps, stamp: Instant) {
-        self.link.link_mut().set_gps(gps, stamp)
-    }
-
-    /// The vehicle altitude measured at `stamp`, for [`SerialGimbal::point_at`] only.
-    pub fn observe_altitude(&mut self, altitude: Altitude, stamp: Instant) {
-        self.link.link_mut().set_altitude(altitude, stamp)
-    }
-
-    /// The next event (see [`Event`] for how events wait).
-    #[inline]
-    pub fn next_event(&mut self) -> Option<Event> {
-        self.link.link_mut().next_event()
-    }
-
-    /// Whether the link is up (a valid postback within the link timeout).
-    pub fn is_link_up(&self) -> bool {
-        self.link.link().is_up()
-    }
-
-    /// The latest valid postback and its age in milliseconds.
-    pub fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)> {
-        self.link.link().latest_postback(now)
-    }
-
-    /// The gimbal model as last reported.
-    pub fn gimbal_type(&self) -> Option<GimbalType> {
-        self.link.link().gimbal_type()
-    }
-
     /// The link's and the stream's counters.
     pub fn stats(&self) -> SerialStats {
         self.link.stats()
@@ -477,18 +408,25 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         self.errors
     }
 
-    /// The serial link, for what the driver does not wrap.
-    pub fn link(&self) -> &SerialLink<Q> {
-        &self.link
-    }
-
-    /// The serial link, mutably.
-    pub fn link_mut(&mut self) -> &mut SerialLink<Q> {
-        &mut self.link
-    }
-
     /// Gives back the port.
     pub fn release(self) -> P {
         self.port
+    }
+}
+
+/// The command surface ([`GimbalControl`](crate::GimbalControl)) is the serial link's. The
+/// vehicle's data is kept for point-at only (the serial link carries no vehicle frames), so
+/// headings are nose-referenced.
+impl<P: SerialPort, const Q: usize> crate::control::Transport for SerialGimbal<P, Q> {
+    type Link = SerialLink<Q>;
+
+    #[inline]
+    fn link(&self) -> &SerialLink<Q> {
+        &self.link
+    }
+
+    #[inline]
+    fn link_mut(&mut self) -> &mut SerialLink<Q> {
+        &mut self.link
     }
 }

@@ -22,19 +22,19 @@
 //! 0), and the gimbal, never receiving the vehicle attitude, references headings to the
 //! **nose**. Vehicle data given to the link (see [`Link::set_attitude`]) is kept for
 //! [`Link::point_at`] only, which then aims relative to the nose from the vehicle heading.
-//! The link has no text slots, so [`Link::send_text`] through [`SerialLink::link_mut`] is
-//! refused with [`TextQueueError::NoRoom`](crate::link::TextQueueError::NoRoom).
+//! The link has no text slots, so [`Link::send_text`] through its
+//! [`Transport::link_mut`](crate::Transport::link_mut) is refused with [`TextQueueError::NoRoom`](crate::link::TextQueueError::NoRoom).
 //!
 //! ```
 //! use idu_gimbal::link::serial::SerialLink;
 //! use idu_gimbal::link::{Config, Event};
 //! use idu_gimbal::wire::control::{GimbalCommand, Pitch};
 //! use idu_gimbal::wire::postback::Postback;
-//! use idu_gimbal::Instant;
+//! use idu_gimbal::{GimbalControl, Instant};
 //!
 //! let mut link: SerialLink = SerialLink::new(Config::default());
 //! let now = Instant::from_millis(0);
-//! link.link_mut().send(GimbalCommand::Pitch(Pitch::new(-45.0)?)).unwrap();
+//! link.send(GimbalCommand::Pitch(Pitch::new(-45.0)?)).unwrap();
 //! link.poll(now);
 //!
 //! // A UART that takes 10 bytes now and the rest later: the frame is finished, not lost.
@@ -52,8 +52,8 @@
 //! link.receive(&[0x00, 0x13], now);
 //! link.receive(&stream[..5], now);
 //! link.receive(&stream[5..], now);
-//! assert_eq!(link.link_mut().next_event(), Some(Event::LinkUp));
-//! assert_eq!(link.link().latest_postback(now).map(|(p, _age)| p.pitch), Some(-4500));
+//! assert_eq!(link.next_event(), Some(Event::LinkUp));
+//! assert_eq!(link.latest_postback(now).map(|(p, _age)| p.pitch), Some(-4500));
 //! assert_eq!(link.stats().stream.skipped_bytes, 2);
 //! # Ok::<(), idu_gimbal::wire::RangeError>(())
 //! ```
@@ -214,17 +214,6 @@ impl<const Q: usize> SerialLink<Q> {
         self.state != Out::Idle || self.link.has_transmit()
     }
 
-    /// The link, for its commands, events and state.
-    pub fn link(&self) -> &Link<Q, 0> {
-        &self.link
-    }
-
-    /// The link, mutably. Its vehicle setters keep data for point-at only (no push on the
-    /// serial link), and it has no text slots.
-    pub fn link_mut(&mut self) -> &mut Link<Q, 0> {
-        &mut self.link
-    }
-
     /// The stream parser, for its state ([`StreamParser::pending`]).
     pub fn parser(&self) -> &StreamParser {
         &self.parser
@@ -248,6 +237,22 @@ impl<const Q: usize> SerialLink<Q> {
     }
 }
 
+/// The command surface ([`GimbalControl`](crate::GimbalControl)) is the link's; its
+/// vehicle push is off, so the vehicle's data is kept for point-at only.
+impl<const Q: usize> crate::control::Transport for SerialLink<Q> {
+    type Link = Link<Q, 0>;
+
+    #[inline]
+    fn link(&self) -> &Link<Q, 0> {
+        &self.link
+    }
+
+    #[inline]
+    fn link_mut(&mut self) -> &mut Link<Q, 0> {
+        &mut self.link
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,6 +260,7 @@ mod tests {
     use crate::wire::control::{Command, GimbalCommand, Photo, Pitch};
     use crate::wire::postback::Postback;
     use crate::wire::vehicle::{Altitude, Attitude, Gps};
+    use crate::Transport;
 
     const T0: Instant = Instant::from_millis(0);
 

@@ -24,7 +24,7 @@ use esp_hal::twai::{BaudRate, ExtendedId, TwaiConfiguration, TwaiMode};
 use esp_println::println;
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Event, Gimbal, Instant};
+use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
 
 /// The main loop shared with the other CAN firmware examples.
 #[path = "../../../examples/common/app.rs"]

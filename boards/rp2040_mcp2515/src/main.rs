@@ -38,7 +38,7 @@ use panic_halt as _;
 use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Gimbal, Instant};
+use idu_gimbal::{Config, Gimbal, GimbalControl, Instant};
 
 /// The main loop shared with the other CAN firmware examples.
 #[path = "../../../examples/common/app.rs"]

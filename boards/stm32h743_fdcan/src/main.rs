@@ -34,7 +34,7 @@ use stm32h7xx_hal::{pac, prelude::*};
 
 use idu_gimbal::driver::fdcan::FdCan;
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Event, Gimbal, Instant};
+use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
 
 /// The main loop shared with the other CAN firmware examples.
 #[path = "../../../examples/common/app.rs"]
