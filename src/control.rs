@@ -93,7 +93,6 @@ pub trait Transport {
 }
 
 impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
-    #[inline]
     fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         Link::send(self, command)
     }
@@ -153,7 +152,6 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
 
 /// Every transport answers for its link.
 impl<D: Transport> GimbalControl for D {
-    #[inline]
     fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         self.link_mut().send(command)
     }
