@@ -13,6 +13,9 @@
 //!    tracking (a band), and the faults on the time axis: link gaps (no postback for more
 //!    than 1.5 s; a grey span), CRC errors (red lines) and lost frames (orange lines).
 //!
+//! The log is decoded by `decode`'s decoders, the trace being one more sink of their
+//! records, so the plot shows the postbacks, commands and faults `gimbalctl decode` finds.
+//!
 //! Time is the log's timestamps, in seconds from the first. A log without timestamps (the
 //! `cansend` and screen forms, `--stream` captures) is drawn against estimated time: 0.5 s
 //! per postback (the gimbal's period); link gaps cannot be seen in such a log.
@@ -30,18 +33,13 @@
 //! machine does not have.
 
 use std::fmt::Write as _;
-use std::io::Read;
 
-use idu_gimbal::link::postback::PostbackAssembler;
 use idu_gimbal::wire::control::{Command, GimbalCommand};
-use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::wire::serial::{StreamItem, StreamParser};
 use idu_gimbal::wire::vehicle::VehicleFrame;
-use idu_gimbal::Instant;
 use plotters::prelude::*;
 
-use crate::decode::{self, Line};
+use crate::decode::{self, Record, Sink};
 use crate::error::Failure;
 
 /// Time buckets per series (each holds its first, min, max and last point: at most four
@@ -381,132 +379,39 @@ impl Trace {
     }
 }
 
-/// Reads a CAN log (any of the three forms), line by line in constant memory.
-fn read_log(input: Box<dyn Read>) -> Result<Trace, Failure> {
-    let mut trace = Trace::default();
-    let mut postbacks = PostbackAssembler::new();
-    let mut marks = (0u32, 0u32, 0u32); // discarded, crc, malformed
-    let reader = std::io::BufReader::with_capacity(1 << 16, input);
-    let mut account = |trace: &mut Trace, asm: &PostbackAssembler, t: f64| {
-        let s = asm.stats();
-        let crc = s.crc_errors.wrapping_sub(marks.1);
-        let unexplained = s
-            .discarded_frames
-            .wrapping_sub(marks.0)
-            .saturating_sub(crc.saturating_mul(4))
-            .saturating_sub(s.malformed.wrapping_sub(marks.2));
-        for _ in 0..crc {
-            trace.crc.push(t, 1.0);
-        }
-        for _ in 0..unexplained.div_ceil(4) {
-            trace.lost.push(t, 1.0);
-        }
-        marks = (s.discarded_frames, s.crc_errors, s.malformed);
-    };
-    decode::for_each_line(
-        reader,
-        &mut (),
-        |(), line| {
-            let Some(line) = line else { return Ok(()) };
-            let Line::Frame { ts, id, data, len } = decode::parse_line(line) else {
-                return Ok(());
-            };
-            let t = trace.clock(ts);
-            let data = &data[..len];
-            match id {
-                ids::POSTBACK => {
-                    let now = Instant::from_millis((t * 1000.0) as u32);
-                    let pb = postbacks.feed(id, data, now);
-                    account(&mut trace, &postbacks, t);
-                    if let Some(pb) = pb {
-                        trace.postback(t, &pb);
-                    }
-                }
-                ids::CONTROL => {
-                    if let Ok(cmd) = Command::decode(data) {
-                        trace.command(t, &cmd);
-                    }
-                }
-                ids::ATTITUDE => {
-                    if let Ok(VehicleFrame::Attitude(a)) = VehicleFrame::decode(id, data) {
-                        trace
-                            .vehicle_heading
-                            .push(t, f64::from(a.heading_deg()).rem_euclid(360.0));
-                    }
-                }
-                _ => {}
+/// The plot's side of the decoding: each record drawn at its time.
+impl Sink for Trace {
+    fn record(&mut self, record: Record<'_>) -> Result<(), Failure> {
+        match record {
+            // Every frame moves the clock, whether or not it completes a message.
+            Record::Frame(at) => {
+                self.clock(at.ts);
             }
-            Ok(())
-        },
-        |()| Ok(()),
-    )?;
-    if let Some(late) = postbacks.expiry() {
-        postbacks.expire(late);
-    }
-    let end = trace.end;
-    account(&mut trace, &postbacks, end);
-    trace.finish();
-    Ok(trace)
-}
-
-/// Reads a serial/TCP capture.
-fn read_stream(mut input: Box<dyn Read>) -> Result<Trace, Failure> {
-    let mut trace = Trace::default();
-    let mut parser = StreamParser::new();
-    let mut block = vec![0u8; 1 << 16];
-    let (mut crc_mark, mut skip_mark) = (0u32, 0u32);
-    // Since the last frame: whether a CRC error explains the bytes skipped after it (the
-    // parser rescans the bad frame's bytes), and whether a loss was marked already.
-    let (mut bad_frame, mut lost_marked) = (false, false);
-    loop {
-        let n = match input.read(&mut block) {
-            Ok(0) => break,
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(Failure::io("cannot read input", e)),
-        };
-        // Bytes are taken one at a time so that faults land between the right postbacks.
-        for &b in &block[..n] {
-            let item = parser.push(b);
-            let s = parser.stats();
-            let t = trace.clock(None);
-            if s.crc_errors != crc_mark {
-                trace.crc.push(t, 1.0);
-                crc_mark = s.crc_errors;
-                bad_frame = true;
+            Record::Postback(at, pb) => {
+                let t = self.clock(at.ts);
+                self.postback(t, &pb);
             }
-            // Bytes skipped while looking for a header, not explained by a CRC error:
-            // frames lost or garbled on the line (one mark per run).
-            let skipped = s.skipped_bytes.saturating_add(s.invalid_frames);
-            if skipped != skip_mark {
-                if !bad_frame && !lost_marked {
-                    trace.lost.push(t, 1.0);
-                    lost_marked = true;
-                }
-                skip_mark = skipped;
+            Record::Command(at, cmd) => {
+                let t = self.clock(at.ts);
+                self.command(t, &cmd);
             }
-            if item.is_some() {
-                bad_frame = false;
-                lost_marked = false;
+            Record::Vehicle(at, VehicleFrame::Attitude(a)) => {
+                let t = self.clock(at.ts);
+                self.vehicle_heading
+                    .push(t, f64::from(a.heading_deg()).rem_euclid(360.0));
             }
-            match item {
-                Some(StreamItem::Postback(pb)) => trace.postback(t, &pb),
-                Some(StreamItem::Control(data)) => {
-                    if let Ok(cmd) = Command::decode(&data) {
-                        trace.command(t, &cmd);
-                    }
-                }
-                None => {}
+            Record::Vehicle(..) | Record::Text(..) => {}
+            Record::CrcError(at) => {
+                let t = self.clock(at.ts);
+                self.crc.push(t, 1.0);
+            }
+            Record::Lost(at) => {
+                let t = self.clock(at.ts);
+                self.lost.push(t, 1.0);
             }
         }
+        Ok(())
     }
-    parser.finish();
-    if parser.stats().truncated > 0 {
-        let t = trace.end;
-        trace.lost.push(t, 1.0);
-    }
-    trace.finish();
-    Ok(trace)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -847,11 +752,9 @@ fn check_output(path: &str) -> Result<(), Failure> {
 pub fn run(file: Option<&str>, stream: bool, output: &str) -> Result<(), Failure> {
     check_output(output)?;
     let input = decode::open(file)?;
-    let trace = if stream {
-        read_stream(input)?
-    } else {
-        read_log(input)?
-    };
+    let mut trace = Trace::default();
+    decode::decode_into(input, stream, &mut trace)?;
+    trace.finish();
     if trace.postbacks == 0 && trace.commands == 0 && trace.vehicle_heading.count == 0 {
         return Err(Failure::Runtime(format!(
             "{}: no postback, command or attitude frame: nothing to plot",
