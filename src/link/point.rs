@@ -148,6 +148,117 @@ pub(crate) fn wrap_360(deg: f64) -> f64 {
     }
 }
 
+// The link's side of pointing: starting, stopping, and the step each poll takes.
+use super::*;
+
+impl<const Q: usize, const T: usize> Link<Q, T> {
+    /// Keeps the gimbal pointed at `target` while the vehicle moves; see
+    /// [`point`](self#pointing-at-a-location). Ends a rate hold (the heading and pitch
+    /// commands that follow replace it).
+    pub fn point_at(&mut self, target: Position) {
+        self.quiet = quiet::Quiet::NONE;
+        // A zero-rate frame still waiting would arrive after the aim and could undo it.
+        self.tx.cancel_zero_rate();
+        self.steering = Steering::Point(PointAt::new(target));
+    }
+
+    /// Stops pointing at a location (the gimbal keeps its last aim).
+    pub fn stop_pointing(&mut self) {
+        if let Steering::Point(_) = self.steering {
+            self.steering = Steering::Manual;
+        }
+    }
+
+    /// The target being pointed at, if any (kept to 1e-7° and 1 cm).
+    pub fn pointing_target(&self) -> Option<Position> {
+        match self.steering {
+            Steering::Point(p) => p.target.position(),
+            _ => None,
+        }
+    }
+
+    pub(super) fn poll_point(&mut self, now: Instant, earliest: &mut Earliest) {
+        if let Steering::Point(p) = self.steering {
+            (p.step)(self, now, earliest);
+        }
+    }
+
+    /// One point-at step; see [`PointAt::step`].
+    pub(super) fn point_step(&mut self, now: Instant, earliest: &mut Earliest) {
+        let Steering::Point(mut p) = self.steering else {
+            return;
+        };
+        if p.due || now.is_at_or_after(p.next) {
+            let period = u32::from(self.config.point_at_period_ms);
+            p.next = if p.due {
+                now.add_millis(period)
+            } else {
+                advance(p.next, period, now)
+            };
+            p.due = false;
+            // North-referenced while attitude is pushed; otherwise nose-referenced, which
+            // needs the vehicle heading (none fresh: the aim cannot be known).
+            let reference = if self.attitude_is_pushed(now) {
+                Some(Reference::North)
+            } else {
+                self.is_fresh(ATTITUDE, now)
+                    .then(|| Reference::Nose(self.vehicle.attitude.heading_centideg()))
+            };
+            if let (true, true, Some(reference)) = (
+                self.is_fresh(GPS, now),
+                self.is_fresh(ALTITUDE, now),
+                reference,
+            ) {
+                let aim = solve(
+                    &p.target,
+                    &self.vehicle.gps,
+                    &self.vehicle.altitude,
+                    reference,
+                );
+                self.aim(&mut p, aim);
+            }
+        }
+        // Due again (no room for the aim): the next poll retries.
+        earliest.offer(if p.due { now } else { p.next });
+        self.steering = Steering::Point(p);
+    }
+
+    pub(super) fn aim(&mut self, p: &mut PointAt<Q, T>, aim: Aim) {
+        match aim {
+            Aim::Unknown => {}
+            Aim::Unreachable { elevation_cdeg } => {
+                if !p.unreachable {
+                    p.unreachable = true;
+                    self.status
+                        .raise(Event::TargetUnreachable { elevation_cdeg });
+                }
+            }
+            Aim::At(heading, pitch) => {
+                p.unreachable = false;
+                let wire = (heading.deci(), pitch.deci());
+                if !moved(p.sent, wire, u32::from(self.config.point_at_deadband_mdeg)) {
+                    return;
+                }
+                if self.tx.control_free() < 2 {
+                    // Both or neither; try again at the next poll.
+                    self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+                    p.due = true;
+                    return;
+                }
+                let _ = self.tx.push_control(
+                    Command::from(GimbalCommand::Heading(heading)).encode(),
+                    &mut self.quiet,
+                );
+                let _ = self.tx.push_control(
+                    Command::from(GimbalCommand::Pitch(pitch)).encode(),
+                    &mut self.quiet,
+                );
+                p.sent = Some(wire);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,8 +14,68 @@
 //! the ID follows from the class. The two FIFOs are rings with one-byte indices, so `Q` and
 //! `T` are at most 255 (checked at compile time).
 
+use super::quiet::Quiet;
 use super::ring::Ring;
 use crate::wire::ids;
+
+/// A vehicle frame's kind, in CAN priority order: the transmit queue's and the link's
+/// vehicle slot.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum VehicleSlot {
+    /// Attitude, `0x0000FF13`.
+    Attitude = 0,
+    /// GPS, `0x0000FF15`.
+    Gps = 1,
+    /// Altitude, `0x0000FF16`.
+    Altitude = 2,
+}
+
+impl VehicleSlot {
+    /// Every slot, in CAN priority order.
+    pub const ALL: [VehicleSlot; 3] = [
+        VehicleSlot::Attitude,
+        VehicleSlot::Gps,
+        VehicleSlot::Altitude,
+    ];
+
+    /// The slot's index (0 to 2), for per-slot arrays.
+    #[inline(always)]
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The slot's frame ID.
+    pub const fn id(self) -> u32 {
+        match self {
+            VehicleSlot::Attitude => ids::ATTITUDE,
+            VehicleSlot::Gps => ids::GPS,
+            VehicleSlot::Altitude => ids::ALTITUDE,
+        }
+    }
+
+    /// The slot's bit in a per-slot bit set (bit 0 attitude, 1 GPS, 2 altitude).
+    #[inline(always)]
+    pub(crate) const fn bit(self) -> u8 {
+        1 << self as u8
+    }
+
+    /// The slot of the lowest bit set in `bits`, one of the three; what is above them
+    /// reads as altitude.
+    #[inline(always)]
+    const fn lowest(bits: u8) -> VehicleSlot {
+        // Tests of the bits, not a count of trailing zeros: the caller's match on the slot
+        // then folds into these branches.
+        if bits & 1 != 0 {
+            VehicleSlot::Attitude
+        } else if bits & 2 != 0 {
+            VehicleSlot::Gps
+        } else {
+            VehicleSlot::Altitude
+        }
+    }
+}
 
 /// The priority class of a frame.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -23,25 +83,22 @@ use crate::wire::ids;
 pub enum Class {
     /// Control commands (`0x00000F01`).
     Control,
-    /// Vehicle frames (attitude, GPS, altitude), by slot (0 attitude, 1 GPS, 2 altitude).
-    Vehicle(usize),
+    /// Vehicle frames (attitude, GPS, altitude).
+    Vehicle(VehicleSlot),
     /// Text frames.
     Text,
     /// Not a frame this crate sends.
     Foreign,
 }
 
-/// Vehicle frame IDs by slot, in CAN priority order.
-pub const VEHICLE_IDS: [u32; 3] = [ids::ATTITUDE, ids::GPS, ids::ALTITUDE];
-
 impl Class {
     /// The class of a frame with this ID.
     pub const fn of(id: u32) -> Class {
         match id {
             ids::CONTROL => Class::Control,
-            ids::ATTITUDE => Class::Vehicle(0),
-            ids::GPS => Class::Vehicle(1),
-            ids::ALTITUDE => Class::Vehicle(2),
+            ids::ATTITUDE => Class::Vehicle(VehicleSlot::Attitude),
+            ids::GPS => Class::Vehicle(VehicleSlot::Gps),
+            ids::ALTITUDE => Class::Vehicle(VehicleSlot::Altitude),
             ids::TEXT | ids::TEXT_END => Class::Text,
             _ => Class::Foreign,
         }
@@ -61,13 +118,13 @@ pub(crate) struct TextSlot {
 pub(crate) enum Next {
     Control([u8; 8]),
     ZeroRate,
-    Vehicle(usize),
+    Vehicle(VehicleSlot),
     Text(TextSlot),
 }
 
 /// The transmit queue; see the [module docs](self).
 #[derive(Clone, Debug)]
-pub struct TxQueue<const Q: usize, const T: usize> {
+pub(crate) struct TxQueue<const Q: usize, const T: usize> {
     control: Ring<[u8; 8], Q>,
     text: Ring<TextSlot, T>,
     /// Bit `i` set (0 to 2): vehicle slot `i` waits; [`ZERO_RATE`]: the zero-rate frame
@@ -85,7 +142,7 @@ impl<const Q: usize, const T: usize> Default for TxQueue<Q, T> {
 
 impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// An empty queue.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         TxQueue {
             control: Ring::new([0; 8]),
             text: Ring::new(TextSlot {
@@ -98,48 +155,55 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     }
 
     /// Frames waiting.
-    pub fn len(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
         usize::from(self.waiting)
     }
 
     /// Whether nothing is waiting.
     #[inline]
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.waiting == 0
     }
 
     /// Free control slots.
-    pub fn control_free(&self) -> usize {
+    pub(crate) fn control_free(&self) -> usize {
         self.control.free()
     }
 
     /// Free text slots.
-    pub fn text_free(&self) -> usize {
+    pub(crate) fn text_free(&self) -> usize {
         self.text.free()
     }
 
+    // Every way in takes the link's quiet word and ends the driver's idle interval in it
+    // (`Quiet::hold_idle`): a frame queued must never wait behind a driver's idle check,
+    // and no caller can queue one and forget to say so.
+
     /// Queues a control frame's data; hands it back when the FIFO is full.
-    pub fn push_control(&mut self, data: [u8; 8]) -> Result<(), [u8; 8]> {
+    pub(crate) fn push_control(&mut self, data: [u8; 8], quiet: &mut Quiet) -> Result<(), [u8; 8]> {
         self.control.push_back(data)?;
         self.waiting += 1;
+        quiet.hold_idle();
         Ok(())
     }
 
     /// Marks vehicle slot `slot` as waiting. Returns `true` when it already was (the value
     /// not yet sent is superseded by the latest).
-    pub fn mark_vehicle(&mut self, slot: usize) -> bool {
-        // Slots are 0 to 2; anything else marks nothing.
-        self.mark(1u8 << (slot & 3) & VEHICLE)
+    pub(crate) fn mark_vehicle(&mut self, slot: VehicleSlot, quiet: &mut Quiet) -> bool {
+        quiet.hold_idle();
+        self.mark(slot.bit())
     }
 
     /// Queues the zero-rate frame (once: it is one frame whenever it was asked for).
     /// Returns `true` when it already waited.
-    pub fn mark_zero_rate(&mut self) -> bool {
+    pub(crate) fn mark_zero_rate(&mut self, quiet: &mut Quiet) -> bool {
+        quiet.hold_idle();
         self.mark(ZERO_RATE)
     }
 
     /// Withdraws a waiting zero-rate frame (a newer pointing instruction replaces it).
-    pub fn cancel_zero_rate(&mut self) {
+    pub(crate) fn cancel_zero_rate(&mut self) {
         if self.flags & ZERO_RATE != 0 {
             self.flags &= !ZERO_RATE;
             self.waiting -= 1;
@@ -157,7 +221,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
 
     /// Queues a text's frames (8 data bytes each; the last one ends the text), all of them
     /// or none when they do not all fit. Gives back how many were needed on failure.
-    pub(crate) fn push_text<I>(&mut self, frames: I) -> Result<(), usize>
+    pub(crate) fn push_text<I>(&mut self, frames: I, quiet: &mut Quiet) -> Result<(), usize>
     where
         I: ExactSizeIterator<Item = TextSlot>,
     {
@@ -171,6 +235,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 self.waiting += 1;
             }
         }
+        quiet.hold_idle();
         Ok(())
     }
 
@@ -197,7 +262,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 self.flags &= !ZERO_RATE;
                 Next::ZeroRate
             } else {
-                let slot = self.flags.trailing_zeros() as usize;
+                let slot = VehicleSlot::lowest(self.flags);
                 self.flags &= self.flags - 1;
                 Next::Vehicle(slot)
             }
@@ -213,7 +278,8 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// cannot take it back (this cannot happen to a frame just popped), except the
     /// zero-rate frame, which needs no slot. A vehicle frame whose slot is already waiting
     /// again is superseded, not an error.
-    pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8]) -> Requeued {
+    pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8], quiet: &mut Quiet) -> Requeued {
+        quiet.hold_idle();
         match Class::of(id) {
             Class::Control => match self.control.push_front(data) {
                 Ok(()) => {
@@ -222,7 +288,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 }
                 // A zero-rate frame needs no slot.
                 Err(data) if data == zero_rate() => {
-                    if self.mark_zero_rate() {
+                    if self.mark(ZERO_RATE) {
                         Requeued::Superseded
                     } else {
                         Requeued::Queued
@@ -241,7 +307,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 Err(_) => Requeued::NoRoom,
             },
             Class::Vehicle(slot) => {
-                if self.mark_vehicle(slot) {
+                if self.mark(slot.bit()) {
                     Requeued::Superseded
                 } else {
                     Requeued::Queued
@@ -252,8 +318,6 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     }
 }
 
-/// The vehicle slots' bits in [`TxQueue::flags`].
-const VEHICLE: u8 = 0b0111;
 /// The zero-rate frame's bit in [`TxQueue::flags`].
 const ZERO_RATE: u8 = 0b1000;
 
@@ -285,6 +349,11 @@ mod tests {
     use crate::wire::control::{Command, GimbalCommand, Rate};
     use std::vec::Vec;
 
+    /// A quiet word for the queue to hold (what it does with it is tested in `quiet`).
+    fn quiet() -> Quiet {
+        Quiet::NONE
+    }
+
     fn text(tag: u8, last: bool) -> TextSlot {
         TextSlot {
             data: [tag; 8],
@@ -299,23 +368,26 @@ mod tests {
     #[test]
     fn priority_order_and_vehicle_flags() {
         let mut q = TxQueue::<4, 4>::new();
-        q.push_text([text(1, false), text(2, true)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter(), &mut quiet())
             .unwrap();
-        assert!(!q.mark_vehicle(2));
-        assert!(!q.mark_vehicle(1));
-        assert!(q.mark_vehicle(1), "already waiting: superseded");
-        assert!(!q.mark_vehicle(0));
-        q.push_control([7; 8]).unwrap();
-        q.push_control([8; 8]).unwrap();
+        assert!(!q.mark_vehicle(VehicleSlot::Altitude, &mut quiet()));
+        assert!(!q.mark_vehicle(VehicleSlot::Gps, &mut quiet()));
+        assert!(
+            q.mark_vehicle(VehicleSlot::Gps, &mut quiet()),
+            "already waiting: superseded"
+        );
+        assert!(!q.mark_vehicle(VehicleSlot::Attitude, &mut quiet()));
+        q.push_control([7; 8], &mut quiet()).unwrap();
+        q.push_control([8; 8], &mut quiet()).unwrap();
         assert_eq!(q.len(), 7); // 2 control, 3 vehicle, 2 text
         assert_eq!(
             drain(&mut q),
             [
                 Next::Control([7; 8]),
                 Next::Control([8; 8]),
-                Next::Vehicle(0),
-                Next::Vehicle(1),
-                Next::Vehicle(2),
+                Next::Vehicle(VehicleSlot::Attitude),
+                Next::Vehicle(VehicleSlot::Gps),
+                Next::Vehicle(VehicleSlot::Altitude),
                 Next::Text(text(1, false)),
                 Next::Text(text(2, true)),
             ]
@@ -330,12 +402,12 @@ mod tests {
             let mut q = TxQueue::<3, 4>::new();
             for op in ops {
                 match op {
-                    0 => { let _ = q.push_control([op; 8]); }
-                    1 | 2 => { q.mark_vehicle(usize::from(op)); }
-                    3 => { let _ = q.push_text([text(1, false), text(2, true)].into_iter()); }
+                    0 => { let _ = q.push_control([op; 8], &mut quiet()); }
+                    1 | 2 => { q.mark_vehicle(VehicleSlot::ALL[usize::from(op)], &mut quiet()); }
+                    3 => { let _ = q.push_text([text(1, false), text(2, true)].into_iter(), &mut quiet()); }
                     4 => { q.pop(); }
-                    5 => { q.requeue(ids::CONTROL, [0; 8]); }
-                    _ => { q.requeue(ids::TEXT_END, [0; 8]); }
+                    5 => { q.requeue(ids::CONTROL, [0; 8], &mut quiet()); }
+                    _ => { q.requeue(ids::TEXT_END, [0; 8], &mut quiet()); }
                 }
                 let held = q.control.len() + q.flags.count_ones() as usize + q.text.len();
                 proptest::prop_assert_eq!(q.len(), held);
@@ -363,18 +435,18 @@ mod tests {
     #[test]
     fn full_control_fifo_hands_the_frame_back() {
         let mut q = TxQueue::<2, 2>::new();
-        q.push_control([1; 8]).unwrap();
-        q.push_control([2; 8]).unwrap();
-        assert_eq!(q.push_control([3; 8]), Err([3; 8]));
+        q.push_control([1; 8], &mut quiet()).unwrap();
+        q.push_control([2; 8], &mut quiet()).unwrap();
+        assert_eq!(q.push_control([3; 8], &mut quiet()), Err([3; 8]));
     }
 
     #[test]
     fn text_is_all_or_nothing() {
         let mut q = TxQueue::<2, 3>::new();
-        q.push_text([text(1, false), text(2, true)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter(), &mut quiet())
             .unwrap();
         assert_eq!(
-            q.push_text([text(3, false), text(4, true)].into_iter()),
+            q.push_text([text(3, false), text(4, true)].into_iter(), &mut quiet()),
             Err(2)
         );
         assert_eq!(q.len(), 2);
@@ -383,34 +455,49 @@ mod tests {
     #[test]
     fn requeue_goes_to_the_front_of_its_class() {
         let mut q = TxQueue::<2, 2>::new();
-        q.push_text([text(1, false), text(2, true)].into_iter())
+        q.push_text([text(1, false), text(2, true)].into_iter(), &mut quiet())
             .unwrap();
         let Some(Next::Text(first)) = q.pop() else {
             panic!()
         };
-        assert_eq!(q.requeue(ids::TEXT, first.data), Requeued::Queued);
+        assert_eq!(
+            q.requeue(ids::TEXT, first.data, &mut quiet()),
+            Requeued::Queued
+        );
         assert_eq!(q.pop(), Some(Next::Text(text(1, false))));
         // The end frame keeps its ID through a requeue.
         assert_eq!(q.pop(), Some(Next::Text(text(2, true))));
-        assert_eq!(q.requeue(ids::TEXT_END, [2; 8]), Requeued::Queued);
+        assert_eq!(
+            q.requeue(ids::TEXT_END, [2; 8], &mut quiet()),
+            Requeued::Queued
+        );
         assert_eq!(q.pop(), Some(Next::Text(text(2, true))));
         // A displaced vehicle frame whose slot waits again is superseded.
-        q.mark_vehicle(1);
-        assert_eq!(q.requeue(ids::GPS, [0; 8]), Requeued::Superseded);
-        assert_eq!(q.pop(), Some(Next::Vehicle(1)));
-        assert_eq!(q.requeue(ids::GPS, [0; 8]), Requeued::Queued);
+        q.mark_vehicle(VehicleSlot::Gps, &mut quiet());
+        assert_eq!(
+            q.requeue(ids::GPS, [0; 8], &mut quiet()),
+            Requeued::Superseded
+        );
+        assert_eq!(q.pop(), Some(Next::Vehicle(VehicleSlot::Gps)));
+        assert_eq!(q.requeue(ids::GPS, [0; 8], &mut quiet()), Requeued::Queued);
         // Control goes back in front of newer control frames.
-        q.push_control([8; 8]).unwrap();
-        assert_eq!(q.requeue(ids::CONTROL, [7; 8]), Requeued::Queued);
-        assert_eq!(q.requeue(ids::CONTROL, [6; 8]), Requeued::NoRoom);
+        q.push_control([8; 8], &mut quiet()).unwrap();
+        assert_eq!(
+            q.requeue(ids::CONTROL, [7; 8], &mut quiet()),
+            Requeued::Queued
+        );
+        assert_eq!(
+            q.requeue(ids::CONTROL, [6; 8], &mut quiet()),
+            Requeued::NoRoom
+        );
         assert_eq!(q.pop(), Some(Next::Control([7; 8])));
-        assert_eq!(q.requeue(0x123, [0; 8]), Requeued::Foreign);
+        assert_eq!(q.requeue(0x123, [0; 8], &mut quiet()), Requeued::Foreign);
     }
 
     #[test]
     fn a_cancelled_zero_rate_frame_no_longer_waits() {
         let mut q = TxQueue::<4, 4>::new();
-        assert!(!q.mark_zero_rate(), "it did not wait before");
+        assert!(!q.mark_zero_rate(&mut quiet()), "it did not wait before");
         assert_eq!(q.len(), 1);
         q.cancel_zero_rate();
         assert_eq!(q.len(), 0);

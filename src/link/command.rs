@@ -1,0 +1,43 @@
+//! Commands and text into the transmit queue.
+
+use super::*;
+
+impl<const Q: usize, const T: usize> Link<Q, T> {
+    /// Queues a command. A pointing command (see [`Command::is_pointing`]) ends a rate hold
+    /// (without a zero-rate command: it is the gimbal's new instruction) or a point-at. A
+    /// full queue hands the command back and ends nothing.
+    pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
+        let command = command.into();
+        if self
+            .tx
+            .push_control(command.encode(), &mut self.quiet)
+            .is_err()
+        {
+            self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+            return Err(QueueFull(command));
+        }
+        if command.is_pointing() {
+            self.steering = Steering::Manual;
+            // A zero-rate frame still waiting would arrive after this command and undo it.
+            self.tx.cancel_zero_rate();
+        }
+        Ok(())
+    }
+
+    /// Queues a text message, all of it or nothing.
+    pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
+        let frames = wire_text::chunks(text).map_err(TextQueueError::Invalid)?;
+        let free = self.tx.text_free();
+        let slots = frames.map(|f| queue::TextSlot {
+            data: f.data,
+            last: f.id == ids::TEXT_END,
+        });
+        self.tx
+            .push_text(slots, &mut self.quiet)
+            .map_err(|needed| {
+                self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+                TextQueueError::NoRoom { needed, free }
+            })?;
+        Ok(())
+    }
+}

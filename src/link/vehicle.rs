@@ -1,0 +1,187 @@
+//! The vehicle's attitude, GPS and altitude: kept with their stamps, pushed at their
+//! periods while fresh.
+
+use super::*;
+
+/// The latest attitude, GPS and altitude with their stamps and push deadlines, by
+/// [`VehicleSlot`] (as in the transmit queue). Values are kept typed (18
+/// bytes, not three 8-byte frames); a frame is encoded when it leaves.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct VehicleSources {
+    pub(super) attitude: Attitude,
+    pub(super) gps: Gps,
+    pub(super) altitude: Altitude,
+    pub(super) stamp: [Instant; 3],
+    pub(super) next: [Instant; 3],
+    /// Bit `i`: slot `i` holds a value.
+    pub(super) has: u8,
+    /// Bit `i`: push slot `i` at the next poll, whatever `next` says (new data after none
+    /// or stale data).
+    pub(super) due: u8,
+}
+
+impl VehicleSources {
+    pub(super) const EMPTY: Self = VehicleSources {
+        attitude: Attitude::ZERO,
+        gps: Gps::ZERO,
+        altitude: Altitude::from_cm(0),
+        stamp: [Instant::from_millis(0); 3],
+        next: [Instant::from_millis(0); 3],
+        has: 0,
+        due: 0b111,
+    };
+
+    pub(super) fn has(&self, slot: VehicleSlot) -> bool {
+        self.has & slot.bit() != 0
+    }
+
+    pub(super) fn due(&self, slot: VehicleSlot) -> bool {
+        self.due & slot.bit() != 0
+    }
+
+    pub(super) fn set_due(&mut self, slot: VehicleSlot, due: bool) {
+        if due {
+            self.due |= slot.bit();
+        } else {
+            self.due &= !slot.bit();
+        }
+    }
+
+    /// When the value in `slot` was measured, if one was set.
+    pub(super) fn stamp(&self, slot: VehicleSlot) -> Option<Instant> {
+        if !self.has(slot) {
+            return None;
+        }
+        self.stamp.get(slot.index()).copied()
+    }
+
+    /// Records that `slot` now holds a value measured at `stamp`.
+    pub(super) fn stamped(&mut self, slot: VehicleSlot, stamp: Instant) {
+        if let Some(s) = self.stamp.get_mut(slot.index()) {
+            *s = stamp;
+            self.has |= slot.bit();
+        }
+    }
+
+    /// The value in `slot`, if one was set.
+    pub(super) fn value(&self, slot: VehicleSlot) -> Option<VehicleFrame> {
+        if !self.has(slot) {
+            return None;
+        }
+        Some(match slot {
+            VehicleSlot::Attitude => VehicleFrame::Attitude(self.attitude),
+            VehicleSlot::Gps => VehicleFrame::Gps(self.gps),
+            VehicleSlot::Altitude => VehicleFrame::Altitude(self.altitude),
+        })
+    }
+}
+
+impl<const Q: usize, const T: usize> Link<Q, T> {
+    /// Bookkeeping before slot `slot` takes a value measured at `stamp`.
+    pub(super) fn set_vehicle(&mut self, slot: VehicleSlot, stamp: Instant) {
+        if !self.vehicle.has(slot) {
+            self.vehicle.set_due(slot, true);
+        }
+        // Newer data replacing fresh data moves no deadline earlier, so the next poll need
+        // only wake for a slot waiting to push at once (first value, or after going stale)
+        // or for an older stamp, which brings staleness closer. (Called at every turn of a
+        // main loop, this must not defeat the idle fast path.)
+        let older = self
+            .vehicle
+            .stamp(slot)
+            .is_some_and(|old| !stamp.is_at_or_after(old));
+        if self.vehicle.due(slot) || older {
+            self.quiet = quiet::Quiet::NONE;
+        }
+        self.vehicle.stamped(slot, stamp);
+    }
+
+    /// Sets the latest vehicle attitude, measured at `stamp`.
+    pub fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
+        self.set_vehicle(ATTITUDE, stamp);
+        self.vehicle.attitude = attitude;
+    }
+
+    /// Sets the latest vehicle position, measured at `stamp`.
+    pub fn set_gps(&mut self, gps: Gps, stamp: Instant) {
+        self.set_vehicle(GPS, stamp);
+        self.vehicle.gps = gps;
+    }
+
+    /// Sets the latest vehicle altitude, measured at `stamp`.
+    pub fn set_altitude(&mut self, altitude: Altitude, stamp: Instant) {
+        self.set_vehicle(ALTITUDE, stamp);
+        self.vehicle.altitude = altitude;
+    }
+
+    pub(super) fn age(stamp: Instant, now: Instant) -> u32 {
+        // A stamp slightly ahead of `now` (clock skew between producer and poller) is fresh.
+        if now.is_at_or_after(stamp) {
+            now.millis_since(stamp)
+        } else {
+            0
+        }
+    }
+
+    /// Whether vehicle slot `slot` holds data that is fresh at `now`.
+    pub(super) fn is_fresh(&self, slot: VehicleSlot, now: Instant) -> bool {
+        self.vehicle
+            .stamp(slot)
+            .is_some_and(|stamp| Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms))
+    }
+
+    /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
+    /// the gimbal references its heading to north rather than to the nose.
+    pub fn attitude_is_pushed(&self, now: Instant) -> bool {
+        self.config.attitude_period_ms != 0 && self.is_fresh(ATTITUDE, now)
+    }
+
+    /// The latest vehicle attitude set, fresh or not.
+    pub fn attitude(&self) -> Option<Attitude> {
+        self.vehicle.has(ATTITUDE).then_some(self.vehicle.attitude)
+    }
+
+    pub(super) fn poll_vehicle(&mut self, now: Instant, earliest: &mut Earliest) {
+        let periods = [
+            u32::from(self.config.attitude_period_ms),
+            u32::from(self.config.gps_period_ms),
+            u32::from(self.config.altitude_period_ms),
+        ];
+        let stale = u32::from(self.config.vehicle_stale_ms);
+        for (slot, period) in VehicleSlot::ALL.into_iter().zip(periods) {
+            let Some(stamp) = self.vehicle.stamp(slot) else {
+                continue;
+            };
+            let Some(&next) = self.vehicle.next.get(slot.index()) else {
+                continue;
+            };
+            if period == 0 {
+                continue;
+            }
+            if Self::age(stamp, now) > stale {
+                // Push again as soon as fresh data arrives (which marks the link dirty).
+                self.vehicle.set_due(slot, true);
+                continue;
+            }
+            let due = self.vehicle.due(slot);
+            let mut next = next;
+            if due || now.is_at_or_after(next) {
+                next = if due {
+                    now.add_millis(period)
+                } else {
+                    advance(next, period, now)
+                };
+                if let Some(n) = self.vehicle.next.get_mut(slot.index()) {
+                    *n = next;
+                }
+                self.vehicle.set_due(slot, false);
+                if self.tx.mark_vehicle(slot, &mut self.quiet) {
+                    self.stats.superseded = self.stats.superseded.wrapping_add(1);
+                }
+            }
+            earliest.offer(next);
+            // Going stale changes what fresh data will do: wake up for it too.
+            earliest.offer(stamp.add_millis(stale.saturating_add(1)));
+        }
+    }
+}
