@@ -2,7 +2,7 @@
 //!
 //! [`GimbalControl`] is what an application asks of a gimbal: commands, a rate hold,
 //! point-at, the vehicle's data, events and the latest postback. The sans-IO
-//! [`Link`](crate::link::Link) implements it; every transport over a link (the CAN driver
+//! [`Link`] implements it; every transport over a link (the CAN driver
 //! [`Gimbal`](crate::Gimbal), the serial driver [`SerialGimbal`](crate::SerialGimbal), the
 //! sans-IO [`SerialLink`](crate::link::serial::SerialLink)) gets it from its link through
 //! [`Transport`], and keeps only what is its own: `poll`, `next_deadline`, `stats`,

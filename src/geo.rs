@@ -142,9 +142,9 @@ impl Position {
     /// `"altitude"`) that is not finite or is out of range.
     pub fn new(lat_deg: f64, lon_deg: f64, alt_m: f64) -> Result<Self, GeoError> {
         Ok(Position {
-            lat_deg: RangeError::check_f64("latitude", lat_deg, -90.0, 90.0)?,
-            lon_deg: RangeError::check_f64("longitude", lon_deg, -180.0, 180.0)?,
-            alt_m: RangeError::check_f64("altitude", alt_m, ALT_MIN_M, ALT_MAX_M)?,
+            lat_deg: RangeError::check("latitude", lat_deg, -90.0, 90.0)?,
+            lon_deg: RangeError::check("longitude", lon_deg, -180.0, 180.0)?,
+            alt_m: RangeError::check("altitude", alt_m, ALT_MIN_M, ALT_MAX_M)?,
         })
     }
 

@@ -152,9 +152,11 @@ pub(crate) fn wrap_360(deg: f64) -> f64 {
 use super::*;
 
 impl<const Q: usize, const T: usize> Link<Q, T> {
-    /// Keeps the gimbal pointed at `target` while the vehicle moves; see
-    /// [`point`](self#pointing-at-a-location). Ends a rate hold (the heading and pitch
-    /// commands that follow replace it).
+    /// Keeps the gimbal pointed at `target` while the vehicle moves: every
+    /// `point_at_period_ms` ([`Config`]) the exact WGS84 bearing and elevation from the
+    /// vehicle's fresh GPS and altitude are sent as heading and pitch commands, past a
+    /// dead-band; a target out of the pitch range raises [`Event::TargetUnreachable`] once.
+    /// Ends a rate hold (the heading and pitch commands that follow replace it).
     pub fn point_at(&mut self, target: Position) {
         self.quiet = quiet::Quiet::NONE;
         // A zero-rate frame still waiting would arrive after the aim and could undo it.

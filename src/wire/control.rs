@@ -140,25 +140,18 @@ fn put_2(buf: &mut [u8; 8], at: Range<usize>, [lo, hi]: [u8; 2]) {
     }
 }
 
-/// Checks an integer wire or count value against `[min, max]`; on failure reports all
-/// three divided by `scale` (the physical unit), as the float constructors do.
+/// [`RangeError::check`] of a value in wire units; the error speaks the physical unit
+/// (all three divided by `scale`), as the float constructors' errors do.
 fn check_int(
     field: &'static str,
-    value: i64,
-    min: i64,
-    max: i64,
+    value: i32,
+    min: i32,
+    max: i32,
     scale: f64,
 ) -> Result<(), RangeError> {
-    if value >= min && value <= max {
-        Ok(())
-    } else {
-        Err(RangeError {
-            field,
-            value: value as f64 / scale,
-            min: min as f64 / scale,
-            max: max as f64 / scale,
-        })
-    }
+    RangeError::check(field, value, min, max)
+        .map(drop)
+        .map_err(|e| e.scaled(scale))
 }
 
 /// Which device a control frame is addressed to (byte 0).
@@ -212,8 +205,8 @@ impl Rate {
 
     /// Rates in deg/s, each in [−100, 100], rounded to the nearest 0.01 deg/s.
     pub fn new(yaw_dps: f32, pitch_dps: f32) -> Result<Self, RangeError> {
-        let yaw = RangeError::check_f32("yaw_rate", yaw_dps, -Self::MAX_DPS, Self::MAX_DPS)?;
-        let pitch = RangeError::check_f32("pitch_rate", pitch_dps, -Self::MAX_DPS, Self::MAX_DPS)?;
+        let yaw = RangeError::check("yaw_rate", yaw_dps, -Self::MAX_DPS, Self::MAX_DPS)?;
+        let pitch = RangeError::check("pitch_rate", pitch_dps, -Self::MAX_DPS, Self::MAX_DPS)?;
         Ok(Rate {
             yaw: round_f32(yaw * 100.0) as i16,
             pitch: round_f32(pitch * 100.0) as i16,
@@ -222,7 +215,7 @@ impl Rate {
 
     /// Rates in wire units, (deg/s)×100, each in [−10000, 10000].
     pub fn from_centi(yaw: i16, pitch: i16) -> Result<Self, RangeError> {
-        let max = i64::from(Self::MAX_CENTI);
+        let max = i32::from(Self::MAX_CENTI);
         check_int("yaw_rate", yaw.into(), -max, max, 100.0)?;
         check_int("pitch_rate", pitch.into(), -max, max, 100.0)?;
         Ok(Rate { yaw, pitch })
@@ -270,7 +263,7 @@ impl Heading {
 
     /// A heading in degrees in [0, 360], rounded to the nearest 0.1°.
     pub fn new(degrees: f32) -> Result<Self, RangeError> {
-        let d = RangeError::check_f32("heading", degrees, 0.0, Self::MAX_DEG)?;
+        let d = RangeError::check("heading", degrees, 0.0, Self::MAX_DEG)?;
         Ok(Heading(round_f32(d * 10.0) as u16))
     }
 
@@ -308,7 +301,7 @@ impl Pitch {
 
     /// A pitch in degrees in [−100, 60], rounded to the nearest 0.1°.
     pub fn new(degrees: f32) -> Result<Self, RangeError> {
-        let d = RangeError::check_f32("pitch", degrees, Self::MIN_DEG, Self::MAX_DEG)?;
+        let d = RangeError::check("pitch", degrees, Self::MIN_DEG, Self::MAX_DEG)?;
         Ok(Pitch(round_f32(d * 10.0) as i16))
     }
 
@@ -352,7 +345,7 @@ impl ZoomRatio {
 
     /// A ratio in [1, 35], rounded to the nearest 0.01.
     pub fn new(ratio: f32) -> Result<Self, RangeError> {
-        let r = RangeError::check_f32("zoom_ratio", ratio, Self::MIN, Self::MAX)?;
+        let r = RangeError::check("zoom_ratio", ratio, Self::MIN, Self::MAX)?;
         Ok(ZoomRatio(round_f32(r * 100.0) as u16))
     }
 
@@ -398,9 +391,9 @@ impl ImageOffset {
 
     /// An offset with each axis in [−10000, 10000].
     pub fn new(x: i32, y: i32) -> Result<Self, RangeError> {
-        let max = i64::from(Self::MAX);
-        check_int("x", x.into(), -max, max, 1.0)?;
-        check_int("y", y.into(), -max, max, 1.0)?;
+        let max = i32::from(Self::MAX);
+        check_int("x", x, -max, max, 1.0)?;
+        check_int("y", y, -max, max, 1.0)?;
         Ok(ImageOffset {
             x: x as i16,
             y: y as i16,
@@ -434,9 +427,9 @@ impl ImagePoint {
 
     /// A point with each axis in [0, 8191].
     pub fn new(x: i32, y: i32) -> Result<Self, RangeError> {
-        let max = i64::from(Self::MAX);
-        check_int("x", x.into(), 0, max, 1.0)?;
-        check_int("y", y.into(), 0, max, 1.0)?;
+        let max = i32::from(Self::MAX);
+        check_int("x", x, 0, max, 1.0)?;
+        check_int("y", y, 0, max, 1.0)?;
         Ok(ImagePoint {
             x: x as u16,
             y: y as u16,
@@ -471,8 +464,8 @@ impl TrackingBox {
     /// A box of `width` × `height` image units, each in [0, 4080], each rounded to the
     /// nearest multiple of 16.
     pub fn new(centre: ImagePoint, width: f32, height: f32) -> Result<Self, RangeError> {
-        let w = RangeError::check_f32("width", width, 0.0, Self::MAX_SIDE)?;
-        let h = RangeError::check_f32("height", height, 0.0, Self::MAX_SIDE)?;
+        let w = RangeError::check("width", width, 0.0, Self::MAX_SIDE)?;
+        let h = RangeError::check("height", height, 0.0, Self::MAX_SIDE)?;
         Ok(TrackingBox {
             centre,
             width16: round_f32(w / 16.0) as u8,
@@ -537,7 +530,8 @@ pub enum Photo {
 
 impl Photo {
     fn parameter(field: &'static str, value: u32) -> Result<NonZeroU8, RangeError> {
-        check_int(field, value.into(), 1, 255, 1.0)?;
+        let value = RangeError::check(field, value, 1, 255)?;
+        // 1..=255 after the check: neither the cast nor the zero test can fail.
         NonZeroU8::new(value as u8).ok_or(RangeError {
             field,
             value: 0.0,

@@ -6,6 +6,43 @@
 
 use core::fmt;
 
+/// An enum of the codes a field takes, with `Unknown(n)` for the codes the document does
+/// not list (newer firmware), and `from_code` / `code` between the two: one mechanism for
+/// every such field (smoltcp's `enum_with_unknown!` is the model).
+macro_rules! enum_with_unknown {
+    (
+        $(#[$attr:meta])*
+        pub enum $name:ident {
+            $( $(#[$variant_attr:meta])* $variant:ident = $code:literal, )+
+        }
+    ) => {
+        $(#[$attr])*
+        pub enum $name {
+            $( $(#[$variant_attr])* $variant, )+
+            /// A code the document does not list (newer firmware).
+            Unknown(u8),
+        }
+
+        impl $name {
+            /// The value of a code; codes the document does not list become `Unknown`.
+            pub const fn from_code(code: u8) -> Self {
+                match code {
+                    $( $code => $name::$variant, )+
+                    n => $name::Unknown(n),
+                }
+            }
+
+            /// The code on the wire.
+            pub const fn code(self) -> u8 {
+                match self {
+                    $( $name::$variant => $code, )+
+                    $name::Unknown(n) => n,
+                }
+            }
+        }
+    };
+}
+
 pub mod control;
 pub mod crc;
 pub mod ids;
@@ -51,17 +88,17 @@ pub struct RangeError {
     pub max: f64,
 }
 
-// Helpers for the codecs that are still to come; not yet used on this branch.
 impl RangeError {
-    /// Checks that `value` is finite and within `[min, max]` (single precision, the
-    /// cheap path on a Cortex-M4F).
-    pub(crate) fn check_f32(
-        field: &'static str,
-        value: f32,
-        min: f32,
-        max: f32,
-    ) -> Result<f32, Self> {
-        // NaN fails both comparisons, infinities fail one of them.
+    /// Checks that `value` is within `[min, max]`, one mechanism for every unit: `f32`
+    /// (the cheap float path on a Cortex-M4F), `f64` (GPS coordinates, which need it) and
+    /// integer wire units (decoding then needs no floating point). A NaN fails both
+    /// comparisons and an infinity one of them, so neither passes. The error reports the
+    /// value and the range in the caller's unit.
+    #[inline]
+    pub(crate) fn check<T>(field: &'static str, value: T, min: T, max: T) -> Result<T, Self>
+    where
+        T: PartialOrd + Copy + Into<f64>,
+    {
         if value >= min && value <= max {
             Ok(value)
         } else {
@@ -74,43 +111,13 @@ impl RangeError {
         }
     }
 
-    /// Checks that a value in wire units is within `[min, max]`: integer comparisons only,
-    /// so that decoding needs no floating-point arithmetic. The error reports wire units.
-    pub(crate) fn check_int(
-        field: &'static str,
-        value: i32,
-        min: i32,
-        max: i32,
-    ) -> Result<i32, Self> {
-        if value >= min && value <= max {
-            Ok(value)
-        } else {
-            Err(RangeError {
-                field,
-                value: value.into(),
-                min: min.into(),
-                max: max.into(),
-            })
-        }
-    }
-
-    /// Checks that `value` is finite and within `[min, max]` (double precision, for
-    /// values such as GPS coordinates that need it).
-    pub(crate) fn check_f64(
-        field: &'static str,
-        value: f64,
-        min: f64,
-        max: f64,
-    ) -> Result<f64, Self> {
-        if value >= min && value <= max {
-            Ok(value)
-        } else {
-            Err(RangeError {
-                field,
-                value,
-                min,
-                max,
-            })
+    /// The same error in a unit `scale` times larger (wire units to physical ones).
+    pub(crate) fn scaled(self, scale: f64) -> Self {
+        RangeError {
+            value: self.value / scale,
+            min: self.min / scale,
+            max: self.max / scale,
+            ..self
         }
     }
 

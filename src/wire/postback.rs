@@ -134,58 +134,30 @@ impl fmt::Display for PostbackError {
 #[cfg(feature = "std")]
 impl std::error::Error for PostbackError {}
 
-/// Gimbal model as reported in the postback (Note 1 of section 2.2).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum GimbalType {
-    /// 1: X30 / X30GT.
-    #[default]
-    X30,
-    /// 2: X30T.
-    X30T,
-    /// 3: 3.5× zoom.
-    Zoom3_5x,
-    /// 4: 3.5× dual light.
-    DualLight3_5x,
-    /// 5: laser ranging.
-    LaserRanging,
-    /// 6: A2000.
-    A2000,
-    /// 7: 30× dual light.
-    DualLight30x,
-    /// A code the document does not list (newer firmware).
-    Unknown(u8),
+enum_with_unknown! {
+    /// Gimbal model as reported in the postback (Note 1 of section 2.2).
+    #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    pub enum GimbalType {
+        /// 1: X30 / X30GT.
+        #[default]
+        X30 = 1,
+        /// 2: X30T.
+        X30T = 2,
+        /// 3: 3.5× zoom.
+        Zoom3_5x = 3,
+        /// 4: 3.5× dual light.
+        DualLight3_5x = 4,
+        /// 5: laser ranging.
+        LaserRanging = 5,
+        /// 6: A2000.
+        A2000 = 6,
+        /// 7: 30× dual light.
+        DualLight30x = 7,
+    }
 }
 
 impl GimbalType {
-    /// The type from its code; unlisted codes become [`GimbalType::Unknown`].
-    pub const fn from_code(code: u8) -> Self {
-        match code {
-            1 => GimbalType::X30,
-            2 => GimbalType::X30T,
-            3 => GimbalType::Zoom3_5x,
-            4 => GimbalType::DualLight3_5x,
-            5 => GimbalType::LaserRanging,
-            6 => GimbalType::A2000,
-            7 => GimbalType::DualLight30x,
-            n => GimbalType::Unknown(n),
-        }
-    }
-
-    /// The code on the wire.
-    pub const fn code(self) -> u8 {
-        match self {
-            GimbalType::X30 => 1,
-            GimbalType::X30T => 2,
-            GimbalType::Zoom3_5x => 3,
-            GimbalType::DualLight3_5x => 4,
-            GimbalType::LaserRanging => 5,
-            GimbalType::A2000 => 6,
-            GimbalType::DualLight30x => 7,
-            GimbalType::Unknown(n) => n,
-        }
-    }
-
     /// The model's name as the document gives it, or `None` for an unknown code.
     pub const fn model_name(self) -> Option<&'static str> {
         match self {
@@ -201,42 +173,22 @@ impl GimbalType {
     }
 }
 
-/// Control mode as reported in the postback (Note 2 of section 2.2).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ControlMode {
-    /// 1: full lock (controllable speed).
-    FullLock,
-    /// 2: heading follow.
-    #[default]
-    HeadingFollow,
-    /// 3: lock (controllable angle).
-    Lock,
-    /// A code the document does not list (newer firmware).
-    Unknown(u8),
+enum_with_unknown! {
+    /// Control mode as reported in the postback (Note 2 of section 2.2).
+    #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    pub enum ControlMode {
+        /// 1: full lock (controllable speed).
+        FullLock = 1,
+        /// 2: heading follow.
+        #[default]
+        HeadingFollow = 2,
+        /// 3: lock (controllable angle).
+        Lock = 3,
+    }
 }
 
 impl ControlMode {
-    /// The mode from its code; unlisted codes become [`ControlMode::Unknown`].
-    pub const fn from_code(code: u8) -> Self {
-        match code {
-            1 => ControlMode::FullLock,
-            2 => ControlMode::HeadingFollow,
-            3 => ControlMode::Lock,
-            n => ControlMode::Unknown(n),
-        }
-    }
-
-    /// The code on the wire.
-    pub const fn code(self) -> u8 {
-        match self {
-            ControlMode::FullLock => 1,
-            ControlMode::HeadingFollow => 2,
-            ControlMode::Lock => 3,
-            ControlMode::Unknown(n) => n,
-        }
-    }
-
     /// A stable snake_case name (`full_lock`, `heading_follow`, `lock`), or `None` for an
     /// unknown code.
     pub const fn name(self) -> Option<&'static str> {
@@ -249,32 +201,15 @@ impl ControlMode {
     }
 }
 
-/// What the postback's Data_id says the message carries.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum DataId {
-    /// 1: gimbal type, tracking, mode and attitude (the only one the document defines).
-    #[default]
-    Attitude,
-    /// Another Data_id (newer firmware). Its fields are decoded at the same offsets.
-    Unknown(u8),
-}
-
-impl DataId {
-    /// The Data_id from its code.
-    pub const fn from_code(code: u8) -> Self {
-        match code {
-            1 => DataId::Attitude,
-            n => DataId::Unknown(n),
-        }
-    }
-
-    /// The code on the wire.
-    pub const fn code(self) -> u8 {
-        match self {
-            DataId::Attitude => 1,
-            DataId::Unknown(n) => n,
-        }
+enum_with_unknown! {
+    /// What the postback's Data_id says the message carries; another Data_id (newer
+    /// firmware) is decoded at the same offsets.
+    #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    pub enum DataId {
+        /// 1: gimbal type, tracking, mode and attitude (the only one the document defines).
+        #[default]
+        Attitude = 1,
     }
 }
 

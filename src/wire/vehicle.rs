@@ -56,8 +56,8 @@ impl Gps {
 
     /// A position from degrees: latitude in [-90, 90], longitude in [-180, 180].
     pub fn new(lat_deg: f64, lon_deg: f64) -> Result<Self, RangeError> {
-        let lat = RangeError::check_f64("latitude", lat_deg, -90.0, 90.0)?;
-        let lon = RangeError::check_f64("longitude", lon_deg, -180.0, 180.0)?;
+        let lat = RangeError::check("latitude", lat_deg, -90.0, 90.0)?;
+        let lon = RangeError::check("longitude", lon_deg, -180.0, 180.0)?;
         // In range, so the scaled values fit an i32 (±1.8e9 < 2^31).
         Ok(Gps {
             lat_e7: round_f64(lat * 1e7) as i32,
@@ -68,8 +68,8 @@ impl Gps {
     /// A position from wire units (1e-7 degree), validated as [`Gps::new`] does; a
     /// rejected value is reported in wire units (`latitude_e7`, `longitude_e7`).
     pub fn from_e7(lat_e7: i32, lon_e7: i32) -> Result<Self, RangeError> {
-        RangeError::check_int("latitude_e7", lat_e7, -900_000_000, 900_000_000)?;
-        RangeError::check_int("longitude_e7", lon_e7, -1_800_000_000, 1_800_000_000)?;
+        RangeError::check("latitude_e7", lat_e7, -900_000_000, 900_000_000)?;
+        RangeError::check("longitude_e7", lon_e7, -1_800_000_000, 1_800_000_000)?;
         Ok(Gps { lat_e7, lon_e7 })
     }
 
@@ -111,7 +111,7 @@ impl Altitude {
 
     /// An altitude from metres, within what an i32 of centimetres holds.
     pub fn new(metres: f64) -> Result<Self, RangeError> {
-        let m = RangeError::check_f64("altitude", metres, Self::MIN_M, Self::MAX_M)?;
+        let m = RangeError::check("altitude", metres, Self::MIN_M, Self::MAX_M)?;
         let cm = round_f64(m * 100.0);
         // Rounding at the very edge could step past i32; reject rather than saturate.
         if cm < f64::from(i32::MIN) || cm > f64::from(i32::MAX) {
@@ -163,8 +163,8 @@ impl Attitude {
     /// An attitude from degrees: pitch in [-90, 90], roll in [-180, 180], heading any finite
     /// value (normalised into [-180, 180) for the wire).
     pub fn new(pitch_deg: f32, roll_deg: f32, heading_deg: f32) -> Result<Self, RangeError> {
-        let pitch = RangeError::check_f32("vehicle_pitch", pitch_deg, -90.0, 90.0)?;
-        let roll = RangeError::check_f32("vehicle_roll", roll_deg, -180.0, 180.0)?;
+        let pitch = RangeError::check("vehicle_pitch", pitch_deg, -90.0, 90.0)?;
+        let roll = RangeError::check("vehicle_roll", roll_deg, -180.0, 180.0)?;
         if !heading_deg.is_finite() {
             return Err(RangeError {
                 field: "vehicle_heading",
@@ -187,9 +187,9 @@ impl Attitude {
     /// the heading must already be in [-18000, 17999]; a rejected value is reported in wire
     /// units (`vehicle_pitch_cdeg`, ...).
     pub fn from_centideg(pitch: i16, roll: i16, heading: i16) -> Result<Self, RangeError> {
-        RangeError::check_int("vehicle_pitch_cdeg", pitch.into(), -9000, 9000)?;
-        RangeError::check_int("vehicle_roll_cdeg", roll.into(), -18000, 18000)?;
-        RangeError::check_int("vehicle_heading_cdeg", heading.into(), -18000, 17999)?;
+        RangeError::check("vehicle_pitch_cdeg", pitch.into(), -9000, 9000)?;
+        RangeError::check("vehicle_roll_cdeg", roll.into(), -18000, 18000)?;
+        RangeError::check("vehicle_heading_cdeg", heading.into(), -18000, 17999)?;
         Ok(Attitude {
             pitch,
             roll,
