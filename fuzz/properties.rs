@@ -5,7 +5,7 @@
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::postback::PostbackAssembler;
 use idu_gimbal::link::serial::SerialLink;
-use idu_gimbal::link::{Config, Event, Link};
+use idu_gimbal::link::{Config, Event, Link, RxId};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, MAX_FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
@@ -107,7 +107,7 @@ pub fn link(data: &[u8]) {
                 received += 1;
             }
             3 => {
-                link.receive_ignored();
+                link.receive(RxId::Other, &[], now);
                 received += 1;
             }
             4 => {

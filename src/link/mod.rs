@@ -56,6 +56,7 @@ pub use event::Event;
 use postback::PostbackAssembler;
 use queue::{Requeued, TxQueue, VehicleSlot};
 use rate::RateHold;
+pub use receive::RxId;
 use vehicle::VehicleSources;
 
 /// Timing of the link. Every field is in milliseconds (at most 65 535) unless it says

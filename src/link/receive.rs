@@ -3,21 +3,39 @@
 
 use super::*;
 
+/// What the CAN controller says of a received frame's identifier.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RxId {
+    /// A data frame with this 29-bit extended ID (a `u32` converts to this).
+    Extended(u32),
+    /// A standard (11-bit) ID or a remote frame: never for this node, only counted.
+    Other,
+}
+
+impl From<u32> for RxId {
+    fn from(id: u32) -> Self {
+        RxId::Extended(id)
+    }
+}
+
 impl<const Q: usize, const T: usize> Link<Q, T> {
-    /// Takes a received frame with a 29-bit extended ID.
+    /// Takes a received frame: the one way in from CAN. `id` is the frame's 29-bit ID (a
+    /// `u32`), or [`RxId::Other`] for a standard-ID or remote frame, which is only
+    /// counted. The drivers take a faster way in for the postback's frames, with the same
+    /// effect.
     #[inline]
-    pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) {
-        if id != ids::POSTBACK {
-            self.receive_ignored();
-            return;
+    pub fn receive(&mut self, id: impl Into<RxId>, data: &[u8], now: Instant) {
+        match id.into() {
+            RxId::Extended(ids::POSTBACK) => self.receive_postback_frame(data, now),
+            _ => self.receive_ignored(),
         }
-        self.receive_postback_frame(data, now);
     }
 
     /// Takes a received data frame whose ID the caller has found to be
     /// [`ids::POSTBACK`]: [`Link::receive`] without the ID check, for a driver that
     /// rejects foreign frames itself before anything else.
-    pub fn receive_postback_frame(&mut self, data: &[u8], now: Instant) {
+    pub(crate) fn receive_postback_frame(&mut self, data: &[u8], now: Instant) {
         match <&[u8; 8]>::try_from(data) {
             Ok(d) => self.receive_postback_u64(now, u64::from_le_bytes(*d)),
             Err(_) => self.assembler.malformed(),
@@ -38,7 +56,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// copy its frame to memory. Out of line: the driver's poll then keeps few registers,
     /// which is what an idle poll pays for.
     #[inline(never)]
-    pub fn receive_postback_u64(&mut self, now: Instant, data: u64) {
+    pub(crate) fn receive_postback_u64(&mut self, now: Instant, data: u64) {
         let held = self.assembler.pending() != 0;
         if self.assembler.push(&data.to_le_bytes(), now) {
             self.complete_postback(now);
@@ -64,7 +82,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Takes a whole postback that arrived in one piece, as on the serial link, where the
     /// stream parser has already checked its header, length byte and CRC. The assembler
     /// (and its counters) is for CAN frames only and is not involved.
-    pub fn receive_postback(&mut self, postback: Postback, now: Instant) {
+    pub(crate) fn receive_postback(&mut self, postback: Postback, now: Instant) {
         // The health deadline follows this postback: earlier than the one the idle fast
         // path knows of when the link was down (none) or `now` is behind the last postback.
         // While the link is up the fast path wakes for the last postback's deadline (the
@@ -82,7 +100,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
 
     /// Counts a received frame that cannot be for this node (a standard ID or a remote
     /// frame); the driver calls it for what it does not pass to [`Link::receive`].
-    pub fn receive_ignored(&mut self) {
+    pub(crate) fn receive_ignored(&mut self) {
         self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
     }
 

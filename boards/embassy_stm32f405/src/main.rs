@@ -45,7 +45,7 @@ use panic_probe as _;
 use static_cell::StaticCell;
 
 use idu_gimbal::interface::CAN_BITRATE;
-use idu_gimbal::link::{Config, Event, Link};
+use idu_gimbal::link::{Config, Event, Link, RxId};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
@@ -118,7 +118,7 @@ fn receive(link: &mut Link, envelope: Envelope, now: Instant) {
     match frame.id() {
         Id::Extended(id) if !frame.header().rtr() => link.receive(id.as_raw(), frame.data(), now),
         // Standard IDs and remote frames are not for this node (the filter passes none).
-        _ => link.receive_ignored(),
+        _ => link.receive(RxId::Other, &[], now),
     }
 }
 
