@@ -2,8 +2,8 @@
 """Writes the fuzz targets' seed corpora from the protocol's own vectors.
 
 Each target's input layout is the one its property in `fuzz/properties.rs` (or
-`fuzz/mavlink_properties.rs`) reads. The vectors: NOTES.md's control frames and its 24-byte
-TCP look-down frame, a postback built field by field as NOTES.md lays it out (CRC-16/MODBUS
+`fuzz/mavlink_properties.rs`) reads. The vectors: the protocol notes' control frames and its 24-byte
+TCP look-down frame, a postback built field by field as the protocol notes lays it out (CRC-16/MODBUS
 low byte first), and MAVLink 2 frames encoded by pymavlink (the autopilot's side).
 
     python3 fuzz/seeds.py            # writes fuzz/seeds/<target>/*, then run cargo fuzz cmin
@@ -29,7 +29,7 @@ def crc16_modbus(data):
     return crc
 
 
-# NOTES.md, "Control frame": the document's own examples, and a few more commands.
+# the protocol notes, "Control frame": the document's own examples, and a few more commands.
 CONTROL = {
     "left_5dps": "0F 04 0C FE 00 00 00 00",
     "up_5dps": "0F 04 00 00 F4 01 00 00",
@@ -45,7 +45,7 @@ CONTROL = {
 }
 CONTROL = {k: bytes.fromhex(v) for k, v in CONTROL.items()}
 
-# NOTES.md, "TCP / serial frame": look down 90 degrees.
+# the protocol notes, "TCP / serial frame": look down 90 degrees.
 TCP_LOOK_DOWN = bytes.fromhex("EB 90 0A 00 00 00 00 00 00 00 00 00 40 88 0F 07 00 00 00 00 00 00 68 5E")
 
 
@@ -55,7 +55,7 @@ def control_frame(data):
 
 
 def postback(gimbal_type=1, tracking=0, mode=3, pitch=-4500, heading=27000, motor=4500):
-    """The 27-byte postback of NOTES.md's table, CRC over bytes 0..=24, low byte first."""
+    """The 27-byte postback of the protocol notes' table, CRC over bytes 0..=24, low byte first."""
     body = bytes([0xEB, 0x90, 0x0C]) + bytes(9) + bytes([0x21, 0xFE, 0x0F, 0x01])
     body += bytes([gimbal_type, tracking, mode]) + struct.pack("<hHh", pitch, heading, motor)
     return body + struct.pack("<H", crc16_modbus(body))

@@ -70,7 +70,7 @@ pub const RTSP_PORT: u16 = 554;
 pub const UART_BAUD: u32 = 115_200;
 
 /// UART data bits. The document gives only the baud rate; the project's notes on it
-/// (`NOTES.md`, "TCP / serial frame") fix the format as 8N1.
+/// (`docs/protocol-notes.md`, "TCP / serial frame") fix the format as 8N1.
 pub const UART_DATA_BITS: u8 = 8;
 
 /// UART parity: none (8N1; see [`UART_DATA_BITS`]).

@@ -1,7 +1,7 @@
 //! A simulated gimbal: frames in, postbacks out, time passed in.
 //!
 //! [`Simulator`] behaves like the real unit as far as the protocol document (and
-//! `NOTES.md`) describe it, and makes a documented choice wherever they are silent. It is
+//! the protocol notes) describe it, and makes a documented choice wherever they are silent. It is
 //! `no_std`, allocates nothing, never panics and does no I/O: the caller hands it every
 //! received frame with [`Simulator::receive`], calls [`Simulator::poll`] regularly (every
 //! 10 ms is plenty), and transmits what [`Simulator::pop_frame`] gives back. The same code

@@ -191,7 +191,7 @@ static void checks(void)
 {
     static u8 check[] = "123456789";
     if (crc_fly16(check, 9) != 0x4B37) fail("crc_fly16(\"123456789\") != 0x4B37");
-    /* NOTES.md's TCP reference vector (look down 90 deg): CRC 0x5E68, sent 68 5E. */
+    /* the protocol notes' TCP reference vector (look down 90 deg): CRC 0x5E68, sent 68 5E. */
     static u8 tcp[24] = {0xEB, 0x90, 0x0A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0x88,
                          0x0F, 0x07, 0, 0, 0, 0, 0, 0, 0x68, 0x5E};
     if (crc_fly16(tcp, 22) != (tcp[22] | tcp[23] << 8)) fail("TCP reference vector CRC");

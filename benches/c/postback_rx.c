@@ -1,5 +1,5 @@
 /* The postback receive path as an integrator would write it from the vendor document
- * (gimbal-can-protocol-v1.1 section 2.2; CRC low byte first, see shared/spec/NOTES.md).
+ * (gimbal-can-protocol-v1.1 section 2.2; CRC low byte first, see shared/spec/the protocol notes).
  * Deliberately plain: no gap bound, no counters, no checks beyond the header and the CRC. */
 #include <string.h>
 #include "postback_rx.h"

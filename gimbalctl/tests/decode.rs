@@ -1,5 +1,5 @@
 //! `gimbalctl decode`: the three log forms, corruption, loss and foreign frames, `--stats`
-//! counts and `--stream`. Postbacks are built in the test from NOTES.md's table with a
+//! counts and `--stream`. Postbacks are built in the test from the protocol notes' table with a
 //! reference CRC.
 
 mod common;

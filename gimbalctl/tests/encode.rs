@@ -1,5 +1,5 @@
 //! `gimbalctl encode`: golden frames for every COMMAND, written by hand from the vendor
-//! document and NOTES.md (never from the tool's own output), `--tcp` frames checked with
+//! document and the protocol notes (never from the tool's own output), `--tcp` frames checked with
 //! a reference CRC, and `encode | decode` round trips.
 
 mod common;
@@ -15,10 +15,10 @@ const GOLDEN: &[(&str, &[&str])] = &[
     ("point-zoom -1234 10000", &["00000F01#0F012EFB10270000"]),
     ("point-zoom -10000 -10000", &["00000F01#0F01F0D8F0D80000"]),
     ("point-zoom 0 0", &["00000F01#0F01000000000000"]),
-    // NOTES.md: nose-following = 0F 02 00 00 00 00 00 00.
+    // the protocol notes: nose-following = 0F 02 00 00 00 00 00 00.
     ("follow", &["00000F01#0F02000000000000"]),
     ("center", &["00000F01#0F03000000000000"]),
-    // NOTES.md: left 5 deg/s = 0F 04 0C FE ..; up 5 deg/s = 0F 04 00 00 F4 01 ..
+    // the protocol notes: left 5 deg/s = 0F 04 0C FE ..; up 5 deg/s = 0F 04 00 00 F4 01 ..
     ("rate -5 0", &["00000F01#0F040CFE00000000"]),
     ("rate 0 5", &["00000F01#0F040000F4010000"]),
     // 100 deg/s = 10000 = 0x2710; -100 = 0xD8F0; 0.016 deg/s = 1.6 -> 2, -0.016 -> -2 = 0xFFFE.
@@ -30,30 +30,30 @@ const GOLDEN: &[(&str, &[&str])] = &[
     // 24/16 = 1.5 rounds to 2; 8/16 = 0.5 rounds to 1.
     ("track 1 2 24 8", &["00000F01#0F05010002000201"]),
     ("track-stop", &["00000F01#0F06000000000000"]),
-    // NOTES.md's TCP reference vector carries 0F 07.
+    // the protocol notes' TCP reference vector carries 0F 07.
     ("look-down", &["00000F01#0F07000000000000"]),
-    // NOTES.md: heading 45 = 0F 08 01 C2 01; 360 = 3600 = 0x0E10; 45.06 -> 450.6 -> 451.
+    // the protocol notes: heading 45 = 0F 08 01 C2 01; 360 = 3600 = 0x0E10; 45.06 -> 450.6 -> 451.
     ("heading 45", &["00000F01#0F0801C201000000"]),
     ("heading 360", &["00000F01#0F0801100E000000"]),
     ("heading 0", &["00000F01#0F08010000000000"]),
     ("heading 45.06", &["00000F01#0F0801C301000000"]),
     ("heading 45.04", &["00000F01#0F0801C201000000"]),
-    // NOTES.md: pitch -45 = 0F 08 02 3E FE; 60 = 600 = 0x0258; -100 = -1000 = 0xFC18.
+    // the protocol notes: pitch -45 = 0F 08 02 3E FE; 60 = 600 = 0x0258; -100 = -1000 = 0xFC18.
     ("pitch -45", &["00000F01#0F08023EFE000000"]),
     ("pitch 60", &["00000F01#0F08025802000000"]),
     ("pitch -100", &["00000F01#0F080218FC000000"]),
     ("pitch -30", &["00000F01#0F0802D4FE000000"]),
-    // NOTES.md: zoom 10x = 0F 08 03 E8 03; 1x = 100 = 0x64; 35x = 3500 = 0x0DAC.
+    // the protocol notes: zoom 10x = 0F 08 03 E8 03; 1x = 100 = 0x64; 35x = 3500 = 0x0DAC.
     ("zoom-to 10", &["00000F01#0F0803E803000000"]),
     ("zoom-to 1", &["00000F01#0F08036400000000"]),
     ("zoom-to 35", &["00000F01#0F0803AC0D000000"]),
-    // NOTES.md: single shot = 0F 10 01; modes 2..=5 with the count or seconds in DATA2.
+    // the protocol notes: single shot = 0F 10 01; modes 2..=5 with the count or seconds in DATA2.
     ("photo single", &["00000F01#0F10010000000000"]),
     ("photo burst 3", &["00000F01#0F10020300000000"]),
     ("photo timelapse 255", &["00000F01#0F1003FF00000000"]),
     ("photo timer 10", &["00000F01#0F10040A00000000"]),
     ("photo stop", &["00000F01#0F10050000000000"]),
-    // NOTES.md: start recording = 0F 11 01.
+    // the protocol notes: start recording = 0F 11 01.
     ("record start", &["00000F01#0F11010000000000"]),
     ("record stop", &["00000F01#0F11020000000000"]),
     ("zoom in", &["00000F01#0F12010000000000"]),
@@ -66,14 +66,14 @@ const GOLDEN: &[(&str, &[&str])] = &[
     ("focus minus", &["00000F01#0F13020000000000"]),
     ("focus stop", &["00000F01#0F13030000000000"]),
     ("focus auto", &["00000F01#0F13040000000000"]),
-    // 0F 14: x 4096 = 0x1000, y 100 = 0x64; DATA5 = DATA6 = 25 = 0x19 (NOTES.md).
+    // 0F 14: x 4096 = 0x1000, y 100 = 0x64; DATA5 = DATA6 = 25 = 0x19 (the protocol notes).
     ("focus-at 4096 100", &["00000F01#0F14001064001919"]),
     ("calibrate", &["00000F01#0FF0000000000000"]),
     // Dual-light camera, peripheral 1F: 100 = 0x64, -100 = 0xFF9C.
     ("ir-point-zoom 100 -100", &["00000F01#1F0164009CFF0000"]),
     ("ir-rate -5 0", &["00000F01#1F040CFE00000000"]),
     ("ir-track 4096 8191 160 48", &["00000F01#1F050010FF1F0A03"]),
-    // Stop tracking is 07 on the dual-light camera (NOTES.md).
+    // Stop tracking is 07 on the dual-light camera (the protocol notes).
     ("ir-track-stop", &["00000F01#1F07000000000000"]),
     ("ir-zoom in", &["00000F01#1F12010000000000"]),
     ("ir-zoom out", &["00000F01#1F12020000000000"]),
@@ -105,7 +105,7 @@ const GOLDEN: &[(&str, &[&str])] = &[
     ("altitude 123.45", &["0000FF16#3930000000000000"]),
     ("altitude -10", &["0000FF16#18FCFFFF00000000"]),
     // Attitude: i16 x 100. 150 = 0x0096, -200 = 0xFF38, 270 deg is sent as -90 = -9000
-    // = 0xDCD8 (an i16 cannot hold 360.00; NOTES.md).
+    // = 0xDCD8 (an i16 cannot hold 360.00; the protocol notes).
     ("attitude 1.5 -2 270", &["0000FF13#960038FFD8DC0000"]),
     ("attitude 0 0 0", &["0000FF13#0000000000000000"]),
     // Text: 8 ASCII bytes a frame, last on 02008202 padded with 00; "HELLO, G" =
@@ -216,7 +216,7 @@ fn golden_can_frames() {
 
 #[test]
 fn golden_tcp_frames() {
-    // NOTES.md's reference vector, byte for byte.
+    // the protocol notes' reference vector, byte for byte.
     let out = ok(&["encode", "--tcp", "look-down"]);
     assert_eq!(
         out.stdout,
@@ -225,7 +225,7 @@ fn golden_tcp_frames() {
     );
     // The flag may also follow the command.
     assert_eq!(ok(&["encode", "look-down", "--tcp"]).stdout, out.stdout);
-    // The reference CRC agrees with NOTES.md's check value and the TCP example.
+    // The reference CRC agrees with the protocol notes' check value and the TCP example.
     assert_eq!(crc16_modbus(b"123456789"), 0x4B37);
     assert_eq!(
         hex(&tcp_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0])),

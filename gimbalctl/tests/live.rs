@@ -52,7 +52,7 @@ fn next_object(rx: &Receiver<String>, after: &str) -> serde_json::Value {
 #[test]
 fn decode_writes_each_object_before_the_next_line_comes() {
     let (mut child, mut stdin, rx) = spawn(&["decode"]);
-    // Pitch -1..-5 deg: 0F 08 02 then the angle in 0.1 deg, little-endian (NOTES.md).
+    // Pitch -1..-5 deg: 0F 08 02 then the angle in 0.1 deg, little-endian (the protocol notes).
     for deg in 1..=5i16 {
         let [lo, hi] = (-deg * 10).to_le_bytes();
         let line = format!("00000F01#0F0802{lo:02X}{hi:02X}000000\n");

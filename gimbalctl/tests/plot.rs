@@ -3,7 +3,7 @@
 //! fault markers at the injected times (pixels mapped back to seconds through the tick
 //! labels). Plus a golden picture, reviewed by eye and committed.
 //!
-//! The log is built here from the spec (NOTES.md's frame layouts, through the reference
+//! The log is built here from the spec (the protocol notes' frame layouts, through the reference
 //! helpers in `common`), not with the tool or the library.
 
 mod common;

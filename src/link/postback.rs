@@ -512,7 +512,7 @@ mod tests {
     /// different messages, duplicates and garbage passes it by chance once in 65 536. Found
     /// by the fault proptest below: after message A, message B arrives as B0 B0 G B1 B2 B3
     /// (a duplicated header, a garbage frame G); the window B0 B0 G B1 has CRC 0x0000 and
-    /// carries 0x0000. NOTES.md makes the CRC the arbiter (the length byte, C_ID and the like
+    /// carries 0x0000. the protocol notes makes the CRC the arbiter (the length byte, C_ID and the like
     /// may differ on newer firmware), so the assembler delivers it: documented here rather
     /// than hidden behind checks the document does not support.
     #[test]

@@ -11,7 +11,7 @@
 //!   (the port was not ready), so a command queued meanwhile with a higher priority still
 //!   goes first.
 //! - **In**: bytes in any split go through a [`StreamParser`]; each postback is taken in its
-//!   27-byte stream form (header, length byte `0x0C`, CRC), as `NOTES.md` assumes: the
+//!   27-byte stream form (header, length byte `0x0C`, CRC), as the protocol notes assumes: the
 //!   vendor document does not show the postback on the stream. Garbage is skipped and
 //!   counted.
 //!

@@ -14,7 +14,7 @@
 //!
 //! let t0 = Instant::from_millis(0);
 //! let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t0);
-//! // Look down 90°, NOTES.md's serial vector, split in two.
+//! // Look down 90°, the protocol notes' serial vector, split in two.
 //! let frame = control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
 //! sim.receive(&frame[..7], t0);
 //! sim.receive(&frame[7..], t0);

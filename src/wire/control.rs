@@ -61,7 +61,7 @@
 //!   round half away from zero to the nearest wire unit, e.g. `Pitch::new(-45.04)` is
 //!   −450 deci-degrees. The range check is on the physical value, before rounding:
 //!   `Pitch::new(60.04)` is rejected although it would round to 600, the bound.
-//! - The zoom ratio accepts [1, 35]: most models stop at 30, some go to 35 (NOTES.md).
+//! - The zoom ratio accepts [1, 35]: most models stop at 30, some go to 35 (the protocol notes).
 //! - Tracking box DATA5 ("length (X)") is the box width, DATA6 ("width (Y)") its height,
 //!   each in image units divided by 16.
 //! - Decoding is strict, so that decoding then encoding gives back the same bytes: the
@@ -1320,7 +1320,7 @@ mod tests {
 
     #[test]
     fn notes_vectors() {
-        // NOTES.md / section 2.2.1 of the document, byte for byte.
+        // the protocol notes / section 2.2.1 of the document, byte for byte.
         assert_vector(
             g(GimbalCommand::Rate(Rate::new(-5.0, 0.0).unwrap())),
             [0x0F, 0x04, 0x0C, 0xFE, 0x00, 0x00, 0x00, 0x00],
@@ -1353,7 +1353,7 @@ mod tests {
             g(GimbalCommand::NoseFollowing),
             [0x0F, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00],
         );
-        // The look-down frame inside NOTES.md's TCP reference vector.
+        // The look-down frame inside the protocol notes' TCP reference vector.
         assert_vector(
             g(GimbalCommand::LookDown),
             [0x0F, 0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00],

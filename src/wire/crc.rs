@@ -2,7 +2,7 @@
 //!
 //! Reflected polynomial 0xA001 (0x8005), initial value 0xFFFF, no final xor; the check
 //! value over ASCII `123456789` is `0x4B37`. On the wire the CRC is sent low byte first
-//! (NOTES.md: the document's TCP example ends in `68 5E` and the CRC of its first 22 bytes
+//! (the protocol notes: the document's TCP example ends in `68 5E` and the CRC of its first 22 bytes
 //! is `0x5E68`).
 //!
 //! The document computes it with a 16-entry (nibble) table. This crate uses a 256-entry
@@ -143,7 +143,7 @@ pub(crate) mod tests {
 
     #[test]
     fn tcp_example_from_notes() {
-        // NOTES.md reference vector: look down 90 degrees over TCP.
+        // the protocol notes reference vector: look down 90 degrees over TCP.
         let frame = [
             0xEB, 0x90, 0x0A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0x88, 0x0F, 0x07, 0, 0, 0, 0, 0, 0,
             0x68, 0x5E,

@@ -3,6 +3,11 @@
 //! One module per protocol concept. Constructors validate physical units once, so a value
 //! that exists is valid and encoding it cannot fail; decoding returns typed values, with
 //! `Unknown(n)` for enum bytes that newer firmware may send.
+//!
+//! "The document" in these docs is the vendor's CAN protocol document (V-1.1), cited by
+//! section; "the protocol notes" are the repository's `docs/protocol-notes.md`, which
+//! record how each of its typos and gaps is resolved, and why. Tests take their vectors
+//! from both.
 
 use core::fmt;
 

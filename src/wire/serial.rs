@@ -19,7 +19,7 @@
 //!
 //! ```
 //! use idu_gimbal::wire::serial::{self, StreamItem, StreamParser};
-//! // Look down 90°, NOTES.md's reference vector.
+//! // Look down 90°, the protocol notes' reference vector.
 //! let frame = serial::control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0]);
 //! assert_eq!(&frame[20..], &[0x00, 0x00, 0x68, 0x5E]);
 //! let mut parser = StreamParser::new();
@@ -341,7 +341,7 @@ mod tests {
     use crate::wire::postback::tests::{arb_postback, sample};
     use proptest::prelude::*;
 
-    /// NOTES.md: look down 90° over TCP, 24 bytes.
+    /// the protocol notes: look down 90° over TCP, 24 bytes.
     const LOOK_DOWN: [u8; 24] = [
         0xEB, 0x90, 0x0A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0x88, 0x0F, 0x07, 0, 0, 0, 0, 0, 0,
         0x68, 0x5E,

@@ -146,7 +146,7 @@ pub fn unhex(s: &str) -> Vec<u8> {
         .collect()
 }
 
-/// NOTES.md's 24-byte serial/TCP frame around 8 CAN data bytes: `EB 90 0A`, nine `00`,
+/// the protocol notes' 24-byte serial/TCP frame around 8 CAN data bytes: `EB 90 0A`, nine `00`,
 /// `40 88`, the data, CRC-16/MODBUS over bytes 0..=21, low byte first.
 pub fn tcp_frame(can_data: &[u8]) -> Vec<u8> {
     assert_eq!(can_data.len(), 8);
@@ -159,7 +159,7 @@ pub fn tcp_frame(can_data: &[u8]) -> Vec<u8> {
     f
 }
 
-/// A postback message per NOTES.md's table: 27 bytes (the stream form).
+/// A postback message per the protocol notes' table: 27 bytes (the stream form).
 pub fn postback(
     gimbal_type: u8,
     tracking: u8,
