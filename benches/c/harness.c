@@ -301,7 +301,7 @@ int main(void)
     int64_t crc_short = per_op(64, run_crc256);
     int64_t crc25 = per_op(256, run_crc25);
 
-    put("\n| measurement (guest instructions) | C, measured | issue 7 reference |\n"
+    put("\n| measurement (guest instructions) | C, measured | published reference |\n"
         "|---|---:|---:|\n");
     flush();
     row("per received postback frame, amortized", message / 4, "97.5");

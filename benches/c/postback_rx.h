@@ -1,5 +1,5 @@
 /* Postback receive path and angle command, written the straightforward way from the vendor
- * document (gimbal-can-protocol-v1.1, section 2.2). The C anchor of issue 7. */
+ * document (gimbal-can-protocol-v1.1, section 2.2). The C reference receive path. */
 #ifndef POSTBACK_RX_H
 #define POSTBACK_RX_H
 

@@ -1,5 +1,5 @@
 #!/bin/bash
-# The C anchor of issue 7: builds postback_rx.c + the harness with arm-none-eabi-gcc 12.2 and
+# The C reference receive path: builds postback_rx.c + the harness with arm-none-eabi-gcc 12.2 and
 # measures it on QEMU netduinoplus2 with -icount shift=0 (see README.md). Prints a Markdown
 # table; exit 0 when the build, the run and every correctness check succeed.
 #
@@ -30,10 +30,10 @@ CC=arm-none-eabi-gcc
 echo "$($CC --version | head -1); $(qemu-system-arm --version | head -1)" >&2
 case "$($CC -dumpversion)" in
     12.2*) ;;
-    *) echo "warning: issue 7's anchor is arm-none-eabi-gcc 12.2, this is $($CC -dumpversion)" >&2 ;;
+    *) echo "warning: the reference figures were measured with arm-none-eabi-gcc 12.2, this is $($CC -dumpversion)" >&2 ;;
 esac
 
-# postback_rx.c, the code under test, gets exactly issue 7's flags (the warning flags change
+# postback_rx.c, the code under test, gets exactly the reference figures' flags (the warning flags change
 # no code). The harness and startup code add -ffreestanding. Not for postback_rx.c: it implies
 # -fno-builtin, which would turn its fixed-size memcpy into a call to newlib-nano's byte loop.
 ANCHOR_FLAGS=(-O2 -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16)

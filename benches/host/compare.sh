@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Host decode benchmark (issue 7, "Host"): `gimbalctl decode` against
+# Host decode benchmark: `gimbalctl decode` against
 # `python3 -m cantools decode` (cantools 45, benches/host/gimbal.dbc) on the same generated
 # `candump -L` log, in the same run.
 #
