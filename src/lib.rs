@@ -91,9 +91,12 @@ pub mod wire;
 pub use control::{GimbalControl, Transport};
 pub use driver::{Blocking, Gimbal, SerialGimbal};
 
-// The README's examples are compiled and run as doctests.
+// The README's and the integration guide's examples are compiled and run as doctests.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
+#[cfg(doctest)]
+#[doc = include_str!("../docs/integration.md")]
+pub struct IntegrationDoctests;
 pub use link::{Config, Event};
 pub use time::Instant;
