@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """End-to-end test of `gimbalctl mavlink --sim` with pymavlink playing the autopilot and a
-ground station, in three sessions, each against a fresh bridge:
+ground station: two sessions, each against a fresh bridge, with the reader beside each:
 
 - PX4 on a port in mode Normal (PX4 src/modules/mavlink/mavlink_main.cpp, configure_streams):
   no AUTOPILOT_STATE_FOR_GIMBAL_DEVICE until the gimbal asks for it (it is streamed only in
