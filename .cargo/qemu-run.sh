@@ -1,6 +1,7 @@
 #!/bin/sh
-# Cargo runner for thumbv7em-none-eabihf (see .cargo/config.toml): `cargo run --target
-# thumbv7em-none-eabihf --example NAME` ends up here with the ELF as "$1".
+# Cargo runner for thumbv7em-none-eabihf (see .cargo/config.toml): `cargo run --bin NAME` in
+# boards/stm32f405_qemu or benches/mcu (or an alias from the root) ends up here with the ELF
+# as "$1".
 #
 #   qemu_demo   QEMU netduinoplus2 (STM32F405), semihosting on; QEMU's exit code is the
 #               firmware's (semihosting SYS_EXIT: 0 on success, 1 on failure).
@@ -31,7 +32,8 @@ case "$name" in
     qemu_*) qemu ;;
     stm32f405*)
         if ! command -v probe-rs >/dev/null 2>&1; then
-            echo "probe-rs not found: `cargo install probe-rs-tools` to flash a board; built ELF: $elf" >&2
+            # Single-quoted: in double quotes the backticks would run the install.
+            echo 'probe-rs not found: run `cargo install probe-rs-tools` to flash a board; built ELF:' "$elf" >&2
             exit 127
         fi
         exec probe-rs run --chip STM32F405RGTx "$elf" "$@"

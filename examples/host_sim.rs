@@ -6,9 +6,6 @@
 //! cargo run --example host_sim --features mock,std
 //! ```
 
-#[path = "common/session.rs"]
-mod session;
-
 struct Stdout;
 
 impl core::fmt::Write for Stdout {
@@ -19,8 +16,9 @@ impl core::fmt::Write for Stdout {
 }
 
 fn main() {
+    // The session the QEMU demo (boards/stm32f405_qemu) plays too.
+    use idu_firmware_support::session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
     use idu_gimbal::Instant;
-    use session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
 
     let bus = DemoBus::new(42);
     let can = CanRig::new(&bus, Instant::from_millis(0))

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Deterministic cost benchmarks on an emulated STM32F405: guest instructions counted under
-# QEMU `-icount shift=0` (examples/qemu_bench.rs), then the flash cost of each CRC variant
-# (nm) and the driver's flash and static RAM (scripts/size-report.sh). Built with the pinned
-# toolchain BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
+# QEMU `-icount shift=0` (benches/mcu: qemu_bench, qemu_bench_mavlink), then the flash cost of
+# each CRC variant (nm) and the driver's flash and static RAM (scripts/size-report.sh). Built
+# with the pinned toolchain BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are
+# measured with.
 #
 # Exit status 1 if a budget is exceeded. Installs the bench toolchain, the target,
 # qemu-system-arm and the ARM binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds
@@ -74,13 +75,13 @@ ensure_binutils
 
 echo "bench toolchain: $(rustc "+$BENCH_TOOLCHAIN" --version)"
 status=0
-cargo "+$BENCH_TOOLCHAIN" run --release --target "$TARGET" --example qemu_bench || status=$?
+firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" run --release --locked --bin qemu_bench || status=$?
 echo
-cargo "+$BENCH_TOOLCHAIN" run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_bench_mavlink || status=$?
+firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" run --release --locked --bin qemu_bench_mavlink || status=$?
 
 echo
 echo "Flash cost of the CRC variants (bytes; arm-none-eabi-nm --size-sort, qemu_bench build):"
-elf=$(example_elf qemu_bench)
+elf=$(firmware_elf qemu_bench)
 arm-none-eabi-nm -C --size-sort -S -t d "$elf" |
     awk '/crcs::bench_crc|crcs::NIBBLE|crcs::CRC_CRATE|wire::crc::TABLE|wire::crc::update/ {
         printf "  %6d  %s %s\n", $2 + 0, $3, substr($0, index($0, $4)) }'

@@ -7,8 +7,11 @@
 #
 # Generic: a new boards/<name>/ is picked up with nothing to add here. The Rust target of
 # each crate comes from `target = "…"` under [build] in its .cargo/config.toml and is
-# installed with rustup when missing. All crates share one target directory (target/boards;
-# BOARDS_TARGET_DIR overrides it), so dependencies they have in common build once per target.
+# installed with rustup when missing. A crate without a `[workspace]` of its own belongs to the
+# root workspace (boards/support, the library the boards share) and is checked with it, by the
+# fast stage of scripts/test.sh. All crates share one target directory (target/boards,
+# scripts/firmware-env.sh; BOARDS_TARGET_DIR overrides it), so dependencies they have in
+# common build once per target.
 #
 # Exits non-zero when any crate fails to build, rustfmt or clippy, or when its lock file is out
 # of date (--locked); every crate is still tried and the failures are listed at the end.
@@ -19,7 +22,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 . scripts/firmware-env.sh
 
-export CARGO_TARGET_DIR="${BOARDS_TARGET_DIR:-$PWD/target/boards}"
+export CARGO_TARGET_DIR="${BOARDS_TARGET_DIR:-$FIRMWARE_TARGET_DIR}"
 start=$SECONDS
 
 # The size tool: llvm-size reads every target's ELF (Debian package `llvm`); failing that,
@@ -54,6 +57,7 @@ boards=()
 for dir in boards/*/; do
     dir=${dir%/}
     [ -f "$dir/Cargo.toml" ] || continue
+    grep -q '^\[workspace\]' "$dir/Cargo.toml" || continue
     if [ ${#selected[@]} -gt 0 ] && ! printf '%s\n' "${selected[@]}" | grep -qx "$(basename "$dir")"; then
         continue
     fi

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The firmware on an emulated STM32F405 (QEMU netduinoplus2) driving a simulated gimbal over
-# an in-memory CAN bus: a scripted session with telemetry. Exit status 0 only if every step's
+# The firmware on an emulated STM32F405 (QEMU netduinoplus2; `qemu_demo` of
+# boards/stm32f405_qemu) driving a simulated gimbal over an in-memory CAN bus: a scripted session with telemetry. Exit status 0 only if every step's
 # effect was seen in the postbacks.
 #
 # Works on a fresh machine with Rust: installs the thumbv7em-none-eabihf target and
@@ -11,4 +11,4 @@ cd "$(dirname "$0")/.."
 
 ensure_target
 ensure_qemu
-exec cargo run --release --target "$TARGET" --example qemu_demo
+firmware_cargo boards/stm32f405_qemu run --release --locked --bin qemu_demo

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The firmware stage of the test suite (`scripts/test.sh firmware`):
-#   1. the QEMU demo sessions must pass (exit 0): the core's, and the MAVLink bridge's;
-#   2. the STM32F405 firmware, CAN, UART and MAVLink bridge, builds in release mode (sizes
-#      printed);
-#   3. every board crate under boards/ (RP2040, ESP32-C3, STM32H743, embassy, …) builds in
-#      release mode and is clippy-clean (scripts/boards.sh; sizes printed);
+#   1. the QEMU demo sessions must pass (exit 0): the core's, and the MAVLink bridge's
+#      (boards/stm32f405_qemu);
+#   2. the STM32F405 firmware, CAN, UART and MAVLink bridge (boards/stm32f405), builds in
+#      release mode (sizes printed);
+#   3. every board crate under boards/ (STM32F405, RP2040, ESP32-C3, STM32H743, embassy, …)
+#      builds in release mode and is rustfmt- and clippy-clean (scripts/boards.sh; sizes
+#      printed), and so are the MCU benchmarks (benches/mcu);
 #   4. the embassy firmware's scripted session passes on QEMU (boards/embassy_qemu/run.sh).
 #
 # The budgets (instruction counts, sizes) are the bench stage's: scripts/bench.sh. Every
@@ -21,15 +23,19 @@ echo "--- firmware: QEMU demo session"
 scripts/demo.sh
 
 echo "--- firmware: the MAVLink bridge's QEMU session (scripted autopilot, bridge, CAN, simulated gimbal)"
-cargo run --release --target "$TARGET" -p idu-gimbal-mavlink --example qemu_mavlink
+firmware_cargo boards/stm32f405_qemu run --release --locked --bin qemu_mavlink
 
 echo "--- firmware: STM32F405 release builds (CAN, UART, MAVLink bridge)"
-cargo build --release --target "$TARGET" --example stm32f405 --example stm32f405_uart
-cargo build --release --target "$TARGET" -p idu-gimbal-mavlink --example stm32f405_mavlink
-arm-none-eabi-size "$(example_elf stm32f405)" "$(example_elf stm32f405_uart)" "$(example_elf stm32f405_mavlink)"
+firmware_cargo boards/stm32f405 build --release --locked
+arm-none-eabi-size "$(firmware_elf stm32f405)" "$(firmware_elf stm32f405_uart)" "$(firmware_elf stm32f405_mavlink)"
 
 echo "--- firmware: board crates (boards/*: release builds, clippy, sizes)"
 scripts/boards.sh
 
+echo "--- firmware: the MCU benchmarks (benches/mcu: release build, rustfmt, clippy; run by the bench stage)"
+firmware_cargo benches/mcu build --release --locked
+firmware_cargo benches/mcu fmt --check
+firmware_cargo benches/mcu clippy --release --locked -- -D warnings
+
 echo "--- firmware: embassy on QEMU (boards/embassy_qemu: the async link task, the scripted session)"
-CARGO_TARGET_DIR="$PWD/target/boards" boards/embassy_qemu/run.sh
+CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR" boards/embassy_qemu/run.sh

@@ -1,9 +1,12 @@
-# Sourced by the firmware scripts (demo.sh, bench.sh, size-report.sh, firmware-checks.sh).
-# Installs what they need when it is missing: the thumbv7em-none-eabihf Rust target,
-# qemu-system-arm and the ARM binutils (Debian packages, through apt-get; sudo only when not
-# root). Nothing is downloaded when everything is already there.
+# Sourced by the firmware scripts (demo.sh, bench.sh, size-report.sh, firmware-checks.sh,
+# boards.sh). Installs what they need when it is missing: the thumbv7em-none-eabihf Rust
+# target, qemu-system-arm and the ARM binutils (Debian packages, through apt-get; sudo only
+# when not root). Nothing is downloaded when everything is already there.
 
 TARGET=thumbv7em-none-eabihf
+# Every firmware crate (boards/*, benches/mcu) is a workspace of its own; they all build in
+# this one target directory, so the dependencies they share build once.
+FIRMWARE_TARGET_DIR="${FIRMWARE_TARGET_DIR:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/target/boards}"
 # Every QEMU run is bounded (seconds); the cargo runner (.cargo/qemu-run.sh) applies it.
 export QEMU_TIMEOUT="${QEMU_TIMEOUT:-120}"
 
@@ -72,7 +75,15 @@ ensure_bench_toolchain() {
     fi
 }
 
-# The path of a release example ELF for the target.
-example_elf() {
-    echo "target/$TARGET/release/examples/$1"
+# `firmware_cargo DIR [+TOOLCHAIN] ARGS…`: cargo in the firmware crate DIR (so that its
+# .cargo/config.toml, which names its target, applies), in the shared target directory.
+firmware_cargo() {
+    local dir=$1
+    shift
+    (cd "$dir" && CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR" cargo "$@")
+}
+
+# The path of a release firmware ELF (a program of any firmware crate) for the target.
+firmware_elf() {
+    echo "$FIRMWARE_TARGET_DIR/$TARGET/release/$1"
 }

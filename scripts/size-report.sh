@@ -1,22 +1,20 @@
 #!/usr/bin/env bash
 # Flash and static RAM of the driver on thumbv7em-none-eabihf (release: opt-level "s", LTO),
-# and of the firmware examples.
+# and of the firmware programs (boards/stm32f405, boards/stm32f405_qemu, benches/mcu).
 #
-# A driver's share is the difference between two builds that differ only by that driver:
-# examples/footprint_driver.rs (a static Gimbal with the default queues, driven with every
-# kind of call) or examples/footprint_serial.rs (the same for SerialGimbal) minus
-# examples/footprint_base.rs (the same skeleton: vector table, panic handler, a CAN driver
-# and a serial port over volatile registers, memcpy/memmove). Flash counts
-# .vector_table + .text + .rodata + .data (initial values live in flash); static RAM counts
-# .data + .bss + .uninit.
+# A driver's share is the difference between two builds that differ only by that driver
+# (benches/mcu/src/bin/): footprint_driver (a static Gimbal with the default queues, driven
+# with every kind of call) or footprint_serial (the same for SerialGimbal) minus
+# footprint_base (the same skeleton: vector table, panic handler, a CAN driver and a serial
+# port over volatile registers, memcpy/memmove). Flash counts .vector_table + .text +
+# .rodata + .data (initial values live in flash); static RAM counts .data + .bss + .uninit.
 #
-# Budgets: issue 7's goals where tighter than issue 4's floors: driver flash <= 6 KiB (issue
-# 4: 8 KiB); static RAM <= 512 B in all (issue 4) and <= 256 B beyond the transmit queue's
-# slots (issue 7). The serial driver is held to the same flash and RAM budgets (issue 14 sets
-# none of its own). The MAVLink bridge (examples/footprint_bridge.rs of idu-gimbal-mavlink: a
-# Bridge with a camera over footprint_driver's driver) is measured against footprint_driver:
-# issue 13's budgets, flash <= 32 KiB and static RAM <= 4 KiB. Exit status 1 when one is
-# exceeded.
+# Budgets: the goals where tighter than the floors: driver flash <= 6 KiB (the floor: 8 KiB);
+# static RAM <= 512 B in all (a floor) and <= 256 B beyond the transmit queue's slots (a
+# goal). The serial driver is held to the same flash and RAM budgets (it has none of its
+# own). The MAVLink bridge (footprint_bridge: a Bridge with a camera over footprint_driver's
+# driver) is measured against footprint_driver: flash <= 32 KiB and static RAM <= 4 KiB. Exit
+# status 1 when one is exceeded.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/firmware-env.sh
@@ -30,16 +28,17 @@ RAM_BEYOND_SLOTS_BUDGET=256
 # The default queues' slots: 8 control frames of 8 bytes, 8 text frames of 9 (8 data bytes
 # and whether the frame ends its text). src/link/queue.rs checks this size in a test.
 TX_SLOTS=136
-# Issue 13: the MAVLink bridge, everything beyond the plain CAN driver.
+# The MAVLink bridge, everything beyond the plain CAN driver.
 BRIDGE_FLASH_BUDGET=32768
 BRIDGE_RAM_BUDGET=4096
 
 ensure_bench_toolchain
-cargo "+$BENCH_TOOLCHAIN" build --release --target "$TARGET" \
-    --example footprint_base --example footprint_driver --example footprint_serial \
-    --example stm32f405 --example stm32f405_uart --example qemu_demo --example qemu_bench
-cargo "+$BENCH_TOOLCHAIN" build --release --target "$TARGET" -p idu-gimbal-mavlink \
-    --example footprint_bridge --example stm32f405_mavlink
+firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" build --release --locked \
+    --bin footprint_base --bin footprint_driver --bin footprint_serial --bin footprint_bridge \
+    --bin qemu_bench
+firmware_cargo boards/stm32f405 "+$BENCH_TOOLCHAIN" build --release --locked \
+    --bin stm32f405 --bin stm32f405_uart --bin stm32f405_mavlink
+firmware_cargo boards/stm32f405_qemu "+$BENCH_TOOLCHAIN" build --release --locked --bin qemu_demo
 
 # "flash ram" of an ELF, from its section sizes.
 sizes() {
@@ -50,28 +49,28 @@ sizes() {
         END { print flash + 0, ram + 0 }'
 }
 
-read -r base_flash base_ram < <(sizes "$(example_elf footprint_base)")
-read -r drv_flash drv_ram < <(sizes "$(example_elf footprint_driver)")
+read -r base_flash base_ram < <(sizes "$(firmware_elf footprint_base)")
+read -r drv_flash drv_ram < <(sizes "$(firmware_elf footprint_driver)")
 flash=$((drv_flash - base_flash))
 ram=$((drv_ram - base_ram))
 beyond=$((ram - TX_SLOTS))
-read -r ser_flash ser_ram < <(sizes "$(example_elf footprint_serial)")
+read -r ser_flash ser_ram < <(sizes "$(firmware_elf footprint_serial)")
 serial_flash=$((ser_flash - base_flash))
 serial_ram=$((ser_ram - base_ram))
-read -r br_flash br_ram < <(sizes "$(example_elf footprint_bridge)")
+read -r br_flash br_ram < <(sizes "$(firmware_elf footprint_bridge)")
 bridge_flash=$((br_flash - drv_flash))
 bridge_ram=$((br_ram - drv_ram))
 
 echo "Firmware images (release, thumbv7em-none-eabihf):"
-printf "  %-18s %8s %8s\n" example "flash B" "RAM B"
+printf "  %-18s %8s %8s\n" program "flash B" "RAM B"
 for ex in stm32f405 stm32f405_uart stm32f405_mavlink qemu_demo qemu_bench footprint_base footprint_driver footprint_serial footprint_bridge; do
-    read -r f r < <(sizes "$(example_elf "$ex")")
+    read -r f r < <(sizes "$(firmware_elf "$ex")")
     printf "  %-18s %8d %8d\n" "$ex" "$f" "$r"
 done
 echo "  (RAM excludes the stack, which cortex-m-rt places at the top of the 128 KiB.)"
 echo
 echo "Largest symbols of the driver build:"
-arm-none-eabi-nm -C --size-sort -S -t d "$(example_elf footprint_driver)" | tail -12 |
+arm-none-eabi-nm -C --size-sort -S -t d "$(firmware_elf footprint_driver)" | tail -12 |
     awk '{ printf "  %6d  %s %s\n", $2 + 0, $3, substr($0, index($0, $4)) }'
 echo
 

@@ -9,7 +9,8 @@
 #             dry-runs, MSRV builds, `cargo test` of the workspace (with and without the
 #             bridge's optional features)
 #   firmware  the QEMU sessions (the core's demo, the MAVLink bridge's, embassy's), the
-#             STM32F405 release builds, the board crates
+#             STM32F405 release builds, the board crates, the MCU benchmarks' build and lints
+#             (benches/mcu)
 #   e2e       real third-party clients against gimbalctl: pymavlink as PX4 and ArduPilot,
 #             MAVSDK's camera plugin; the host simulation session
 #   bench     instruction counts under QEMU -icount and flash/RAM sizes, with the pinned
@@ -52,6 +53,10 @@ stage_fast() {
 
     step "clippy, thumbv7em-none-eabihf, lib and examples"
     cargo clippy --target thumbv7em-none-eabihf --lib --examples -- -D warnings
+
+    step "firmware support library (boards/support): clippy for thumbv7em-none-eabihf, all features"
+    # Its QEMU and meter parts build for bare-metal ARM only, so the host clippy above skips them.
+    cargo clippy -p idu-firmware-support --target thumbv7em-none-eabihf --all-features -- -D warnings
 
     step "library builds for thumbv7em-none-eabihf: no features, defmt, mock, fdcan"
     cargo build --target thumbv7em-none-eabihf --lib

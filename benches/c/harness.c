@@ -1,5 +1,5 @@
 /* Instruction-count benchmark of postback_rx.c on QEMU netduinoplus2 (-icount shift=0),
- * measured the way examples/qemu_bench.rs measures the Rust crate:
+ * measured the way benches/mcu/src/bin/qemu_bench.rs measures the Rust crate:
  *  - SysTick, clocked from the (virtual) 168 MHz core clock, counts the virtual clock, which
  *    -icount shift=0 advances 1 ns per guest instruction; a loop of known length (subs/bne)
  *    timed at 200,000 and 400,000 iterations calibrates instructions per tick (125/21);

@@ -1,6 +1,6 @@
 //! idu-gimbal under embassy on QEMU's `netduinoplus2` (an emulated STM32F405): the sans-IO
 //! [`Link`] driven by an async task, as in `boards/embassy_stm32f405`, against the crate's
-//! simulated gimbal, playing the scripted session of `examples/common/session.rs` in real
+//! simulated gimbal, playing the scripted session of `idu_firmware_support::session` in real
 //! (virtual) embassy time.
 //!
 //! embassy-stm32 cannot boot there (see `boards/embassy_stm32f405/examples/qemu_probe.rs`:
@@ -36,9 +36,6 @@
 #![no_std]
 #![no_main]
 
-// The conversion between embassy-time and the crate's clock, as the STM32F405 board does it.
-#[path = "../../embassy_stm32f405/src/time.rs"]
-mod time;
 mod time_driver;
 
 use core::cell::RefCell;
@@ -59,16 +56,15 @@ use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::Frame;
 use idu_gimbal::Instant;
-use time::{embassy_at, tick};
+// The conversion between embassy-time and the core's clock, as the STM32F405 board does it.
+use idu_firmware_support::embassy::{embassy_at, tick};
 
 // ---- output and exit ----
 
 // Semihosting output (`println!`), `exit`, and the panic and HardFault handlers (status 1):
-// the support the crate's other QEMU firmware uses.
-#[path = "../../../examples/common/qemu.rs"]
-#[macro_use]
-mod qemu;
-use qemu::exit;
+// the support the repository's other QEMU firmware uses.
+use idu_firmware_support::println;
+use idu_firmware_support::qemu::exit;
 
 // ---- what the tasks exchange ----
 
@@ -247,7 +243,7 @@ async fn link_task() {
 
 // ---- the vehicle data ----
 
-/// Stand-in vehicle data at 10 Hz, as `examples/common/session.rs` pushes it: level,
+/// Stand-in vehicle data at 10 Hz, as `idu_firmware_support::session` pushes it: level,
 /// heading 30°, hovering over Zurich at 450 m.
 #[embassy_executor::task]
 async fn vehicle_task() {
@@ -394,7 +390,7 @@ impl Session {
         self.request(Request::Command(command)).await;
     }
 
-    /// Plays the script of `examples/common/session.rs` (its CAN rig); returns the number of
+    /// Plays the script of `idu_firmware_support::session` (its CAN rig); returns the number of
     /// checks that failed.
     async fn play(&mut self) -> u32 {
         println!(

@@ -19,11 +19,6 @@
 #![no_std]
 #![no_main]
 
-mod time;
-/// The stand-in vehicle data shared with the other firmware examples.
-#[path = "../../../examples/common/vehicle.rs"]
-mod vehicle;
-
 use defmt::{info, unwrap, warn};
 use defmt_rtt as _;
 use embassy_executor::Spawner;
@@ -49,8 +44,10 @@ use idu_gimbal::link::{Config, Event, Link, RxId};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
-use time::{embassy_at, tick};
-use vehicle::vehicle_stand_in;
+// Between embassy-time and the core's clock; the stand-in vehicle data shared with the other
+// firmware.
+use idu_firmware_support::embassy::{embassy_at, tick};
+use idu_firmware_support::vehicle::vehicle_stand_in;
 
 bind_interrupts!(struct Irqs {
     CAN1_TX => TxInterruptHandler<CAN1>;
@@ -237,8 +234,8 @@ async fn gimbal_task(
 
 // ---- the vehicle data ----
 
-/// Vehicle data at 10 Hz, from the stand-in the other firmware examples use
-/// (`examples/common/vehicle.rs`: replace it with the autopilot's estimates).
+/// Vehicle data at 10 Hz, from the stand-in the other firmware uses
+/// (`idu_firmware_support::vehicle`: replace it with the autopilot's estimates).
 #[embassy_executor::task]
 async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, VehicleSample, 4>) {
     let mut ticker = embassy_time::Ticker::every(embassy_time::Duration::from_millis(100));
@@ -295,7 +292,7 @@ async fn main(spawner: Spawner) {
         [ListEntry32::data_frames_with_id(POSTBACK); 2],
     );
     // From the CAN clock embassy configured (APB1, 42 MHz): prescaler 6, 7 time quanta a
-    // bit (1 + 5 + 1), sample point 85.7 % (as examples/common/board.rs's 14 quanta).
+    // bit (1 + 5 + 1), sample point 85.7 % (as boards/stm32f405/src/board.rs's 14 quanta).
     can.modify_config()
         .set_bitrate(CAN_BITRATE)
         .set_automatic_retransmit(true);

@@ -40,10 +40,8 @@ use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
 use idu_gimbal::{Config, Gimbal, GimbalControl, Instant};
 
-/// The main loop shared with the other CAN firmware examples.
-#[path = "../../../examples/common/app.rs"]
-mod app;
-use app::App;
+// The main loop shared with the other CAN firmware.
+use idu_firmware_support::app::App;
 
 /// The second-stage bootloader for the Pico's W25Q080 flash (for other flash chips,
 /// `rp2040_boot2::BOOT_LOADER_GENERIC_03H` works with any).
@@ -54,16 +52,14 @@ pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 /// The Pico's crystal.
 const XTAL_FREQ_HZ: u32 = 12_000_000;
 
-/// The stand-in vehicle data (replace with the autopilot's estimates) shared with the other
-/// firmware examples, built from f32 degrees and metres.
-#[path = "../../../examples/common/vehicle.rs"]
-mod vehicle;
+// The stand-in vehicle data (replace with the autopilot's estimates) shared with the other
+// firmware, built from f32 degrees and metres.
 #[cfg(not(feature = "wire-units"))]
-use vehicle::vehicle_stand_in;
+use idu_firmware_support::vehicle::vehicle_stand_in;
 
 /// The same stand-in, built from wire units (1e-7 degree, cm, centi-degree): no floats.
 #[cfg(feature = "wire-units")]
-fn vehicle_stand_in(now: Instant) -> Option<vehicle::Vehicle> {
+fn vehicle_stand_in(now: Instant) -> Option<idu_firmware_support::vehicle::Vehicle> {
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
     let gps = Gps::from_e7(473_977_420, 85_455_940).ok()?;

@@ -36,14 +36,9 @@ use idu_gimbal::driver::fdcan::FdCan;
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
 use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
 
-/// The main loop shared with the other CAN firmware examples.
-#[path = "../../../examples/common/app.rs"]
-mod app;
-use app::{App, Report};
-/// The stand-in vehicle data shared with the other firmware examples.
-#[path = "../../../examples/common/vehicle.rs"]
-mod vehicle;
-use vehicle::vehicle_stand_in;
+// The main loop and the stand-in vehicle data shared with the other CAN firmware.
+use idu_firmware_support::app::{App, Report};
+use idu_firmware_support::vehicle::vehicle_stand_in;
 
 /// The board's crystal.
 const HSE_HZ: u32 = 16_000_000;

@@ -1,0 +1,46 @@
+//! Footprint of the MAVLink bridge: `footprint_driver` (the core's CAN driver, driven with
+//! every kind of call) plus a `Bridge` with a camera in front of it, fed MAVLink bytes from
+//! an opaque serial port and writing back to it. `scripts/size-report.sh` subtracts
+//! `footprint_driver`: what remains is everything the bridge adds beyond the plain CAN
+//! driver. Never run (the runner refuses it); only its size matters.
+#![no_std]
+#![no_main]
+
+// A module of each program, not a library: see its header.
+#[path = "../footprint.rs"]
+mod footprint;
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    use footprint::{input, output, RegCan, RegPort};
+    use idu_gimbal::driver::SerialPort;
+    use idu_gimbal::{Config, Gimbal, Instant};
+    use idu_gimbal_mavlink::camera::CameraConfig;
+    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+
+    let camera = CameraConfig::new("rtsp://192.168.42.108:554/live").ok();
+    let Some(bridge) = cortex_m::singleton!(: Bridge<Gimbal<RegCan>> = Bridge::new(
+        Gimbal::new(RegCan, Config::default()),
+        BridgeConfig { camera, ..BridgeConfig::default() },
+    )) else {
+        cortex_m::asm::udf()
+    };
+    footprint::use_mem_builtins();
+    let mut port = RegPort;
+    let mut buf = [0u8; 64];
+    loop {
+        // The same as `footprint_driver`: the port used directly, the driver driven.
+        footprint::port_skeleton();
+        footprint::drive(bridge.gimbal_mut());
+        let now = Instant::from_millis(input(4));
+        if let Ok(n) = port.read(&mut buf) {
+            bridge.receive(&buf[..n.min(64)], now);
+        }
+        bridge.poll(now);
+        let bytes = bridge.transmit_bytes();
+        if let Ok(n) = port.write(bytes) {
+            bridge.transmit_written(n);
+        }
+        output(bridge.stats().acks);
+    }
+}

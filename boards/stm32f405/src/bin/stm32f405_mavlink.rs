@@ -1,0 +1,119 @@
+//! Co-processor firmware for an STM32F405RG: the IDU gimbal (on CAN) as a MAVLink gimbal
+//! device and camera for the autopilot (on a UART).
+//!
+//! * To the autopilot: USART2, **PA2 (TX) / PA3 (RX)**, MAVLink 2 at **921600 baud** 8N1
+//!   (set the autopilot's serial port to MAVLink 2 at the same rate). Receive is
+//!   interrupt-driven into a 1024-byte ring (`src/usart2_ring.rs`): at 921600
+//!   baud 92 bytes arrive a millisecond, and the ring holds 11 ms of them while the main
+//!   loop is busy. A full ring or a line error is counted by the reader (the frame it broke
+//!   fails its CRC and is skipped); transmit is polled without blocking.
+//! * To the gimbal: CAN1 on **PB8 (RX) / PB9 (TX)** at 1 Mbit/s with a filter passing only
+//!   the postback, clocks and the 1 kHz tick (`src/board.rs`).
+//! * The bridge (`idu_gimbal_mavlink::Bridge`) owns the CAN driver; the main loop polls the
+//!   driver, feeds the bridge what the UART received, polls the bridge and writes what it
+//!   sends. Logging through defmt-rtt.
+//!
+//! Build: `cargo build --release --bin stm32f405_mavlink` in `boards/stm32f405`; `cargo run`
+//! with the same arguments flashes it through `probe-rs run`.
+#![no_std]
+#![no_main]
+
+mod fw {
+    use cortex_m_rt::entry;
+    use defmt_rtt as _;
+    use panic_probe as _;
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Serial};
+    use stm32f4xx_hal::{interrupt, pac, prelude::*};
+
+    use board_stm32f405::board::{self, now};
+    use board_stm32f405::usart2_ring::{self, RingRx};
+    use idu_gimbal::driver::{Nb, SerialPort};
+    use idu_gimbal::video::{Camera, Family, Stream};
+    use idu_gimbal::{Config, Gimbal, GimbalControl};
+    use idu_gimbal_mavlink::camera::CameraConfig;
+    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+
+    /// The autopilot link's rate.
+    const MAVLINK_BAUD: u32 = 921_600;
+
+    /// USART2 receive into the ring.
+    #[interrupt]
+    fn USART2() {
+        usart2_ring::on_interrupt();
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+            panic!("peripherals taken twice");
+        };
+        let mut rcc = board::clocks(dp.RCC);
+        board::start_tick(cp.SYST, &rcc);
+        let can = board::can1(dp.CAN1, dp.GPIOB, &mut rcc);
+
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let Ok(serial) = Serial::new(
+            dp.USART2,
+            (gpioa.pa2, gpioa.pa3),
+            SerialConfig::default().baudrate(MAVLINK_BAUD.bps()),
+            &mut rcc,
+        ) else {
+            panic!("USART2 configuration refused");
+        };
+        let (tx, rx) = serial.split();
+        usart2_ring::start(rx);
+        // The same non-blocking port adapter the serial gimbal driver uses.
+        let mut autopilot = Nb::new(RingRx, tx);
+        defmt::info!(
+            "USART2 up: MAVLink 2 at {=u32} baud, PA2 TX, PA3 RX",
+            MAVLINK_BAUD
+        );
+
+        // The camera's stream, as QGroundControl will play it (set the family and the IP
+        // of your camera here).
+        let camera = Camera::new(Family::X3)
+            .url(Stream::Main)
+            .ok()
+            .and_then(|uri| CameraConfig::new(&uri).ok());
+        let gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        let mut bridge = Bridge::new(
+            gimbal,
+            BridgeConfig {
+                camera,
+                ..BridgeConfig::default()
+            },
+        );
+        let mut buf = [0u8; 64];
+        let mut was_up = false;
+        loop {
+            let now = now();
+            if let Err(e) = bridge.gimbal_mut().poll(now) {
+                defmt::warn!("{}", e);
+            }
+            loop {
+                match autopilot.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(n) => bridge.receive(&buf[..n], now),
+                    // Counted where it shows: the frame it broke fails its CRC.
+                    Err(_) => defmt::warn!("autopilot UART: line error or overrun"),
+                }
+            }
+            bridge.poll(now);
+            loop {
+                let bytes = bridge.transmit_bytes();
+                if bytes.is_empty() {
+                    break;
+                }
+                match autopilot.write(bytes) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => bridge.transmit_written(n),
+                }
+            }
+            let up = bridge.gimbal().is_link_up();
+            if up != was_up {
+                was_up = up;
+                defmt::info!("gimbal link {}", if up { "up" } else { "down" });
+            }
+        }
+    }
+}

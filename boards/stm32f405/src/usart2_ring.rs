@@ -1,0 +1,80 @@
+//! USART2 receive by interrupt into a ring the main loop drains (shared by the
+//! `stm32f405_uart` and `stm32f405_mavlink` firmware).
+//!
+//! The USART2 interrupt (RXNE, handled by [`on_interrupt`]) moves every byte into a
+//! `RING`-byte ring, so no byte is lost while the main loop is busy. A full ring or a line
+//! error (overrun, framing, parity, noise) is kept and reported by the next read as an
+//! error, which the driver counts; the parser above resynchronises on the next frame.
+
+use core::cell::RefCell;
+
+use cortex_m::interrupt::Mutex;
+use heapless::Deque;
+use stm32f4xx_hal::pac;
+use stm32f4xx_hal::serial::{Error as LineError, Rx, RxListen};
+
+/// Bytes received and not yet taken by the main loop.
+pub const RING: usize = 1024;
+
+/// The receive half, owned by the interrupt once set up.
+static UART_RX: Mutex<RefCell<Option<Rx<pac::USART2>>>> = Mutex::new(RefCell::new(None));
+static RECEIVED: Mutex<RefCell<Deque<u8, RING>>> = Mutex::new(RefCell::new(Deque::new()));
+/// The latest line error or ring overflow not yet reported.
+static LINE_ERROR: Mutex<RefCell<Option<LineError>>> = Mutex::new(RefCell::new(None));
+
+/// The USART2 interrupt's work. The program defines the handler (`#[interrupt] fn USART2()`)
+/// and calls this: a handler defined here would sit in the vector table of every program
+/// linking this crate, the CAN firmware's too.
+pub fn on_interrupt() {
+    cortex_m::interrupt::free(|cs| {
+        let mut rx = UART_RX.borrow(cs).borrow_mut();
+        let Some(rx) = rx.as_mut() else { return };
+        let mut ring = RECEIVED.borrow(cs).borrow_mut();
+        loop {
+            match embedded_hal_nb::serial::Read::read(rx) {
+                Ok(byte) => {
+                    if ring.push_back(byte).is_err() {
+                        // The main loop fell behind: the byte is lost, and said so.
+                        LINE_ERROR.borrow(cs).replace(Some(LineError::Overrun));
+                    }
+                }
+                Err(nb::Error::WouldBlock) => break,
+                // The HAL read the data register to clear the error flag.
+                Err(nb::Error::Other(e)) => {
+                    LINE_ERROR.borrow(cs).replace(Some(e));
+                }
+            }
+        }
+    });
+}
+
+/// Hands the receive half to the interrupt and enables it (the program's USART2 handler
+/// calls [`on_interrupt`]).
+pub fn start(mut rx: Rx<pac::USART2>) {
+    rx.listen();
+    cortex_m::interrupt::free(|cs| UART_RX.borrow(cs).replace(Some(rx)));
+    // SAFETY: the handler only touches state behind `cortex_m::interrupt::Mutex`.
+    unsafe { cortex_m::peripheral::NVIC::unmask(pac::Interrupt::USART2) };
+}
+
+/// The main loop's end of the receive ring, as an `embedded-hal-nb` reader.
+pub struct RingRx;
+
+impl embedded_hal_nb::serial::ErrorType for RingRx {
+    type Error = LineError;
+}
+
+impl embedded_hal_nb::serial::Read<u8> for RingRx {
+    fn read(&mut self) -> nb::Result<u8, LineError> {
+        cortex_m::interrupt::free(|cs| {
+            if let Some(e) = LINE_ERROR.borrow(cs).take() {
+                return Err(nb::Error::Other(e));
+            }
+            RECEIVED
+                .borrow(cs)
+                .borrow_mut()
+                .pop_front()
+                .ok_or(nb::Error::WouldBlock)
+        })
+    }
+}

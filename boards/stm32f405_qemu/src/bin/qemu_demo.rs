@@ -1,0 +1,98 @@
+//! The firmware on an emulated STM32F405 (QEMU `netduinoplus2`) driving a simulated gimbal.
+//!
+//! The board has no CAN peripheral in QEMU, so the driver (`Gimbal`) and the simulated
+//! gimbal (`sim::Simulator`) exchange frames over the crate's in-memory CAN bus
+//! (`mock::Bus`) inside the firmware. It plays the scripted session of
+//! `idu_firmware_support::session` (shared with `host_sim`): re-center, pitch -45°, heading
+//! 90°, a rate hold released to test the dead-man, zoom 10x, photo, recording on and off, a
+//! text message, with vehicle data pushed throughout. Then it plays the same session over the
+//! serial path: `SerialGimbal` and `sim::serial::SerialSimulator` on the in-memory serial
+//! line (`mock::serial::Pipe`), where headings are nose-referenced and there is no text.
+//! Telemetry goes to the host's stdout through semihosting.
+//!
+//! **Clock.** Time is simulated: each loop iteration advances the driver's and the
+//! simulator's millisecond tick by exactly 1. Without `-icount`, QEMU's virtual clock (and so
+//! SysTick) follows the host's wall clock, which stalls and jumps with host load: a session
+//! timed by it would be neither reproducible nor faithful to a real board's 1 kHz tick. The
+//! simulated step makes every run identical, on any machine, and as fast as the emulator
+//! goes. The real firmware (`boards/stm32f405`'s `stm32f405`) takes its tick from SysTick.
+//!
+//! Exit status (through semihosting `SYS_EXIT`): 0 only if every step's expected effect was
+//! seen on both transports; 1 otherwise, on a panic, or on a HardFault.
+//!
+//! ```sh
+//! scripts/demo.sh   # installs the target and qemu-system-arm when missing, then in
+//!                   # boards/stm32f405_qemu:
+//! cargo run --release --bin qemu_demo
+//! ```
+#![no_std]
+#![no_main]
+
+// The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
+use stm32f4xx_hal as _;
+
+mod fw {
+    use core::fmt::{self, Write};
+
+    // The scripted session; semihosting output and exit (its panic and HardFault handlers
+    // exit with status 1).
+    use idu_firmware_support::session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
+    use idu_firmware_support::{println, qemu};
+    use idu_gimbal::Instant;
+
+    /// Line-buffered semihosting output: one host call per line rather than per fragment.
+    struct Semihosting {
+        line: heapless::String<256>,
+    }
+
+    impl Semihosting {
+        fn flush(&mut self) {
+            qemu::print(format_args!("{}", self.line));
+            self.line.clear();
+        }
+    }
+
+    impl Write for Semihosting {
+        fn write_str(&mut self, s: &str) -> fmt::Result {
+            for c in s.chars() {
+                if self.line.push(c).is_err() {
+                    self.flush();
+                    let _ = self.line.push(c);
+                }
+                if c == '\n' {
+                    self.flush();
+                }
+            }
+            Ok(())
+        }
+    }
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        println!("qemu_demo: STM32F405 (QEMU netduinoplus2), driver and simulated gimbal on an in-memory CAN bus");
+        let out = || Semihosting {
+            line: heapless::String::new(),
+        };
+        let bus = DemoBus::new(42);
+        let Some(can) = CanRig::new(&bus, Instant::from_millis(0)) else {
+            println!("qemu_demo: could not set up the bus");
+            qemu::exit(false)
+        };
+        let can_failures = Session::new(can, out(), 0).play();
+        println!("");
+        let pipe = DemoPipe::new(42);
+        let Some(serial) = SerialRig::new(&pipe, Instant::from_millis(0)) else {
+            println!("qemu_demo: could not set up the serial line");
+            qemu::exit(false)
+        };
+        let serial_failures = Session::new(serial, out(), 0).play();
+        let failures = can_failures + serial_failures;
+        if failures != 0 {
+            println!(
+                "qemu_demo: {} step(s) failed over CAN, {} over serial",
+                can_failures, serial_failures
+            );
+        }
+        qemu::exit(failures == 0)
+    }
+}

@@ -1,0 +1,19 @@
+//! Between embassy-time and the core's clock, for the embassy boards (`boards/embassy_*`):
+//! the conversion holds at any embassy-time tick rate.
+
+use idu_gimbal::Instant;
+
+/// The crate's wrapping millisecond tick at embassy's `at`: embassy's u64 millisecond
+/// count truncated to 32 bits is exactly a tick that wraps at `u32::MAX` (the truncation is
+/// the wrap).
+pub fn tick(at: embassy_time::Instant) -> Instant {
+    Instant::from_millis(at.as_millis() as u32)
+}
+
+/// The embassy instant of the crate's `deadline`, seen from `now` (embassy's) whose tick is
+/// `tick(now)`: the start of the deadline's millisecond. `next_deadline` is at or after the
+/// tick and less than 2^31 ms ahead, so the wrapping difference is the real distance.
+pub fn embassy_at(deadline: Instant, now: embassy_time::Instant) -> embassy_time::Instant {
+    let ahead = deadline.millis_since(tick(now));
+    embassy_time::Instant::from_millis(now.as_millis() + u64::from(ahead))
+}
