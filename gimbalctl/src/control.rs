@@ -1,9 +1,11 @@
-//! `gimbalctl control --tcp HOST:PORT`: an interactive terminal panel.
+//! `gimbalctl control (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD])`: an
+//! interactive terminal panel.
 //!
-//! Every byte goes through the library's sans-IO [`SerialLink`]: commands are queued on its
-//! [`Link`](idu_gimbal::link::Link), the arrow keys drive its rate hold, and the bytes it
-//! hands out are written to the socket; received bytes go back into it, and the panel
-//! shows its latest postback, state and counters.
+//! Every byte or frame goes through the library's driver for the transport (a
+//! [`Session`]: `SerialGimbal` for the serial server and the UART, `Gimbal<C>` for CAN):
+//! commands are queued on its link, the arrow keys drive its rate hold, and the panel shows
+//! its latest postback, state and counters (bus errors on CAN, bytes that held no frame on
+//! the serial paths).
 //!
 //! # How an arrow key holds a rate
 //!
@@ -17,15 +19,12 @@
 //! repeat delay, often 250-600 ms, during which the hold may lapse once: the gimbal stops
 //! briefly at the start of a long press unless the repeat delay is shorter than 250 ms.)
 
-use std::io::{ErrorKind, IsTerminal, Read, Write};
-use std::net::TcpStream;
+use std::io::IsTerminal;
 use std::time::{Duration, Instant as StdInstant};
 
-use idu_gimbal::link::serial::SerialLink;
-use idu_gimbal::link::{Config, Event};
+use idu_gimbal::link::Event;
 use idu_gimbal::wire::control::{Command, GimbalCommand, Photo, Rate, Video, Zoom};
 use idu_gimbal::Instant;
-use idu_gimbal::Transport;
 use ratatui::crossterm::event::{self, Event as TermEvent, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::crossterm::{cursor, execute, terminal};
 use ratatui::layout::{Constraint, Layout};
@@ -35,7 +34,7 @@ use ratatui::Terminal;
 
 use crate::command;
 use crate::error::Failure;
-use crate::net;
+use crate::transport::{clock, Job, Mode, Session, Target};
 
 /// How long the loop waits for a key before looking at the socket and the link again.
 const TICK: Duration = Duration::from_millis(10);
@@ -90,16 +89,14 @@ fn centi(v: i64) -> String {
     format!("{sign}{}.{:02}", a / 100, a % 100)
 }
 
-fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: Instant) {
-    let l = link.link();
-    let stats = link.stats();
-    let link_state = match (l.is_up(), stats.link.postbacks) {
+fn draw<S: Session>(frame: &mut ratatui::Frame<'_>, link: &S, panel: &Panel, now: Instant) {
+    let link_state = match (link.is_link_up(), link.postbacks()) {
         (true, _) => "up",
         (false, 0) => "waiting for the first postback",
         (false, _) => "DOWN (no postback for 1.5 s)",
     };
     let mut gimbal = Vec::new();
-    match l.latest_postback(now) {
+    match link.latest_postback(now) {
         Some((pb, age)) => {
             let mode = match pb.mode.name() {
                 Some(name) => name.to_owned(),
@@ -128,7 +125,7 @@ fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: I
         }
     }
     let hold = match panel.held {
-        Some(r) if l.is_rate_holding() => format!(
+        Some(r) if link.is_rate_holding() => format!(
             "yaw {} pitch {} deg/s (held while the key repeats)",
             r.yaw_dps(),
             r.pitch_dps()
@@ -146,19 +143,7 @@ fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: I
         Line::raw(format!("last sent  {}", panel.last_sent)),
         Line::raw(format!("last event {}", panel.last_event)),
     ];
-    let counters = vec![
-        Line::raw(format!(
-            "postbacks {}  crc errors {}  skipped bytes {}",
-            stats.link.postbacks, stats.stream.crc_errors, stats.stream.skipped_bytes
-        )),
-        Line::raw(format!(
-            "frames sent {}  bytes sent {}  bytes received {}  queue full {}",
-            stats.bytes_sent / 24,
-            stats.bytes_sent,
-            stats.bytes_received,
-            stats.link.queue_full
-        )),
-    ];
+    let counters: Vec<Line> = link.counters().into_iter().map(Line::raw).collect();
     let keys = vec![
         Line::raw("arrows rate hold (stops 250 ms after the last key event)"),
         Line::raw("c centre  d look down  +/- zoom  p photo  r record  f follow  q quit"),
@@ -166,7 +151,7 @@ fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: I
     let [a, b, c, d] = Layout::vertical([
         Constraint::Length(5),
         Constraint::Length(6),
-        Constraint::Length(4),
+        Constraint::Length(5),
         Constraint::Length(4),
     ])
     .areas(frame.area());
@@ -189,59 +174,13 @@ fn draw(frame: &mut ratatui::Frame<'_>, link: &SerialLink, panel: &Panel, now: I
     );
 }
 
-/// Writes what the link hands out until the socket would block.
-fn pump_out(link: &mut SerialLink, stream: &mut TcpStream, target: &str) -> Result<(), Failure> {
-    loop {
-        let bytes = link.transmit_bytes();
-        if bytes.is_empty() {
-            return Ok(());
-        }
-        match stream.write(bytes) {
-            Ok(0) => {
-                return Err(Failure::Runtime(format!("{target} closed the connection")));
-            }
-            Ok(n) => link.transmit_written(n),
-            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {
-                link.transmit_written(0);
-                return Ok(());
-            }
-            Err(e) => {
-                link.transmit_written(0);
-                return Err(Failure::Runtime(format!("cannot send to {target}: {e}")));
-            }
-        }
-    }
-}
-
-/// Reads what arrived, into the link.
-fn pump_in(
-    link: &mut SerialLink,
-    stream: &mut TcpStream,
-    target: &str,
-    now: Instant,
-) -> Result<(), Failure> {
-    let mut buf = [0u8; 4096];
-    loop {
-        match stream.read(&mut buf) {
-            Ok(0) => {
-                return Err(Failure::Runtime(format!("{target} closed the connection")));
-            }
-            Ok(n) => link.receive(&buf[..n], now),
-            Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(()),
-            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(Failure::Runtime(format!("cannot read from {target}: {e}"))),
-        }
-    }
-}
-
-/// `gimbalctl control --tcp HOST:PORT [--speed DEG_S]`.
-pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
+/// `gimbalctl control (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD]) [--speed DEG_S]`.
+pub fn run(target: &Target, speed: f32) -> Result<(), Failure> {
     if !(1.0..=100.0).contains(&speed) {
         return Err(Failure::Usage(format!(
             "--speed {speed}: out of range [1, 100] deg/s"
         )));
     }
-    net::resolve(target)?;
     if !std::io::stdin().is_terminal() {
         return Err(Failure::Usage(
             "control: stdin is not a terminal; control is interactive (in scripts use send and monitor)"
@@ -254,15 +193,26 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                 .into(),
         ));
     }
-    let mut stream = net::connect(target)?;
-    stream
-        .set_nonblocking(true)
-        .map_err(|e| Failure::io(target, e))?;
-    let start = StdInstant::now();
-    let now = || Instant::from_millis(start.elapsed().as_millis() as u32);
-    let mut link: SerialLink = SerialLink::new(Config::default());
+    target.run(Mode::Drive, Panelled { speed })
+}
+
+struct Panelled {
+    speed: f32,
+}
+
+impl Job for Panelled {
+    type Out = ();
+
+    fn run<S: Session>(self, link: S) -> Result<(), Failure> {
+        panel(link, self.speed)
+    }
+}
+
+/// The panel over an open session.
+fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
+    let now = clock(StdInstant::now());
     let mut panel = Panel {
-        target: target.to_owned(),
+        target: link.name().to_owned(),
         speed,
         held: None,
         recording: false,
@@ -278,10 +228,9 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
     let result = (|| -> Result<(), Failure> {
         loop {
             let t = now();
-            pump_in(&mut link, &mut stream, target, t)?;
-            link.poll(t);
+            link.pump(t)?;
             let mut changed = false;
-            while let Some(ev) = link.link_mut().next_event() {
+            while let Some(ev) = link.next_event() {
                 match ev {
                     Event::Postback => {}
                     Event::LinkUp => panel.last_event = "link up".into(),
@@ -295,7 +244,6 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                 }
                 changed = true;
             }
-            pump_out(&mut link, &mut stream, target)?;
             if changed || drawn.elapsed() >= REDRAW {
                 term.draw(|f| draw(f, &link, &panel, now()))
                     .map_err(|e| Failure::io("terminal", e))?;
@@ -322,8 +270,8 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                     let mut send: Option<Command> = None;
                     let mut hold: Option<Rate> = None;
                     match key.code {
-                        _ if ctrl_c => return quit(&mut link, &mut stream, target, now),
-                        KeyCode::Char('q') => return quit(&mut link, &mut stream, target, now),
+                        _ if ctrl_c => return quit(&mut link, now),
+                        KeyCode::Char('q') => return quit(&mut link, now),
                         KeyCode::Up => hold = rate(0.0, speed),
                         KeyCode::Down => hold = rate(0.0, -speed),
                         KeyCode::Left => hold = rate(-speed, 0.0),
@@ -349,7 +297,7 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                         _ => {}
                     }
                     if let Some(r) = hold {
-                        match link.link_mut().set_rate(r, t) {
+                        match link.set_rate(r, t) {
                             Ok(()) => {
                                 if panel.held != Some(r) {
                                     panel.last_sent =
@@ -361,7 +309,7 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                         }
                     }
                     if let Some(cmd) = send {
-                        match link.link_mut().send(cmd) {
+                        match link.send(cmd) {
                             Ok(()) => {
                                 if cmd == Command::from(GimbalCommand::Video(Video::Start)) {
                                     panel.recording = true;
@@ -376,8 +324,7 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
                             Err(_) => panel.last_event = "queue full: command not sent".into(),
                         }
                     }
-                    link.poll(t);
-                    pump_out(&mut link, &mut stream, target)?;
+                    link.pump(t)?;
                 }
                 if !event::poll(Duration::ZERO).map_err(|e| Failure::io("terminal", e))? {
                     break;
@@ -390,45 +337,35 @@ pub fn run(target: &str, speed: f32) -> Result<(), Failure> {
     })();
     drop(term);
     drop(guard);
+    if result.is_ok() {
+        link.finish();
+    }
     result
 }
 
 /// `q`: a zero rate (through the link: the end of the hold, or a zero-rate command when
 /// none is held), written before leaving.
-fn quit(
-    link: &mut SerialLink,
-    stream: &mut TcpStream,
-    target: &str,
-    now: impl Fn() -> Instant,
-) -> Result<(), Failure> {
-    if link.link().is_rate_holding() {
-        link.link_mut().stop_rate();
-    } else if link
-        .link_mut()
-        .send(GimbalCommand::Rate(Rate::ZERO))
-        .is_err()
-    {
+fn quit<S: Session>(link: &mut S, now: impl Fn() -> Instant) -> Result<(), Failure> {
+    if link.is_rate_holding() {
+        link.stop_rate();
+    } else if link.send(GimbalCommand::Rate(Rate::ZERO)).is_err() {
         // A full queue: end any hold the link would restart, and let the queue drain.
-        link.link_mut().stop_rate();
+        link.stop_rate();
     }
     let deadline = StdInstant::now() + QUIT_FLUSH;
     loop {
-        link.poll(now());
-        pump_out(link, stream, target)?;
+        link.pump(now())?;
         if !link.has_transmit() {
             break;
         }
         if StdInstant::now() >= deadline {
             return Err(Failure::Runtime(format!(
-                "cannot send the zero rate to {target} within {} ms",
+                "cannot send the zero rate to {} within {} ms",
+                link.name(),
                 QUIT_FLUSH.as_millis()
             )));
         }
         std::thread::sleep(Duration::from_millis(5));
-    }
-    let _ = stream.set_nonblocking(false);
-    if let Ok(s) = stream.try_clone() {
-        net::close_gently(s);
     }
     Ok(())
 }

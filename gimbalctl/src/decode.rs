@@ -486,7 +486,8 @@ pub fn write_command(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, cmd: 
     o.end();
 }
 
-fn write_vehicle(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, v: &VehicleFrame) {
+/// Writes a GPS, altitude or attitude object.
+pub fn write_vehicle(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, v: &VehicleFrame) {
     match v {
         VehicleFrame::Gps(g) => {
             let mut o = Obj::start(out, "gps", t, id);

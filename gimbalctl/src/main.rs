@@ -20,12 +20,14 @@ mod net;
 mod plot;
 mod rtsp;
 mod sim;
+mod transport;
 
 use command::Spec;
 use error::Failure;
+use transport::{GimbalArgs, SerialSpec, Target, AUTOPILOT_BAUD};
 
-/// Host tool for IDU camera gimbals: encode and decode CAN frames, send commands through
-/// the serial server, monitor postbacks, simulate a gimbal.
+/// Host tool for IDU camera gimbals: encode and decode CAN frames, send commands and monitor
+/// postbacks over the serial server (TCP), SocketCAN or the gimbal's UART, simulate a gimbal.
 #[derive(Parser, Debug)]
 #[command(name = "gimbalctl", version, propagate_version = true)]
 struct Cli {
@@ -67,11 +69,10 @@ enum Top {
         #[arg(value_name = "LOG|-")]
         file: Option<String>,
     },
-    /// Send a control command's frame to the serial server (or gimbalctl sim)
+    /// Send a command to the gimbal: over the serial server or the UART (control commands), or CAN (any)
     Send {
-        /// The serial server, HOST:PORT (port 2000 when omitted)
-        #[arg(long, value_name = "HOST:PORT")]
-        tcp: String,
+        #[command(flatten)]
+        gimbal: GimbalArgs,
         /// Repeat the frame every MS milliseconds (a rate hold), then send zero rate
         #[arg(
             long,
@@ -87,11 +88,10 @@ enum Top {
         #[command(subcommand)]
         command: Spec,
     },
-    /// Print the postbacks arriving from the serial server (or gimbalctl sim)
+    /// Print the gimbal's postbacks (on CAN also every other frame: control, vehicle, text, foreign)
     Monitor {
-        /// The serial server, HOST:PORT (port 2000 when omitted)
-        #[arg(long, value_name = "HOST:PORT")]
-        tcp: String,
+        #[command(flatten)]
+        gimbal: GimbalArgs,
         /// One JSON object per postback, as decode writes them
         #[arg(long)]
         json: bool,
@@ -101,9 +101,8 @@ enum Top {
     },
     /// Interactive terminal panel: the latest postback, link state and counters; keys move the gimbal
     Control {
-        /// The serial server, HOST:PORT (port 2000 when omitted), or gimbalctl sim
-        #[arg(long, value_name = "HOST:PORT")]
-        tcp: String,
+        #[command(flatten)]
+        gimbal: GimbalArgs,
         /// Rate of the arrow keys' rate hold, deg/s, 1..=100
         #[arg(
             long,
@@ -113,11 +112,14 @@ enum Top {
         )]
         speed: f32,
     },
-    /// Run a simulated gimbal on TCP, speaking the serial server's byte stream
+    /// Run a simulated gimbal on TCP (the serial server's byte stream) or on a pseudo-terminal (its UART)
     Sim {
         /// Address to listen on (port 0: any free port; the first stdout line says which)
         #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:2000")]
         listen: String,
+        /// Serve on a new pseudo-terminal instead, as the gimbal's UART (the first stdout line gives the path to open with --serial)
+        #[arg(long, conflicts_with_all = ["listen", "max_clients"])]
+        pty: bool,
         /// Exit after MS milliseconds (for scripted tests)
         #[arg(long, value_name = "MS")]
         exit_after_ms: Option<u64>,
@@ -125,21 +127,22 @@ enum Top {
         #[arg(long, value_name = "N", default_value_t = 8)]
         max_clients: usize,
     },
-    /// Bridge MAVLink 2 on UDP to a gimbal: a MAVLink gimbal device (154) and camera (100)
-    #[command(group(clap::ArgGroup::new("gimbal").required(true).args(["sim", "tcp"])))]
+    /// Bridge MAVLink 2 (UDP or a serial port) to a gimbal: a MAVLink gimbal device (154) and camera (100)
     Mavlink {
         /// The gimbal is the in-process simulated gimbal (on an in-memory CAN link)
-        #[arg(long)]
+        #[arg(long, group = "gimbal")]
         sim: bool,
-        /// The gimbal is behind the serial server (or gimbalctl sim), HOST:PORT
-        #[arg(long, value_name = "HOST:PORT")]
-        tcp: Option<String>,
+        #[command(flatten)]
+        gimbal: GimbalArgs,
         /// UDP address to listen on (port 0: any free port; the first stdout line says which)
         #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:14560")]
         listen: String,
         /// Also send to this UDP peer (repeatable); peers heard from are always sent to
         #[arg(long, value_name = "ADDR")]
         to: Vec<String>,
+        /// The autopilot on a serial port instead of UDP (a TELEM port), PATH[:BAUD] (921600 8N1 when BAUD is omitted)
+        #[arg(long, value_name = "PATH[:BAUD]", conflicts_with_all = ["listen", "to"])]
+        autopilot_serial: Option<String>,
         /// MAVLink system id (default: the autopilot's, from its heartbeat)
         #[arg(long, value_name = "1-255", value_parser = clap::value_parser!(u8).range(1..))]
         system_id: Option<u8>,
@@ -210,36 +213,71 @@ fn run(cli: Cli) -> Result<(), Failure> {
             file,
         } => plot::run(file.as_deref(), stream, &output),
         Top::Send {
-            tcp,
+            gimbal,
             repeat_ms,
             for_ms,
             command,
-        } => net::send(&tcp, &command, repeat_ms.zip(for_ms)),
-        Top::Monitor { tcp, json, count } => net::monitor(&tcp, json, count),
-        Top::Control { tcp, speed } => control::run(&tcp, speed),
+        } => net::send(
+            &Target::from_args(&gimbal)?,
+            &command,
+            repeat_ms.zip(for_ms),
+        ),
+        Top::Monitor {
+            gimbal,
+            json,
+            count,
+        } => net::monitor(&Target::from_args(&gimbal)?, json, count),
+        Top::Control { gimbal, speed } => {
+            let target = Target::from_args(&gimbal)?;
+            control::run(&target, speed)
+        }
         Top::Sim {
             listen,
+            pty,
             exit_after_ms,
             max_clients,
-        } => sim::run(&listen, exit_after_ms, max_clients),
+        } => {
+            if pty {
+                sim::run_pty(exit_after_ms)
+            } else {
+                sim::run(&listen, exit_after_ms, max_clients)
+            }
+        }
         Top::Mavlink {
-            sim: _,
-            tcp,
+            sim,
+            gimbal,
             listen,
             to,
+            autopilot_serial,
             system_id,
             camera,
             exit_after_ms,
-        } => mavlink::run(&mavlink::Options {
-            gimbal: tcp
+        } => {
+            let target = if sim {
+                None
+            } else {
+                Some(Target::from_args(&gimbal)?)
+            };
+            let serial = autopilot_serial
                 .as_deref()
-                .map_or(mavlink::Gimbal::Sim, mavlink::Gimbal::Tcp),
-            listen: &listen,
-            to: &to,
-            system_id,
-            camera: &camera,
-            exit_after_ms,
-        }),
+                .map(|s| SerialSpec::parse("--autopilot-serial", s, AUTOPILOT_BAUD))
+                .transpose()?;
+            mavlink::run(&mavlink::Options {
+                gimbal: target
+                    .as_ref()
+                    .map_or(mavlink::Gimbal::Sim, mavlink::Gimbal::Target),
+                autopilot: match &serial {
+                    Some(spec) => mavlink::Autopilot::Serial(spec),
+                    None => mavlink::Autopilot::Udp {
+                        listen: &listen,
+                        to: &to,
+                    },
+                },
+                system_id,
+                camera: &camera,
+                exit_after_ms,
+            })
+        }
         Top::Rtsp {
             family,
             stream,

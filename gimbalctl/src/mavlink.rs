@@ -1,5 +1,7 @@
-//! `gimbalctl mavlink`: the library's MAVLink bridge (`idu-gimbal-mavlink`) on UDP, in front
-//! of the in-process simulated gimbal (`--sim`) or the serial server (`--tcp`).
+//! `gimbalctl mavlink`: the library's MAVLink bridge (`idu-gimbal-mavlink`) between an
+//! autopilot (UDP, or a serial port with `--autopilot-serial`) and a gimbal: the in-process
+//! simulated gimbal (`--sim`), or a real one on any transport (`--tcp`, `--can`,
+//! `--serial`; see [`crate::transport`]).
 //!
 //! One thread, non-blocking sockets, a 1 ms tick on the host's monotonic clock. Each tick
 //! reads at most [`DATAGRAMS_PER_TICK`] datagrams, then moves the gimbal side, polls the
@@ -15,16 +17,24 @@
 //! bridge sends goes, one frame a datagram, to every peer and to each `--to` address (those
 //! are permanent and outside the table). Joins, departures and replacements go to stderr.
 //!
+//! On a serial port (`--autopilot-serial PATH[:BAUD]`, 921600 baud by default as the firmware
+//! runs its TELEM port) the autopilot's bytes go to [`Bridge::receive`] as a stream, in any
+//! split, and the bridge's bytes go back as the port takes them; a port that vanishes ends
+//! the run (exit 1). UDP and the serial port are not mixed: the bridge is one MAVLink node
+//! on one link (a router such as mavlink-router joins links).
+//!
 //! With `--sim` the gimbal is the library's `Simulator` on an in-memory CAN link (the `Link`
 //! the firmware uses, so the vehicle attitude is pushed and headings are north-referenced as
-//! on a real CAN bus); with `--tcp` it is the serial server, through the core's `SerialLink`
-//! (nose-referenced: the serial link carries no vehicle frames).
+//! on a real CAN bus); with `--can` it is the library's `Gimbal<C>` on the bus, and the
+//! autopilot's attitude, GPS and altitude are pushed to the gimbal as the firmware does; with
+//! `--tcp` or `--serial` it is the library's `SerialGimbal` (nose-referenced: the serial link
+//! carries no vehicle frames).
 
-use std::io::{ErrorKind, Read, Write};
-use std::net::{SocketAddr, TcpStream, UdpSocket};
+use std::io::{ErrorKind, Write};
+use std::marker::PhantomData;
+use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant as StdInstant};
 
-use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family, Stream};
@@ -34,6 +44,7 @@ use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
+use crate::transport::{clock, Job, Mode, SerialSpec, Session, StreamPort, Target};
 
 mod peers;
 
@@ -48,20 +59,31 @@ pub const DATAGRAMS_PER_TICK: usize = 256;
 /// The receive buffer: the largest UDP payload (65,507 bytes over IPv4) fits, so no datagram
 /// is cut short, whatever number of frames it holds.
 const DATAGRAM_BUFFER: usize = 65_536;
+/// Serial reads at most per tick (4 KiB each: more than a tick of 921600 baud).
+const SERIAL_READS_PER_TICK: usize = 16;
+/// How often the gimbal side's faults (bus errors, bytes that held no frame) go to stderr.
+const NOTE_EVERY: Duration = Duration::from_secs(1);
 
 /// Where the gimbal is.
 pub enum Gimbal<'a> {
     /// The in-process simulated gimbal.
     Sim,
-    /// The serial server (or `gimbalctl sim`), HOST:PORT.
-    Tcp(&'a str),
+    /// A gimbal on `--tcp`, `--can` or `--serial`.
+    Target(&'a Target),
+}
+
+/// Where the autopilot (and any ground station) is.
+pub enum Autopilot<'a> {
+    /// MAVLink on UDP: listen here, also send to these.
+    Udp { listen: &'a str, to: &'a [String] },
+    /// MAVLink on a serial port (a TELEM port).
+    Serial(&'a SerialSpec),
 }
 
 /// What `gimbalctl mavlink` was asked to do.
 pub struct Options<'a> {
     pub gimbal: Gimbal<'a>,
-    pub listen: &'a str,
-    pub to: &'a [String],
+    pub autopilot: Autopilot<'a>,
     pub system_id: Option<u8>,
     pub camera: &'a str,
     pub exit_after_ms: Option<u64>,
@@ -72,6 +94,10 @@ trait Pump {
     type G: GimbalControl;
     /// Moves frames or bytes between the gimbal and the link; `Err` ends the run.
     fn pump(bridge: &mut Bridge<Self::G>, side: &mut Self, now: Instant) -> Result<(), Failure>;
+    /// Faults new since the last call, for stderr.
+    fn notes(_bridge: &mut Bridge<Self::G>) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 /// The simulated gimbal on an in-memory CAN link.
@@ -96,52 +122,30 @@ impl Pump for SimSide {
     }
 }
 
-/// The serial server over TCP.
-struct TcpSide {
-    stream: TcpStream,
-    peer: String,
-}
+/// A real gimbal: the bridge drives the transport's session, which the bridge owns.
+struct SessionSide<S>(PhantomData<S>);
 
-impl Pump for TcpSide {
-    type G = SerialLink;
-    fn pump(bridge: &mut Bridge<SerialLink>, side: &mut Self, now: Instant) -> Result<(), Failure> {
-        let link = bridge.gimbal_mut();
-        let mut buf = [0u8; 1024];
-        loop {
-            match side.stream.read(&mut buf) {
-                Ok(0) => {
-                    return Err(Failure::Runtime(format!(
-                        "{}: the serial server closed the connection",
-                        side.peer
-                    )))
-                }
-                Ok(n) => link.receive(&buf[..n], now),
-                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => return Err(Failure::io(&side.peer, e)),
-            }
-        }
-        link.poll(now);
-        loop {
-            let bytes = link.transmit_bytes();
-            if bytes.is_empty() {
-                break;
-            }
-            match side.stream.write(bytes) {
-                Ok(n) => link.transmit_written(n),
-                Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                    link.transmit_written(0);
-                    break;
-                }
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => return Err(Failure::io(&side.peer, e)),
-            }
-        }
-        Ok(())
+impl<S: Session> Pump for SessionSide<S> {
+    type G = S;
+    fn pump(bridge: &mut Bridge<S>, _side: &mut Self, now: Instant) -> Result<(), Failure> {
+        bridge.gimbal_mut().pump(now)
+    }
+    fn notes(bridge: &mut Bridge<S>) -> Vec<String> {
+        bridge.gimbal_mut().take_notes()
     }
 }
 
-/// `gimbalctl mavlink (--sim | --tcp HOST:PORT) [--listen ADDR] [--to ADDR]...`.
+/// The autopilot's link, open.
+enum Port {
+    Udp {
+        socket: UdpSocket,
+        to: Vec<SocketAddr>,
+    },
+    Serial(StreamPort),
+}
+
+/// `gimbalctl mavlink (--sim | --tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD])
+/// [--listen ADDR] [--to ADDR]... | --autopilot-serial PATH[:BAUD]`.
 pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let family =
         Family::from_name(opts.camera).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
@@ -149,76 +153,112 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
         .url(Stream::Main)
         .map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
     let camera = CameraConfig::new(&uri).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
-    let mut to = Vec::new();
-    for t in opts.to {
-        let addrs = crate::net::resolve(t)
-            .map_err(|_| Failure::Usage(format!("--to: {t:?} is not a HOST:PORT address")))?;
-        to.extend(addrs.into_iter().take(1));
-    }
-    let listen = crate::net::resolve(opts.listen).map_err(|_| {
-        Failure::Usage(format!(
-            "--listen: {:?} is not a HOST:PORT address",
-            opts.listen
-        ))
-    })?;
     let config = BridgeConfig {
         system_id: opts.system_id,
         camera: Some(camera),
         ..BridgeConfig::default()
     };
-    let socket = UdpSocket::bind(&listen[..])
-        .map_err(|e| Failure::Runtime(format!("cannot listen on {}: {e}", opts.listen)))?;
-    socket
-        .set_nonblocking(true)
-        .map_err(|e| Failure::io("UDP socket", e))?;
-    let local = socket
-        .local_addr()
-        .map_err(|e| Failure::io("UDP socket", e))?;
-    let start = StdInstant::now();
-    let now = move || Instant::from_millis(start.elapsed().as_millis() as u32);
+    // Every argument checked (exit 2) before anything is opened.
+    let udp = match opts.autopilot {
+        Autopilot::Udp { listen, to: tos } => {
+            let mut to = Vec::new();
+            for t in tos {
+                let addrs = crate::net::resolve(t).map_err(|_| {
+                    Failure::Usage(format!("--to: {t:?} is not a HOST:PORT address"))
+                })?;
+                to.extend(addrs.into_iter().take(1));
+            }
+            let addrs = crate::net::resolve(listen).map_err(|_| {
+                Failure::Usage(format!("--listen: {listen:?} is not a HOST:PORT address"))
+            })?;
+            Some((listen, addrs, to))
+        }
+        Autopilot::Serial(_) => None,
+    };
+    let (port, where_) = match (udp, &opts.autopilot) {
+        (Some((listen, addrs, to)), _) => {
+            let socket = UdpSocket::bind(&addrs[..])
+                .map_err(|e| Failure::Runtime(format!("cannot listen on {listen}: {e}")))?;
+            socket
+                .set_nonblocking(true)
+                .map_err(|e| Failure::io("UDP socket", e))?;
+            let local = socket
+                .local_addr()
+                .map_err(|e| Failure::io("UDP socket", e))?;
+            (Port::Udp { socket, to }, format!("listening on {local}"))
+        }
+        (None, Autopilot::Serial(spec)) => (
+            Port::Serial(StreamPort::serial(spec, "--autopilot-serial")?),
+            format!("autopilot on {} at {} baud", spec.path, spec.baud),
+        ),
+        (None, Autopilot::Udp { .. }) => unreachable!("checked above"),
+    };
+    let now = clock(StdInstant::now());
     match opts.gimbal {
         Gimbal::Sim => {
             let bridge = Bridge::new(Link::new(Config::default()), config);
             let side = SimSide {
                 sim: Simulator::new(SimConfig::default(), now()),
             };
-            announce(local, "the simulated gimbal (in-process, CAN)")?;
-            serve(bridge, side, &socket, &to, now, opts.exit_after_ms)
+            announce(&where_, "the simulated gimbal (in-process, CAN)")?;
+            serve(bridge, side, port, now, opts.exit_after_ms)
         }
-        Gimbal::Tcp(target) => {
-            let stream = crate::net::connect(target)?;
-            stream
-                .set_nonblocking(true)
-                .map_err(|e| Failure::io(target, e))?;
-            let _ = stream.set_nodelay(true);
-            let bridge = Bridge::new(SerialLink::new(Config::default()), config);
-            let side = TcpSide {
-                stream,
-                peer: target.to_string(),
-            };
-            announce(local, &format!("the serial server at {target}"))?;
-            serve(bridge, side, &socket, &to, now, opts.exit_after_ms)
+        Gimbal::Target(target) => {
+            let mut what = target.describe();
+            if target.carries_vehicle() {
+                what.push_str(" (the autopilot's attitude, GPS and altitude pushed to it)");
+            }
+            target.run(
+                Mode::Drive,
+                Bridged {
+                    config,
+                    port,
+                    announce: (where_, what),
+                    exit_after_ms: opts.exit_after_ms,
+                },
+            )
         }
     }
 }
 
-/// The first stdout line says where we listen (useful with port 0); flushed at once for
-/// scripts that wait for it.
-fn announce(local: SocketAddr, gimbal: &str) -> Result<(), Failure> {
+/// The bridge over an open gimbal session.
+struct Bridged {
+    config: BridgeConfig,
+    port: Port,
+    announce: (String, String),
+    exit_after_ms: Option<u64>,
+}
+
+impl Job for Bridged {
+    type Out = ();
+
+    fn run<S: Session>(self, session: S) -> Result<(), Failure> {
+        announce(&self.announce.0, &self.announce.1)?;
+        let bridge = Bridge::new(session, self.config);
+        let now = clock(StdInstant::now());
+        serve(
+            bridge,
+            SessionSide::<S>(PhantomData),
+            self.port,
+            now,
+            self.exit_after_ms,
+        )
+    }
+}
+
+/// The first stdout line says where the autopilot is reached (the UDP port, useful with
+/// port 0) and what the gimbal is; flushed at once for scripts that wait for it.
+fn announce(where_: &str, gimbal: &str) -> Result<(), Failure> {
     let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "gimbalctl mavlink: listening on {local}, gimbal: {gimbal}"
-    )
-    .and_then(|()| out.flush())
-    .map_err(Failure::stdout)
+    writeln!(out, "gimbalctl mavlink: {where_}, gimbal: {gimbal}")
+        .and_then(|()| out.flush())
+        .map_err(Failure::stdout)
 }
 
 fn serve<S: Pump>(
     mut bridge: Bridge<S::G>,
     mut side: S,
-    socket: &UdpSocket,
-    to: &[SocketAddr],
+    mut port: Port,
     now: impl Fn() -> Instant,
     exit_after_ms: Option<u64>,
 ) -> Result<(), Failure> {
@@ -228,6 +268,7 @@ fn serve<S: Pump>(
     let mut buf = vec![0u8; DATAGRAM_BUFFER];
     let mut was_up = false;
     let mut splitter = FrameReader::new();
+    let mut notes_at = start + NOTE_EVERY;
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
             eprintln!(
@@ -238,48 +279,12 @@ fn serve<S: Pump>(
         }
         let t = now();
         let clock = StdInstant::now();
-        peers.expire(clock, |gone| {
-            eprintln!(
-                "gimbalctl mavlink: peer {gone} left (silent {} s)",
-                PEER_TIMEOUT.as_secs()
-            );
-        });
-        let mut drained = false;
-        for _ in 0..DATAGRAMS_PER_TICK {
-            match socket.recv_from(&mut buf) {
-                Ok((n, from)) => {
-                    let good = bridge.receive_datagram(&buf[..n], t);
-                    if to.contains(&from) {
-                        continue;
-                    }
-                    match peers.heard(from, good, clock) {
-                        Some(Change::Joined(new)) => eprintln!(
-                            "gimbalctl mavlink: peer {new} joined ({} of {})",
-                            peers.len(),
-                            peers.capacity()
-                        ),
-                        Some(Change::Replaced { old, new }) => eprintln!(
-                            "gimbalctl mavlink: peer {new} joined, replacing {old} \
-                             (all {} slots taken; {old} heard least recently)",
-                            peers.capacity()
-                        ),
-                        None => {}
-                    }
-                }
-                Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                    drained = true;
-                    break;
-                }
-                // A peer that went away (ICMP port unreachable) must not stop the bridge.
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused
-                    ) => {}
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => return Err(Failure::io("UDP socket", e)),
+        let drained = match &mut port {
+            Port::Udp { socket, to } => {
+                receive_udp(&mut bridge, socket, to, &mut peers, &mut buf, t, clock)?
             }
-        }
+            Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, t)?,
+        };
         S::pump(&mut bridge, &mut side, t)?;
         bridge.poll(t);
         let up = bridge.gimbal().is_link_up();
@@ -290,24 +295,236 @@ fn serve<S: Pump>(
             );
             was_up = up;
         }
-        // One frame a datagram, as MAVLink on UDP goes.
-        loop {
-            let bytes = bridge.transmit_bytes().to_vec();
-            if bytes.is_empty() {
-                break;
+        if clock >= notes_at {
+            for note in S::notes(&mut bridge) {
+                eprintln!("gimbalctl mavlink: warning: {note}");
             }
-            bridge.transmit_written(bytes.len());
-            splitter.feed(&bytes, |frame| {
-                for peer in peers.addrs().chain(to.iter()) {
-                    // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
-                    let _ = socket.send_to(frame.bytes(), peer);
-                }
-                Check::Unhandled
-            });
+            notes_at = clock + NOTE_EVERY;
         }
-        // Datagrams still waiting: the next tick at once, so a burst is read at full speed.
+        match &mut port {
+            // One frame a datagram, as MAVLink on UDP goes.
+            Port::Udp { socket, to } => loop {
+                let bytes = bridge.transmit_bytes().to_vec();
+                if bytes.is_empty() {
+                    break;
+                }
+                bridge.transmit_written(bytes.len());
+                splitter.feed(&bytes, |frame| {
+                    for peer in peers.addrs().chain(to.iter()) {
+                        // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
+                        let _ = socket.send_to(frame.bytes(), peer);
+                    }
+                    Check::Unhandled
+                });
+            },
+            // A byte stream: what the port takes now; the rest waits in the bridge.
+            Port::Serial(serial) => loop {
+                let bytes = bridge.transmit_bytes();
+                if bytes.is_empty() {
+                    break;
+                }
+                let n = serial.write_now(bytes).map_err(|e| Failure::Runtime(e.0))?;
+                bridge.transmit_written(n);
+                if n == 0 {
+                    break;
+                }
+            },
+        }
+        // Datagrams or bytes still waiting: the next tick at once, so a burst is read at
+        // full speed.
         if drained {
             std::thread::sleep(TICK);
         }
+    }
+}
+
+/// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
+/// the peer table; whether the socket was emptied.
+fn receive_udp<G: GimbalControl>(
+    bridge: &mut Bridge<G>,
+    socket: &UdpSocket,
+    to: &[SocketAddr],
+    peers: &mut Peers,
+    buf: &mut [u8],
+    t: Instant,
+    clock: StdInstant,
+) -> Result<bool, Failure> {
+    peers.expire(clock, |gone| {
+        eprintln!(
+            "gimbalctl mavlink: peer {gone} left (silent {} s)",
+            PEER_TIMEOUT.as_secs()
+        );
+    });
+    for _ in 0..DATAGRAMS_PER_TICK {
+        match socket.recv_from(buf) {
+            Ok((n, from)) => {
+                let good = bridge.receive_datagram(&buf[..n], t);
+                if to.contains(&from) {
+                    continue;
+                }
+                match peers.heard(from, good, clock) {
+                    Some(Change::Joined(new)) => eprintln!(
+                        "gimbalctl mavlink: peer {new} joined ({} of {})",
+                        peers.len(),
+                        peers.capacity()
+                    ),
+                    Some(Change::Replaced { old, new }) => eprintln!(
+                        "gimbalctl mavlink: peer {new} joined, replacing {old} \
+                         (all {} slots taken; {old} heard least recently)",
+                        peers.capacity()
+                    ),
+                    None => {}
+                }
+            }
+            Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
+            // A peer that went away (ICMP port unreachable) must not stop the bridge.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused
+                ) => {}
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(Failure::io("UDP socket", e)),
+        }
+    }
+    Ok(false)
+}
+
+/// Reads what the serial port has (bounded) into the bridge as a byte stream; whether the
+/// port was emptied. A port that went away ends the run.
+fn receive_serial<G: GimbalControl>(
+    bridge: &mut Bridge<G>,
+    port: &mut StreamPort,
+    buf: &mut [u8],
+    t: Instant,
+) -> Result<bool, Failure> {
+    let chunk = buf.len().min(4096);
+    for _ in 0..SERIAL_READS_PER_TICK {
+        match port.read_now(&mut buf[..chunk]) {
+            Ok(0) => return Ok(true),
+            Ok(n) => bridge.receive(&buf[..n], t),
+            Err(e) => return Err(Failure::Runtime(e.0)),
+        }
+    }
+    Ok(false)
+}
+
+/// The bridge over the library's `Gimbal<C>` on the core's in-memory CAN bus (the session
+/// `--can` runs over SocketCAN), with the library's simulated gimbal at the other end.
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transport::can::CanSession;
+    use embedded_can::{nb::Can, Frame as _};
+    use idu_gimbal::mock::{Bus, MockFrame};
+    use idu_gimbal_mavlink::attitude::YawPitch;
+    use idu_gimbal_mavlink::mavio;
+    use mavio::dialects::common::enums::{GimbalDeviceFlags, MavAutopilot, MavType};
+    use mavio::dialects::common::messages::{
+        AutopilotStateForGimbalDevice, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
+    };
+    use mavio::protocol::{Frame, V2};
+    use mavio::Message;
+
+    const AP: (u8, u8) = (1, 1);
+
+    fn frame(seq: u8, message: &dyn Message) -> Vec<u8> {
+        let f = Frame::builder()
+            .version(V2)
+            .sequence(seq)
+            .system_id(AP.0)
+            .component_id(AP.1)
+            .message(message)
+            .unwrap()
+            .build();
+        let mut buf = [0u8; 300];
+        let n = f.serialize(&mut buf).unwrap();
+        buf[..n].to_vec()
+    }
+
+    #[test]
+    fn the_autopilots_attitude_gps_and_altitude_reach_the_can_gimbal() {
+        let bus: Bus<2, 64> = Bus::new(5);
+        let mut gimbal_end = bus.endpoint(1).unwrap();
+        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
+        let mut bridge = Bridge::new(session, BridgeConfig::default());
+        let mut side = SessionSide::<CanSession<_>>(PhantomData);
+        let t = Instant::from_millis;
+        let mut sim: Simulator = Simulator::new(SimConfig::default(), t(0));
+        let heartbeat = Heartbeat {
+            type_: MavType::Quadrotor,
+            autopilot: MavAutopilot::Px4,
+            mavlink_version: 3,
+            ..Default::default()
+        };
+        let state = AutopilotStateForGimbalDevice {
+            target_system: AP.0,
+            target_component: 154,
+            q: YawPitch {
+                yaw_rad: 30f32.to_radians(),
+                pitch_rad: 0.0,
+            }
+            .to_quaternion(),
+            ..Default::default()
+        };
+        let position = GlobalPositionInt {
+            lat: 473_977_420,
+            lon: 85_455_940,
+            alt: 488_123,
+            ..Default::default()
+        };
+        let down = GimbalDeviceSetAttitude {
+            target_system: AP.0,
+            target_component: 154,
+            flags: GimbalDeviceFlags::YAW_LOCK,
+            q: YawPitch {
+                yaw_rad: 0.0,
+                pitch_rad: (-45f32).to_radians(),
+            }
+            .to_quaternion(),
+            angular_velocity_x: f32::NAN,
+            angular_velocity_y: f32::NAN,
+            angular_velocity_z: f32::NAN,
+        };
+        for ms in (0..3_000u32).step_by(5) {
+            let now = t(ms);
+            if ms % 100 == 0 {
+                let mut bytes = frame(0, &heartbeat);
+                bytes.extend(frame(1, &state));
+                bytes.extend(frame(2, &position));
+                if ms >= 2_000 {
+                    bytes.extend(frame(3, &down));
+                }
+                // A byte stream, as from --autopilot-serial, in two pieces.
+                let (a, b) = bytes.split_at(bytes.len() / 3);
+                bridge.receive(a, now);
+                bridge.receive(b, now);
+            }
+            SessionSide::pump(&mut bridge, &mut side, now).unwrap();
+            bridge.poll(now);
+            let n = bridge.transmit_bytes().len();
+            bridge.transmit_written(n);
+            while let Ok(f) = gimbal_end.receive() {
+                let _ = sim.receive(f.raw_id(), f.data(), now);
+            }
+            let _ = sim.poll(now);
+            while let Some(f) = sim.pop_frame() {
+                gimbal_end
+                    .transmit(&MockFrame::extended(f.id, &f.data).unwrap())
+                    .unwrap();
+            }
+        }
+        let state = sim.state();
+        let att = state.vehicle.expect("the attitude pushed on CAN");
+        assert!((att.heading_deg() - 30.0).abs() < 0.01, "{att:?}");
+        let gps = state.gps.expect("the position pushed on CAN");
+        assert_eq!((gps.lat_e7(), gps.lon_e7()), (473_977_420, 85_455_940));
+        assert!(state.altitude.is_some());
+        assert!(state.north_referenced, "headings north-referenced on CAN");
+        assert!(bridge.gimbal().is_link_up());
+        assert!(bridge.gimbal().north_referenced(t(3_000)));
+        // The setpoint became a pitch command on the bus.
+        assert_eq!(state.target_pitch_deg, Some(-45.0));
+        assert!(sim.stats().vehicle_frames >= 20, "{:?}", sim.stats());
     }
 }

@@ -1,17 +1,22 @@
-//! `send` and `monitor`: talking to the serial server (or `gimbalctl sim`) over TCP.
+//! `send` and `monitor` over any transport (`--tcp`, `--can`, `--serial`: see
+//! [`crate::transport`]), and the TCP helpers (resolving, connecting, closing gently).
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use idu_gimbal::interface::SERIAL_SERVER_PORT;
+use idu_gimbal::link::text::TextAssembler;
 use idu_gimbal::wire::control::{Command, DualLightCommand, GimbalCommand, Rate};
+use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::wire::serial::{self, StreamItem, StreamParser};
+use idu_gimbal::wire::vehicle::VehicleFrame;
 
-use crate::command::{Message, Spec};
+use crate::command::{self, Message, Spec};
 use crate::decode;
 use crate::error::Failure;
+use crate::json::Obj;
+use crate::transport::{clock, Job, Mode, Seen, Session, Target};
 
 /// How long `send` and `monitor` wait for the connection.
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
@@ -79,8 +84,8 @@ pub fn control_commands(spec: &Spec) -> Result<Vec<Command>, Failure> {
     match spec.build()? {
         Message::Control(cmds) => Ok(cmds),
         Message::Vehicle(_) | Message::Text(_) => Err(Failure::Usage(format!(
-            "{}: only control commands have a serial/TCP frame (--tcp); \
-             vehicle and text frames exist only on CAN",
+            "{}: only control commands have a serial/TCP frame (--tcp, --serial); \
+             vehicle and text frames exist only on CAN (--can)",
             spec.name()
         ))),
     }
@@ -97,48 +102,131 @@ fn zero_rate(cmd: &Command) -> Option<Command> {
     }
 }
 
-/// `gimbalctl send --tcp HOST:PORT [--repeat-ms MS --for-ms MS] COMMAND ARGS...`.
-pub fn send(target: &str, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(), Failure> {
-    let cmds = control_commands(spec)?;
-    let frames: Vec<u8> = cmds
-        .iter()
-        .flat_map(|c| serial::control_frame(&c.encode()))
-        .collect();
-    let mut stream = connect(target)?;
-    let mut write = |bytes: &[u8]| {
-        stream
-            .write_all(bytes)
-            .map_err(|e| Failure::Runtime(format!("cannot send to {target}: {e}")))
-    };
-    write(&frames)?;
-    if let Some((every_ms, for_ms)) = repeat {
-        let start = Instant::now();
-        // clap rejects 0; guard anyway so the loop always advances.
-        let every = Duration::from_millis(every_ms.max(1));
-        let total = Duration::from_millis(for_ms);
-        let mut next = start + every;
-        while next <= start + total {
-            let now = Instant::now();
-            if next > now {
-                std::thread::sleep(next - now);
-            }
-            write(&frames)?;
-            next += every;
-        }
-        let zero: Vec<u8> = cmds
-            .iter()
-            .filter_map(zero_rate)
-            .flat_map(|c| serial::control_frame(&c.encode()))
-            .collect();
-        if !zero.is_empty() {
-            write(&zero)?;
-        }
+/// How long `send` waits for its frames to be taken by the port or bus.
+const SEND_TIMEOUT: Duration = Duration::from_secs(3);
+
+/// `gimbalctl send (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD]) [--repeat-ms MS
+/// --for-ms MS] COMMAND ARGS...`.
+pub fn send(target: &Target, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(), Failure> {
+    let message = spec.build()?;
+    if !target.carries_vehicle() {
+        // Vehicle and text frames exist only on CAN: a usage error before connecting.
+        control_commands(spec)?;
     }
-    stream
-        .flush()
-        .map_err(|e| Failure::Runtime(format!("cannot send to {target}: {e}")))?;
-    close_gently(stream);
+    let text = match spec {
+        Spec::Text { text } => Some(text.clone()),
+        _ => None,
+    };
+    target.run(
+        Mode::Drive,
+        SendJob {
+            message,
+            text,
+            repeat,
+        },
+    )
+}
+
+struct SendJob {
+    message: Message,
+    text: Option<String>,
+    repeat: Option<(u64, u64)>,
+}
+
+impl Job for SendJob {
+    type Out = ();
+
+    fn run<S: Session>(self, mut s: S) -> Result<(), Failure> {
+        let now = clock(Instant::now());
+        let frames = self.message.frames().len() as u64;
+        let mut want = s.sent() + frames;
+        queue(&mut s, &self.message, self.text.as_deref(), now())?;
+        flush(&mut s, want, now)?;
+        if let Some((every_ms, for_ms)) = self.repeat {
+            let start = Instant::now();
+            // clap rejects 0; guard anyway so the loop always advances.
+            let every = Duration::from_millis(every_ms.max(1));
+            let total = Duration::from_millis(for_ms);
+            let mut next = start + every;
+            while next <= start + total {
+                // Polled while waiting: postbacks arriving are read, not left to pile up.
+                while Instant::now() < next {
+                    s.pump(now())?;
+                    std::thread::sleep(Duration::from_millis(1).min(next - Instant::now()));
+                }
+                queue(&mut s, &self.message, self.text.as_deref(), now())?;
+                want += frames;
+                flush(&mut s, want, now)?;
+                next += every;
+            }
+            if let Message::Control(cmds) = &self.message {
+                for zero in cmds.iter().filter_map(zero_rate) {
+                    queue(&mut s, &Message::Control(vec![zero]), None, now())?;
+                    want += 1;
+                }
+                flush(&mut s, want, now)?;
+            }
+        }
+        s.finish();
+        Ok(())
+    }
+}
+
+/// Hands a message to the library: commands to the queue, vehicle values to the push
+/// (CAN), a text to the text queue (CAN).
+fn queue<S: Session>(
+    s: &mut S,
+    message: &Message,
+    text: Option<&str>,
+    now: idu_gimbal::Instant,
+) -> Result<(), Failure> {
+    match message {
+        Message::Control(cmds) => {
+            for cmd in cmds {
+                s.send(*cmd).map_err(|_| {
+                    Failure::Runtime(format!(
+                        "cannot send to {}: the transmit queue is full",
+                        s.name()
+                    ))
+                })?;
+            }
+        }
+        Message::Vehicle(VehicleFrame::Gps(g)) => s.set_gps(*g, now),
+        Message::Vehicle(VehicleFrame::Altitude(a)) => s.set_altitude(*a, now),
+        Message::Vehicle(VehicleFrame::Attitude(a)) => s.set_attitude(*a, now),
+        Message::Text(_) => s
+            .send_text(text.unwrap_or_default().as_bytes())
+            .map_err(|e| Failure::Runtime(format!("cannot send the text to {}: {e}", s.name())))?,
+    }
     Ok(())
+}
+
+/// Polls until `want` frames in all were taken by the port or bus.
+fn flush<S: Session>(
+    s: &mut S,
+    want: u64,
+    now: impl Fn() -> idu_gimbal::Instant,
+) -> Result<(), Failure> {
+    let deadline = Instant::now() + SEND_TIMEOUT;
+    loop {
+        s.pump(now())?;
+        if s.sent() >= want {
+            return Ok(());
+        }
+        if Instant::now() >= deadline {
+            let mut why = format!(
+                "cannot send to {}: not taken within {} s",
+                s.name(),
+                SEND_TIMEOUT.as_secs()
+            );
+            for note in s.take_notes() {
+                why.push_str("; ");
+                why.push_str(&note);
+            }
+            return Err(Failure::Runtime(why));
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
 }
 
 /// How long `send` waits for the server to close its side after ours.
@@ -201,73 +289,443 @@ fn now_timestamp() -> String {
     format!("{}.{:06}", d.as_secs(), d.subsec_micros())
 }
 
-/// `gimbalctl monitor --tcp HOST:PORT [--json] [--count N]`.
-pub fn monitor(target: &str, json: bool, count: Option<u64>) -> Result<(), Failure> {
+/// How often `monitor` tells of new faults (bus errors, bytes that held no frame).
+const NOTE_EVERY: Duration = Duration::from_secs(1);
+
+/// `gimbalctl monitor (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD]) [--json]
+/// [--count N]`.
+pub fn monitor(target: &Target, json: bool, count: Option<u64>) -> Result<(), Failure> {
     if count == Some(0) {
         return Ok(());
     }
-    let mut stream = connect(target)?;
-    stream
-        .set_read_timeout(Some(Duration::from_millis(100)))
-        .map_err(|e| Failure::io(target, e))?;
-    let stdout = std::io::stdout();
-    let mut parser = StreamParser::new();
+    target.run(Mode::Monitor, MonitorJob { json, count })
+}
+
+struct MonitorJob {
+    json: bool,
+    count: Option<u64>,
+}
+
+impl Job for MonitorJob {
+    type Out = ();
+
+    fn run<S: Session>(self, s: S) -> Result<(), Failure> {
+        let stdout = std::io::stdout();
+        let mut out = stdout.lock();
+        watch(s, self.json, self.count, &mut out, None)
+    }
+}
+
+/// `monitor`'s loop over any session, writing to `out`; `until`, for tests, ends it after
+/// that long (Ok). Each postback is printed once: a monitor session completes at most one
+/// per poll.
+pub fn watch<S: Session>(
+    mut s: S,
+    json: bool,
+    count: Option<u64>,
+    out: &mut impl Write,
+    until: Option<Duration>,
+) -> Result<(), Failure> {
+    let start = Instant::now();
+    let now = clock(start);
     let mut seen = 0u64;
-    // The last postback (or the connection), and when to warn about silence next.
+    let mut postbacks = s.postbacks();
+    // The last postback (or the start), and when to warn about silence next.
     let mut last = Instant::now();
     let mut warn_at = last + SILENCE_WARNING;
-    let mut buf = [0u8; 4096];
+    let mut notes_at = last + NOTE_EVERY;
+    let mut texts: TextAssembler<TEXT_CAPACITY> = TextAssembler::new();
     let mut line = Vec::with_capacity(512);
     loop {
-        let n = match stream.read(&mut buf) {
-            Ok(0) => {
-                return Err(Failure::Runtime(format!(
-                    "{target} closed the connection after {seen} postback(s)"
-                )))
+        if until.is_some_and(|u| start.elapsed() >= u) {
+            return Ok(());
+        }
+        let t = now();
+        if let Err(e) = s.poll_once(t) {
+            return Err(match e {
+                Failure::Runtime(why) => {
+                    Failure::Runtime(format!("{why} (after {seen} postback(s))"))
+                }
+                other => other,
+            });
+        }
+        line.clear();
+        let ts = now_timestamp();
+        for frame in s.take_frames() {
+            if !frame.is(ids::POSTBACK) {
+                describe_frame(&mut line, &frame, &mut texts, json.then_some(ts.as_bytes()));
             }
-            Ok(n) => n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock
-                        | std::io::ErrorKind::TimedOut
-                        | std::io::ErrorKind::Interrupted
-                ) =>
-            {
-                0
+        }
+        let mut done = false;
+        if s.postbacks() != postbacks {
+            postbacks = s.postbacks();
+            if let Some((pb, _age)) = s.latest_postback(t) {
+                last = Instant::now();
+                warn_at = last + SILENCE_WARNING;
+                if json {
+                    let id = s.is_can().then_some(ids::POSTBACK);
+                    decode::write_postback(&mut line, Some(ts.as_bytes()), id, &pb);
+                } else {
+                    line.extend_from_slice(readable(&pb).as_bytes());
+                    line.push(b'\n');
+                }
+                seen += 1;
+                done = count.is_some_and(|c| seen >= c);
             }
-            Err(e) => return Err(Failure::Runtime(format!("cannot read from {target}: {e}"))),
-        };
-        for item in parser.feed(&buf[..n]) {
-            let StreamItem::Postback(pb) = item else {
-                continue;
-            };
-            last = Instant::now();
-            warn_at = last + SILENCE_WARNING;
-            line.clear();
-            if json {
-                let ts = now_timestamp();
-                decode::write_postback(&mut line, Some(ts.as_bytes()), None, &pb);
-            } else {
-                line.extend_from_slice(readable(&pb).as_bytes());
-                line.push(b'\n');
-            }
-            let mut out = stdout.lock();
+        }
+        if !line.is_empty() {
             out.write_all(&line)
                 .and_then(|()| out.flush())
                 .map_err(Failure::stdout)?;
-            seen += 1;
-            if count.is_some_and(|c| seen >= c) {
-                return Ok(());
-            }
         }
-        let now = Instant::now();
-        if now >= warn_at {
+        if done {
+            s.finish();
+            return Ok(());
+        }
+        let clock_now = Instant::now();
+        if clock_now >= notes_at {
+            for note in s.take_notes() {
+                eprintln!("gimbalctl: warning: {note}");
+            }
+            notes_at = clock_now + NOTE_EVERY;
+        }
+        if clock_now >= warn_at {
             eprintln!(
-                "gimbalctl: warning: no postback from {target} for {:.1} s",
-                (now - last).as_secs_f64()
+                "gimbalctl: warning: no postback from {} for {:.1} s",
+                s.name(),
+                (clock_now - last).as_secs_f64()
             );
             warn_at += SILENCE_WARNING;
         }
+        if s.drained() {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
+/// The longest text `monitor` assembles from CAN text frames.
+const TEXT_CAPACITY: usize = 256;
+
+/// A CAN frame other than a postback, as a line: its class (control, vehicle, text,
+/// foreign), its ID, and what it says. With `json` (the receive time), as a JSON object.
+pub fn describe_frame(
+    out: &mut Vec<u8>,
+    f: &Seen,
+    texts: &mut TextAssembler<TEXT_CAPACITY>,
+    json: Option<&[u8]>,
+) {
+    let id = f.raw_id();
+    let hex: String = f.data.iter().map(|b| format!("{b:02X}")).collect();
+    let protocol = !f.remote && matches!(f.id, embedded_can::Id::Extended(_));
+    let malformed = |out: &mut Vec<u8>, class: &str, why: &str| match json {
+        Some(t) => {
+            let mut o = Obj::start(out, "malformed", Some(t), Some(id));
+            o.str("class", class).str("data", &hex).str("error", why);
+            o.end();
+        }
+        None => out.extend_from_slice(
+            format!(
+                "{class:<8} {}  [{}] {hex}: {why}\n",
+                f.id_text(),
+                f.data.len()
+            )
+            .as_bytes(),
+        ),
+    };
+    match id {
+        ids::CONTROL if protocol => match Command::decode(&f.data) {
+            Ok(cmd) => match json {
+                Some(t) => decode::write_command(out, Some(t), Some(id), &cmd),
+                None => out.extend_from_slice(
+                    format!(
+                        "control  {}  {}\n",
+                        f.id_text(),
+                        command::command_line(&cmd)
+                    )
+                    .as_bytes(),
+                ),
+            },
+            Err(e) => malformed(out, "control", &e.to_string()),
+        },
+        ids::GPS | ids::ALTITUDE | ids::ATTITUDE if protocol => {
+            match VehicleFrame::decode(id, &f.data) {
+                Ok(v) => match json {
+                    Some(t) => decode::write_vehicle(out, Some(t), Some(id), &v),
+                    None => out.extend_from_slice(
+                        format!("vehicle  {}  {}\n", f.id_text(), vehicle_text(&v)).as_bytes(),
+                    ),
+                },
+                Err(e) => malformed(out, "vehicle", &e.to_string()),
+            }
+        }
+        ids::TEXT | ids::TEXT_END if protocol => match texts.feed(id, &f.data) {
+            Ok(Some(text)) => match json {
+                Some(t) => {
+                    let mut o = Obj::start(out, "text", Some(t), Some(id));
+                    o.str("text", text);
+                    o.end();
+                }
+                None => out
+                    .extend_from_slice(format!("text     {}  {text:?}\n", f.id_text()).as_bytes()),
+            },
+            Ok(None) => {
+                if json.is_none() {
+                    out.extend_from_slice(
+                        format!("text     {}  (part) {hex}\n", f.id_text()).as_bytes(),
+                    );
+                }
+            }
+            Err(e) => malformed(out, "text", &e.to_string()),
+        },
+        _ => match json {
+            Some(t) => {
+                let mut o = Obj::start(out, "foreign", Some(t), Some(id));
+                o.bool("extended", matches!(f.id, embedded_can::Id::Extended(_)))
+                    .bool("remote", f.remote)
+                    .str("data", &hex);
+                o.end();
+            }
+            None => out.extend_from_slice(
+                format!(
+                    "foreign  {}  {}[{}] {hex}\n",
+                    f.id_text(),
+                    if f.remote { "remote " } else { "" },
+                    f.data.len()
+                )
+                .as_bytes(),
+            ),
+        },
+    }
+}
+
+/// A vehicle frame in words, with exact decimals of its wire values.
+fn vehicle_text(v: &VehicleFrame) -> String {
+    let fixed = |v: i64, d: u32| {
+        let mut b = Vec::new();
+        crate::json::push_fixed(&mut b, v, d);
+        String::from_utf8(b).unwrap_or_default()
+    };
+    match v {
+        VehicleFrame::Gps(g) => format!(
+            "gps {} {}",
+            fixed(g.lat_e7().into(), 7),
+            fixed(g.lon_e7().into(), 7)
+        ),
+        VehicleFrame::Altitude(a) => format!("altitude {} m", fixed(a.cm().into(), 2)),
+        VehicleFrame::Attitude(a) => format!(
+            "attitude pitch {} roll {} heading {} deg",
+            fixed(a.pitch_centideg().into(), 2),
+            fixed(a.roll_centideg().into(), 2),
+            fixed(a.heading_centideg().into(), 2)
+        ),
+    }
+}
+
+/// `send` and `monitor` over the library's `Gimbal<C>` on the core's in-memory CAN bus: the
+/// same session code `--can` runs over a SocketCAN socket.
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transport::can::CanSession;
+    use embedded_can::{nb::Can, Frame as _};
+    use idu_gimbal::mock::{Bus, MockFrame};
+    use idu_gimbal::sim::{SimConfig, Simulator};
+    use idu_gimbal::wire::text;
+
+    fn spec(args: &[&str]) -> Spec {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct One {
+            #[command(subcommand)]
+            spec: Spec,
+        }
+        let mut argv = vec!["one"];
+        argv.extend_from_slice(args);
+        One::try_parse_from(argv).expect("a command").spec
+    }
+
+    /// What `gimbalctl send --can` puts on the bus for `args`, as `ID#DATA`.
+    fn sent_on_can(args: &[&str], repeat: Option<(u64, u64)>) -> Vec<String> {
+        let bus: Bus<2, 64> = Bus::new(1);
+        let mut gimbal = bus.endpoint(1).unwrap();
+        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
+        let s = spec(args);
+        let job = SendJob {
+            message: s.build().unwrap(),
+            text: match &s {
+                Spec::Text { text } => Some(text.clone()),
+                _ => None,
+            },
+            repeat,
+        };
+        job.run(session).expect("sent");
+        let mut frames = Vec::new();
+        while let Ok(f) = gimbal.receive() {
+            let hex: String = f.data().iter().map(|b| format!("{b:02X}")).collect();
+            frames.push(format!("{:08X}#{hex}", f.raw_id()));
+        }
+        frames
+    }
+
+    #[test]
+    fn send_on_can_puts_each_message_on_the_bus() {
+        // The same frames `encode` prints (and the README's examples).
+        assert_eq!(
+            sent_on_can(&["pitch", "-45"], None),
+            ["00000F01#0F08023EFE000000"]
+        );
+        assert_eq!(
+            sent_on_can(&["look-at", "0", "0", "1000", "0", "0.009", "0"], None),
+            ["00000F01#0F08018403000000", "00000F01#0F08023FFE000000"]
+        );
+        // Vehicle and text frames, which only CAN carries, through the link's push and
+        // text queue.
+        let gps = sent_on_can(&["gps", "47.397742", "8.545594"], None);
+        let expected = spec(&["gps", "47.397742", "8.545594"])
+            .build()
+            .unwrap()
+            .frames();
+        assert_eq!(gps.len(), 1, "{gps:?}");
+        assert_eq!(
+            gps[0],
+            format!("{:08X}#{}", expected[0].id, crate::hex(&expected[0].data))
+        );
+        let att = sent_on_can(&["attitude", "1", "-2", "30"], None);
+        assert!(att[0].starts_with("0000FF13#"), "{att:?}");
+        let txt = sent_on_can(&["text", "HELLO, GIMBAL"], None);
+        let frames: Vec<String> = text::chunks(b"HELLO, GIMBAL")
+            .unwrap()
+            .map(|f| format!("{:08X}#{}", f.id, crate::hex(&f.data)))
+            .collect();
+        assert_eq!(txt, frames);
+    }
+
+    #[test]
+    fn send_on_can_holds_a_rate_then_sends_zero_rate() {
+        let frames = sent_on_can(&["rate", "10", "0"], Some((50, 300)));
+        let (last, held) = frames.split_last().unwrap();
+        assert_eq!(last, "00000F01#0F04000000000000");
+        assert!((5..=8).contains(&held.len()), "{frames:?}");
+        assert!(held.iter().all(|f| f == "00000F01#0F04E80300000000"));
+    }
+
+    /// Puts on the bus, from endpoint 1: another controller's command, the flight
+    /// controller's attitude, a text, a foreign standard frame and a remote frame, then the
+    /// simulated gimbal's postbacks.
+    fn traffic(bus: &Bus<2, 64>) -> idu_gimbal::mock::Endpoint<'_, 2, 64> {
+        let mut other = bus.endpoint(1).unwrap();
+        let mut put = |f: MockFrame| other.transmit(&f).unwrap();
+        let ext = |id, data: &[u8]| MockFrame::extended(id, data).unwrap();
+        let control = spec(&["pitch", "-45"]).build().unwrap().frames();
+        put(ext(control[0].id, &control[0].data));
+        let att = spec(&["attitude", "0", "0", "30.05"])
+            .build()
+            .unwrap()
+            .frames();
+        put(ext(att[0].id, &att[0].data));
+        for f in text::chunks(b"HELLO, GIMBAL").unwrap() {
+            put(ext(f.id, &f.data));
+        }
+        put(MockFrame::standard(0x123, &[1, 2, 3]).unwrap());
+        let mut sim: Simulator =
+            Simulator::new(SimConfig::default(), idu_gimbal::Instant::from_millis(0));
+        for ms in [500, 1000] {
+            sim.poll(idu_gimbal::Instant::from_millis(ms)).unwrap();
+            while let Some(f) = sim.pop_frame() {
+                put(ext(f.id, &f.data));
+            }
+        }
+        other
+    }
+
+    #[test]
+    fn monitor_on_can_shows_postbacks_and_every_other_frame() {
+        let bus: Bus<2, 64> = Bus::new(2);
+        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor);
+        let _other = traffic(&bus);
+        let mut out = Vec::new();
+        watch(
+            session,
+            false,
+            Some(2),
+            &mut out,
+            Some(Duration::from_secs(5)),
+        )
+        .unwrap();
+        let out = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = out.lines().collect();
+        let postback = "pitch 0.00 deg  heading 0.00 deg  motor 0.00 deg  mode heading_follow  \
+                        tracking no  gimbal 1 (X30/X30GT)";
+        assert_eq!(
+            lines,
+            [
+                "control  00000F01  pitch -45",
+                "vehicle  0000FF13  attitude pitch 0 roll 0 heading 30.05 deg",
+                "text     02008201  (part) 48454C4C4F2C2047",
+                "text     02008202  \"HELLO, GIMBAL\"",
+                "foreign  123  [3] 010203",
+                postback,
+                postback,
+            ],
+            "{out}"
+        );
+    }
+
+    #[test]
+    fn monitor_on_can_writes_json_as_decode_does() {
+        let bus: Bus<2, 64> = Bus::new(3);
+        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor);
+        let _other = traffic(&bus);
+        let mut out = Vec::new();
+        watch(
+            session,
+            true,
+            Some(1),
+            &mut out,
+            Some(Duration::from_secs(5)),
+        )
+        .unwrap();
+        let objects: Vec<serde_json::Value> = String::from_utf8(out)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let kinds: Vec<&str> = objects
+            .iter()
+            .map(|o| o["type"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            kinds,
+            ["command", "attitude", "text", "foreign", "postback"]
+        );
+        assert_eq!(objects[0]["command"], "pitch");
+        assert_eq!(objects[2]["text"], "HELLO, GIMBAL");
+        assert_eq!(objects[3]["id"], 0x123);
+        assert_eq!(objects[3]["extended"], false);
+        assert_eq!(objects[4]["id"], 0x030F_0001);
+        assert_eq!(objects[4]["gimbal_model"], "X30/X30GT");
+        assert!(objects.iter().all(|o| o["t"].as_f64().unwrap() > 1.6e9));
+    }
+
+    #[test]
+    fn bus_errors_are_counted_and_told_once() {
+        let bus: Bus<2, 64> = Bus::new(4);
+        let mut s = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
+        let _other = traffic(&bus);
+        bus.inject_error(0, embedded_can::ErrorKind::Acknowledge);
+        let t = idu_gimbal::Instant::from_millis(0);
+        s.pump(t).unwrap();
+        assert_eq!(s.postbacks(), 2);
+        let counters = s.counters();
+        assert!(
+            counters[2].starts_with("bus errors 1  last: "),
+            "{counters:?}"
+        );
+        let notes = s.take_notes();
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].starts_with("mock0: ") && notes[0].ends_with("(1 new, 1 in all)"));
+        assert!(s.take_notes().is_empty());
+        // A monitor-less session records no frames.
+        assert!(s.take_frames().is_empty());
     }
 }

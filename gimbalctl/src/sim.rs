@@ -1,4 +1,12 @@
-//! `gimbalctl sim`: a simulated gimbal on TCP, speaking the serial server's byte stream.
+//! `gimbalctl sim`: a simulated gimbal on TCP, speaking the serial server's byte stream, or
+//! (`--pty`) on a pseudo-terminal, as the gimbal's UART.
+//!
+//! On a pty the gimbal is the library's [`SerialSimulator`] (the same `Simulator` in its
+//! serial framing), served through the library's `SerialPort` contract on the pty's master
+//! side; the slave side's path is the first stdout line, for `--serial PATH`. The sim keeps
+//! no slave open itself, so the kernel tells it when a client opens and closes the port (a
+//! hang-up on the master): postbacks go out only while a client has it open, and a client
+//! that opens it later sees fresh postbacks, not a backlog.
 //!
 //! The gimbal is the library's [`Simulator`] (with `emit_can_frames: false`: its postbacks
 //! go out in their 27-byte stream form). One thread, non-blocking sockets, a 5 ms tick: accept clients up to a bound (more are
@@ -12,6 +20,7 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::time::{Duration, Instant as StdInstant};
 
+use idu_gimbal::sim::serial::SerialSimulator;
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::control::Command;
 use idu_gimbal::wire::ids;
@@ -25,6 +34,9 @@ use crate::error::Failure;
 const TICK: Duration = Duration::from_millis(5);
 /// Reads per client per tick (4 KiB each).
 const MAX_READS: usize = 16;
+/// Reads of the pty per tick (24 bytes each, see `run_pty`).
+#[cfg(unix)]
+const PTY_READS: usize = 256;
 
 struct Client {
     stream: TcpStream,
@@ -155,5 +167,181 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
             });
         }
         std::thread::sleep(TICK);
+    }
+}
+
+/// `gimbalctl sim --pty [--exit-after-ms MS]`.
+#[cfg(unix)]
+pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
+    use idu_gimbal::driver::SerialPort;
+
+    let (master, path) =
+        open_pty().map_err(|e| Failure::Runtime(format!("cannot open a pseudo-terminal: {e}")))?;
+    {
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "gimbalctl sim: serial port at {path}")
+            .and_then(|()| out.flush())
+            .map_err(Failure::stdout)?;
+    }
+    let mut port = PtyMaster {
+        pty: master,
+        open: false,
+    };
+    let start = StdInstant::now();
+    let now = || Instant::from_millis(start.elapsed().as_millis() as u32);
+    let mut gimbal: SerialSimulator = SerialSimulator::new(SimConfig::default(), now());
+    let mut last_logged: Option<Command> = None;
+    let mut handled = 0u32;
+    // One control frame is 24 bytes: a read of 24 completes at most one, so each command
+    // is seen (and logged) as it arrives.
+    let mut buf = [0u8; 24];
+    loop {
+        if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
+            eprintln!(
+                "gimbalctl sim: exiting after {} ms",
+                exit_after_ms.unwrap_or(0)
+            );
+            return Ok(());
+        }
+        let was_open = port.open;
+        for _ in 0..PTY_READS {
+            let n = port.read(&mut buf).unwrap_or(0);
+            if n == 0 {
+                break;
+            }
+            gimbal.receive(&buf[..n], now());
+            let stats = gimbal.sim().stats();
+            let seen = stats.commands.wrapping_add(stats.rejected);
+            if seen != handled {
+                handled = seen;
+                match gimbal.sim().state().last_command {
+                    // Each command once, not every repeat of a rate hold.
+                    Some(cmd) if last_logged != Some(cmd) => {
+                        last_logged = Some(cmd);
+                        eprintln!("gimbalctl sim: {path}: {}", command::command_line(&cmd));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if port.open != was_open {
+            if port.open {
+                eprintln!("gimbalctl sim: {path} opened");
+            } else {
+                eprintln!("gimbalctl sim: {path} closed");
+                last_logged = None;
+            }
+        }
+        // Postbacks only while a client has the port open (none pile up for the next).
+        if gimbal.poll(now()).is_some() && !port.open {
+            let n = gimbal.transmit_bytes().len();
+            gimbal.transmit_written(n);
+        }
+        loop {
+            let bytes = gimbal.transmit_bytes();
+            if bytes.is_empty() {
+                break;
+            }
+            match port.write(bytes) {
+                Ok(0) | Err(()) => break,
+                Ok(n) => gimbal.transmit_written(n),
+            }
+        }
+        std::thread::sleep(TICK);
+    }
+}
+
+/// A new pseudo-terminal: its master side (non-blocking, close-on-exec) and its slave's
+/// path. The slave is opened once to set it raw (8-bit clean, no echo, no line editing),
+/// as a UART is, and closed again.
+#[cfg(unix)]
+fn open_pty() -> nix::Result<(nix::pty::PtyMaster, String)> {
+    use nix::fcntl::OFlag;
+    use nix::sys::termios;
+    use std::os::unix::fs::OpenOptionsExt;
+
+    let master = nix::pty::posix_openpt(
+        OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_NONBLOCK | OFlag::O_CLOEXEC,
+    )?;
+    nix::pty::grantpt(&master)?;
+    nix::pty::unlockpt(&master)?;
+    let path = ptsname(&master)?;
+    let slave = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(libc::O_NOCTTY)
+        .open(&path)
+        .map_err(|e| nix::Error::from_raw(e.raw_os_error().unwrap_or(libc::EIO)))?;
+    let mut raw = termios::tcgetattr(&slave)?;
+    termios::cfmakeraw(&mut raw);
+    termios::tcsetattr(&slave, termios::SetArg::TCSANOW, &raw)?;
+    drop(slave);
+    Ok((master, path))
+}
+
+#[cfg(any(target_os = "linux", target_os = "android"))]
+fn ptsname(master: &nix::pty::PtyMaster) -> nix::Result<String> {
+    nix::pty::ptsname_r(master)
+}
+
+#[cfg(all(unix, not(any(target_os = "linux", target_os = "android"))))]
+fn ptsname(master: &nix::pty::PtyMaster) -> nix::Result<String> {
+    // SAFETY: ptsname's static buffer is copied at once, and the sim calls it from its one
+    // thread only.
+    unsafe { nix::pty::ptsname(master) }
+}
+
+/// `--pty` needs a Unix pseudo-terminal.
+#[cfg(not(unix))]
+pub fn run_pty(_exit_after_ms: Option<u64>) -> Result<(), Failure> {
+    Err(Failure::Usage(
+        "--pty: pseudo-terminals exist only on Unix; use --listen ADDR (TCP)".into(),
+    ))
+}
+
+/// The pty's master side as the library's `SerialPort`: never blocks. While no client has
+/// the slave open the master reads EIO (after any bytes the last client left): that reads
+/// as nothing and is noted in `open`.
+#[cfg(unix)]
+struct PtyMaster {
+    pty: nix::pty::PtyMaster,
+    /// Whether a client has the slave side open (as of the last read).
+    open: bool,
+}
+
+#[cfg(unix)]
+impl idu_gimbal::driver::SerialPort for PtyMaster {
+    type ReadError = ();
+    type WriteError = ();
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, ()> {
+        match std::io::Read::read(&mut self.pty, buf) {
+            Ok(0) => {
+                self.open = false;
+                Ok(0)
+            }
+            Ok(n) => {
+                self.open = true;
+                Ok(n)
+            }
+            Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                self.open = true;
+                Ok(0)
+            }
+            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),
+            // EIO: no client.
+            Err(_) => {
+                self.open = false;
+                Err(())
+            }
+        }
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<usize, ()> {
+        match std::io::Write::write(&mut self.pty, bytes) {
+            Ok(n) => Ok(n),
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
+            Err(_) => Err(()),
+        }
     }
 }

@@ -352,3 +352,120 @@ fn control_without_a_server_is_a_runtime_failure() {
     assert_eq!(code.trim(), "1", "{stderr}");
     assert!(stderr.contains(&format!("127.0.0.1:{port}")), "{stderr}");
 }
+
+/// `gimbalctl sim --pty`, logged as [`start_sim_logged`] logs the TCP sim: the guard, the
+/// slave's path, the log.
+fn start_pty_sim_logged() -> (Guard, String, Log) {
+    let mut child = Command::new(BIN)
+        .args(["sim", "--pty", "--exit-after-ms", "60000"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn sim --pty");
+    let stdout = child.stdout.take().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let guard = Guard(child);
+    let mut first = String::new();
+    BufReader::new(stdout).read_line(&mut first).unwrap();
+    assert!(first.contains("serial port at /dev/"), "{first}");
+    let path = first.trim().rsplit(' ').next().unwrap().to_owned();
+    let log: Log = Arc::default();
+    let l = log.clone();
+    thread::spawn(move || {
+        for line in BufReader::new(stderr).lines() {
+            let Ok(line) = line else { break };
+            l.lock().unwrap().push((Instant::now(), line));
+        }
+    });
+    (guard, path, log)
+}
+
+/// Runs `control ARGS` in a detached 80x24 tmux session; the file its exit status goes to.
+fn control_in_tmux(tmux: &Tmux, args: &str, name: &str) -> std::path::PathBuf {
+    let rc = std::env::temp_dir().join(format!("gimbalctl-{name}-{}.rc", std::process::id()));
+    let _ = std::fs::remove_file(&rc);
+    let cmd = format!("'{BIN}' control {args}; echo $? > '{}'", rc.display());
+    let out = tmux.run(&[
+        "new-session",
+        "-d",
+        "-x",
+        "80",
+        "-y",
+        "24",
+        "-s",
+        "ctl",
+        &cmd,
+    ]);
+    assert!(out.status.success(), "tmux new-session: {out:?}");
+    rc
+}
+
+/// Waits for the panel to exit; its exit status.
+fn exit_status(tmux: &Tmux, rc: &std::path::Path) -> String {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while tmux.alive() {
+        assert!(
+            Instant::now() < deadline,
+            "control did not exit: {}",
+            tmux.pane()
+        );
+        thread::sleep(Duration::from_millis(50));
+    }
+    let code = std::fs::read_to_string(rc).unwrap_or_default();
+    let _ = std::fs::remove_file(rc);
+    code.trim().to_owned()
+}
+
+/// The panel on the gimbal's UART (`--serial`, the simulated gimbal on a pty): the same
+/// keys, the same rate hold and dead-man, through the library's `SerialGimbal`.
+#[test]
+fn control_drives_the_gimbal_over_its_uart() {
+    let (_sim, path, log) = start_pty_sim_logged();
+    let tmux = Tmux::new();
+    let rc = control_in_tmux(&tmux, &format!("--serial {path}"), "serial");
+    let pane = tmux.wait_pane("the link up", Duration::from_secs(10), |p| {
+        p.contains("link up") && p.contains("pitch") && p.contains("q quit")
+    });
+    assert!(pane.contains(&format!("control {path}")), "{pane}");
+    let started = Instant::now();
+    let mut last_key = started;
+    while started.elapsed() < Duration::from_millis(600) {
+        tmux.keys(&["Up"]);
+        last_key = Instant::now();
+        thread::sleep(Duration::from_millis(50));
+    }
+    wait_log(&log, ": rate 0 20", started, Duration::from_secs(5));
+    let stopped = wait_log(&log, ": rate 0 0", last_key, Duration::from_secs(5));
+    assert!(stopped.duration_since(last_key) <= Duration::from_millis(1000));
+    let t = Instant::now();
+    tmux.keys(&["c"]);
+    wait_log(&log, ": center", t, Duration::from_secs(5));
+    tmux.keys(&["q"]);
+    assert_eq!(exit_status(&tmux, &rc), "0");
+}
+
+/// Bytes that hold no frame (a wrong baud rate): counted on the panel, with the likely
+/// cause; the panel goes on, and `q` still leaves with exit 0.
+#[test]
+fn control_shows_garbage_on_the_line() {
+    let mut pty = TestPty::new();
+    let tmux = Tmux::new();
+    let rc = control_in_tmux(&tmux, &format!("--serial {}:57600", pty.path), "garbage");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        // 0x55 never starts a frame.
+        pty.write(&[0x55; 100]);
+        let pane = tmux.pane();
+        if pane.contains("no frame in") {
+            assert!(pane.contains("wrong baud rate"), "{pane}");
+            assert!(pane.contains("57600"), "{pane}");
+            assert!(pane.contains("waiting for the first postback"), "{pane}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "the panel never said: {pane}");
+        thread::sleep(Duration::from_millis(100));
+    }
+    tmux.keys(&["q"]);
+    assert_eq!(exit_status(&tmux, &rc), "0");
+}

@@ -242,3 +242,80 @@ pub fn start_sim(extra: &[&str]) -> (Guard, String) {
     assert!(first.contains("listening on 127.0.0.1:"), "{first}");
     (guard, addr)
 }
+
+/// A pseudo-terminal made by a test: its master side (the test's end of the line) and the
+/// slave's path (gimbalctl's `--serial PATH`). Close-on-exec, so that no child process keeps
+/// the line open: dropping it is the other end going away (a USB adapter pulled).
+#[cfg(unix)]
+pub struct TestPty {
+    master: nix::pty::PtyMaster,
+    pub path: String,
+}
+
+#[cfg(unix)]
+impl TestPty {
+    pub fn new() -> TestPty {
+        use nix::fcntl::OFlag;
+        use nix::sys::termios;
+        use std::os::unix::fs::OpenOptionsExt;
+        let master = nix::pty::posix_openpt(
+            OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_NONBLOCK | OFlag::O_CLOEXEC,
+        )
+        .expect("posix_openpt");
+        nix::pty::grantpt(&master).unwrap();
+        nix::pty::unlockpt(&master).unwrap();
+        let path = nix::pty::ptsname_r(&master).unwrap();
+        // Raw, as a UART: set once through the slave, which is then closed.
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(libc::O_NOCTTY)
+            .open(&path)
+            .unwrap();
+        let mut raw = termios::tcgetattr(&slave).unwrap();
+        termios::cfmakeraw(&mut raw);
+        termios::tcsetattr(&slave, termios::SetArg::TCSANOW, &raw).unwrap();
+        drop(slave);
+        TestPty { master, path }
+    }
+
+    /// Writes all of `bytes` (waiting while the line is full, 2 s at most); `false` when no
+    /// one has the slave open (the bytes are lost, as on a line with no listener).
+    pub fn write(&mut self, bytes: &[u8]) -> bool {
+        let deadline = Instant::now() + Duration::from_secs(2);
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            match Write::write(&mut self.master, rest) {
+                Ok(n) => rest = &rest[n..],
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    assert!(Instant::now() < deadline, "the pty stays full");
+                    thread::sleep(Duration::from_millis(1));
+                }
+                Err(_) => return false,
+            }
+        }
+        true
+    }
+
+    /// What arrives within `wait`.
+    pub fn read_for(&mut self, wait: Duration) -> Vec<u8> {
+        let deadline = Instant::now() + wait;
+        let mut got = Vec::new();
+        let mut buf = [0u8; 4096];
+        while Instant::now() < deadline {
+            match Read::read(&mut self.master, &mut buf) {
+                Ok(n) if n > 0 => got.extend_from_slice(&buf[..n]),
+                _ => thread::sleep(Duration::from_millis(2)),
+            }
+        }
+        got
+    }
+
+    /// Whether a process has the slave side open (the master reads EIO while none does).
+    pub fn is_open(&mut self) -> bool {
+        match Read::read(&mut self.master, &mut []) {
+            Err(e) => e.raw_os_error() != Some(libc::EIO),
+            Ok(_) => true,
+        }
+    }
+}

@@ -1,0 +1,460 @@
+//! The CAN transport: the library's `Gimbal<C>` over a [`Tap`] around any
+//! `embedded_can::nb::Can` driver: a SocketCAN socket in non-blocking mode on Linux, the
+//! core's in-memory mock bus in the tests (the same session code, only the socket's opening
+//! differs).
+//!
+//! The tap passes every call through unchanged and notes, for the session: each frame
+//! received (for `monitor`, which shows the frames the driver does not take: control,
+//! vehicle, text, foreign IDs), each driver error by what it says (CAN error frames: bus-off,
+//! error-passive, no ACK, ...), and an error that means the interface is gone.
+
+use std::cell::RefCell;
+use std::fmt::Write as _;
+use std::rc::Rc;
+
+use embedded_can::{nb::Can, Frame as _, Id};
+use idu_gimbal::link::Link;
+use idu_gimbal::{Gimbal, Instant, Transport};
+
+use super::{Mode, Session};
+use crate::error::Failure;
+
+/// What a CAN driver's error means to the user.
+pub trait BusFault {
+    /// In words, with a hint where one helps (`bus off: ...`).
+    fn describe(&self) -> String;
+    /// Whether the interface is gone (down, removed): the session ends.
+    fn is_fatal(&self) -> bool;
+}
+
+/// A received frame, as `monitor` shows it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Seen {
+    pub id: Id,
+    pub remote: bool,
+    pub data: Vec<u8>,
+}
+
+impl Seen {
+    /// The raw ID (11 or 29 bits).
+    pub fn raw_id(&self) -> u32 {
+        match self.id {
+            Id::Standard(id) => u32::from(id.as_raw()),
+            Id::Extended(id) => id.as_raw(),
+        }
+    }
+
+    /// The ID as candump writes it: 3 hex digits standard, 8 extended.
+    pub fn id_text(&self) -> String {
+        match self.id {
+            Id::Standard(id) => format!("{:03X}", id.as_raw()),
+            Id::Extended(id) => format!("{:08X}", id.as_raw()),
+        }
+    }
+
+    /// Whether this is an extended data frame on `id`.
+    pub fn is(&self, id: u32) -> bool {
+        !self.remote && matches!(self.id, Id::Extended(e) if e.as_raw() == id)
+    }
+}
+
+/// A driver error of one kind: how many, how many already told.
+#[derive(Debug)]
+struct Fault {
+    what: String,
+    count: u64,
+    told: u64,
+}
+
+/// What the tap noted, shared with the session.
+#[derive(Debug, Default)]
+pub struct TapLog {
+    /// Record received frames (monitor).
+    record: bool,
+    frames: Vec<Seen>,
+    faults: Vec<Fault>,
+    last_fault: Option<String>,
+    fatal: Option<String>,
+}
+
+impl TapLog {
+    fn fault(&mut self, what: String, fatal: bool) {
+        if fatal && self.fatal.is_none() {
+            self.fatal = Some(what.clone());
+        }
+        if let Some(f) = self.faults.iter_mut().find(|f| f.what == what) {
+            f.count += 1;
+        } else if self.faults.len() < 64 {
+            // Bounded: a driver has few kinds of error.
+            self.faults.push(Fault {
+                what: what.clone(),
+                count: 1,
+                told: 0,
+            });
+        }
+        self.last_fault = Some(what);
+    }
+}
+
+/// The received-frame bound of [`TapLog`] between two `take_frames` (a monitor that stops
+/// reading them loses the oldest rather than grow without end).
+const MAX_FRAMES: usize = 4096;
+
+/// An `embedded_can::nb::Can` driver with its traffic noted in a shared [`TapLog`].
+pub struct Tap<C> {
+    can: C,
+    log: Rc<RefCell<TapLog>>,
+}
+
+impl<C> Tap<C> {
+    /// Wraps `can`; the log is shared with whoever else holds it.
+    pub fn new(can: C, log: Rc<RefCell<TapLog>>) -> Self {
+        Tap { can, log }
+    }
+}
+
+impl<C> Can for Tap<C>
+where
+    C: Can,
+    C::Error: BusFault,
+{
+    type Frame = C::Frame;
+    type Error = C::Error;
+
+    fn transmit(&mut self, frame: &C::Frame) -> nb::Result<Option<C::Frame>, C::Error> {
+        let r = self.can.transmit(frame);
+        if let Err(nb::Error::Other(e)) = &r {
+            self.log.borrow_mut().fault(e.describe(), e.is_fatal());
+        }
+        r
+    }
+
+    fn receive(&mut self) -> nb::Result<C::Frame, C::Error> {
+        let r = self.can.receive();
+        let mut log = self.log.borrow_mut();
+        match &r {
+            Ok(f) if log.record => {
+                if log.frames.len() >= MAX_FRAMES {
+                    log.frames.remove(0);
+                }
+                log.frames.push(Seen {
+                    id: f.id(),
+                    remote: f.is_remote_frame(),
+                    data: f.data().to_vec(),
+                });
+            }
+            Ok(_) | Err(nb::Error::WouldBlock) => {}
+            Err(nb::Error::Other(e)) => log.fault(e.describe(), e.is_fatal()),
+        }
+        r
+    }
+}
+
+/// The library's `Gimbal<C>` over a tapped CAN driver.
+pub struct CanSession<C> {
+    gimbal: Gimbal<Tap<C>>,
+    log: Rc<RefCell<TapLog>>,
+    name: String,
+    /// Frames and errors counted at the start of the last poll, and the poll's bound.
+    before: u64,
+    per_poll: u64,
+}
+
+/// Frames one poll receives in [`Mode::Monitor`]: a postback is four frames, so one poll
+/// completes at most one.
+const MONITOR_FRAMES: u16 = 4;
+
+impl<C> CanSession<C>
+where
+    C: Can,
+    C::Error: BusFault,
+{
+    /// A session on `can`, named `name` (the interface) in messages.
+    pub fn new(can: C, name: &str, mode: Mode) -> Self {
+        let log = Rc::new(RefCell::new(TapLog {
+            record: mode == Mode::Monitor,
+            ..TapLog::default()
+        }));
+        let config = mode.config(MONITOR_FRAMES);
+        CanSession {
+            gimbal: Gimbal::new(Tap::new(can, log.clone()), config),
+            log,
+            name: name.to_owned(),
+            before: 0,
+            per_poll: u64::from(config.max_rx_per_poll.get()),
+        }
+    }
+
+    /// Frames received and driver errors so far: what a poll's receive loop consumed.
+    fn consumed(&self) -> u64 {
+        let s = self.gimbal.stats();
+        u64::from(s.link.frames_received) + u64::from(s.driver_errors.total())
+    }
+}
+
+impl<C> Transport for CanSession<C>
+where
+    C: Can,
+    C::Error: BusFault,
+{
+    type Link = Link;
+
+    fn link(&self) -> &Link {
+        self.gimbal.link()
+    }
+
+    fn link_mut(&mut self) -> &mut Link {
+        self.gimbal.link_mut()
+    }
+}
+
+impl<C> Session for CanSession<C>
+where
+    C: Can,
+    C::Error: BusFault,
+{
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn poll_once(&mut self, now: Instant) -> Result<(), Failure> {
+        self.before = self.consumed();
+        // A driver error is counted by the driver and noted by the tap; the poll went on.
+        let _ = self.gimbal.poll(now);
+        match &self.log.borrow().fatal {
+            Some(why) => Err(Failure::Runtime(format!("{}: {why}", self.name))),
+            None => Ok(()),
+        }
+    }
+
+    fn drained(&self) -> bool {
+        self.consumed().wrapping_sub(self.before) < self.per_poll
+    }
+
+    fn postbacks(&self) -> u32 {
+        self.gimbal.stats().link.postbacks
+    }
+
+    fn sent(&self) -> u64 {
+        u64::from(self.gimbal.stats().link.frames_sent)
+    }
+
+    fn has_transmit(&self) -> bool {
+        self.gimbal.link().has_transmit()
+    }
+
+    fn is_rate_holding(&self) -> bool {
+        self.gimbal.link().is_rate_holding()
+    }
+
+    fn send_text(&mut self, text: &[u8]) -> Result<(), String> {
+        self.gimbal.send_text(text).map_err(|e| format!("{e:?}"))
+    }
+
+    fn counters(&self) -> [String; 3] {
+        let s = self.gimbal.stats();
+        let log = self.log.borrow();
+        let errors: u64 = log.faults.iter().map(|f| f.count).sum();
+        [
+            format!(
+                "postbacks {}  crc errors {}  frames received {}  other frames {}",
+                s.link.postbacks, s.link.crc_errors, s.link.frames_received, s.link.ignored_frames
+            ),
+            format!(
+                "frames sent {}  queue full {}  requeued {}",
+                s.link.frames_sent, s.link.queue_full, s.link.requeued
+            ),
+            match &log.last_fault {
+                Some(last) => format!("bus errors {errors}  last: {last}"),
+                None => "bus errors 0".to_owned(),
+            },
+        ]
+    }
+
+    fn take_notes(&mut self) -> Vec<String> {
+        let mut log = self.log.borrow_mut();
+        let name = self.name.clone();
+        log.faults
+            .iter_mut()
+            .filter(|f| f.count > f.told)
+            .map(|f| {
+                let new = f.count - f.told;
+                f.told = f.count;
+                let mut line = format!("{name}: {}", f.what);
+                let _ = write!(line, " ({new} new, {} in all)", f.count);
+                line
+            })
+            .collect()
+    }
+
+    fn take_frames(&mut self) -> Vec<Seen> {
+        std::mem::take(&mut self.log.borrow_mut().frames)
+    }
+
+    fn is_can(&self) -> bool {
+        true
+    }
+
+    fn finish(self) {}
+}
+
+/// `--can IFACE`: a network interface name (1 to 15 bytes, no `/`, no whitespace); on a
+/// system without SocketCAN, a usage error.
+pub fn check_name(iface: &str) -> Result<(), Failure> {
+    if cfg!(not(target_os = "linux")) {
+        return Err(Failure::Usage(format!(
+            "--can {iface}: SocketCAN exists only on Linux; here use --serial PATH[:BAUD] \
+             (the gimbal's UART) or --tcp HOST:PORT (its serial server)"
+        )));
+    }
+    let ok = (1..=15).contains(&iface.len())
+        && !iface.contains('/')
+        && !iface.chars().any(|c| c.is_whitespace() || c == ':')
+        && iface != "."
+        && iface != "..";
+    if ok {
+        Ok(())
+    } else {
+        Err(Failure::Usage(format!(
+            "--can {iface:?}: not an interface name (1 to 15 characters, no '/', ':' or \
+             spaces), e.g. can0"
+        )))
+    }
+}
+
+/// Opens `iface` with SocketCAN and runs `job` over it.
+#[cfg(target_os = "linux")]
+pub fn run_socketcan<J: super::Job>(iface: &str, mode: Mode, job: J) -> Result<J::Out, Failure> {
+    let socket = socketcan_open::open(iface)?;
+    job.run(CanSession::new(socket, iface, mode))
+}
+
+/// SocketCAN is Linux only ([`check_name`] already said so).
+#[cfg(not(target_os = "linux"))]
+pub fn run_socketcan<J: super::Job>(iface: &str, _mode: Mode, _job: J) -> Result<J::Out, Failure> {
+    check_name(iface).map(|()| unreachable!("SocketCAN is Linux only"))
+}
+
+#[cfg(target_os = "linux")]
+mod socketcan_open {
+    //! Opening a SocketCAN interface, with the state of the interface read from
+    //! /sys/class/net first so that the usual mistakes get their own message. The one part
+    //! of the CAN path the tests cannot run without a (v)can interface.
+
+    use std::path::Path;
+
+    use socketcan::{CanSocket, Socket, SocketOptions};
+
+    use super::BusFault;
+    use crate::error::Failure;
+
+    /// ARPHRD_CAN, /sys/class/net/IFACE/type of a CAN interface.
+    const ARPHRD_CAN: u32 = 280;
+    /// IFF_UP in /sys/class/net/IFACE/flags.
+    const IFF_UP: u32 = 0x1;
+
+    fn read_sys(iface: &str, what: &str) -> Option<String> {
+        std::fs::read_to_string(Path::new("/sys/class/net").join(iface).join(what))
+            .ok()
+            .map(|s| s.trim().to_owned())
+    }
+
+    /// The CAN interfaces of this machine, for the messages.
+    fn can_interfaces() -> String {
+        let mut names: Vec<String> = std::fs::read_dir("/sys/class/net")
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter(|n| read_sys(n, "type").and_then(|t| t.parse().ok()) == Some(ARPHRD_CAN))
+            .collect();
+        names.sort();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    }
+
+    /// Opens `iface`: it must exist, be a CAN interface, and be up. The socket is
+    /// non-blocking and receives error frames (counted and shown as bus errors).
+    pub fn open(iface: &str) -> Result<CanSocket, Failure> {
+        let Some(ty) = read_sys(iface, "type") else {
+            return Err(Failure::Runtime(format!(
+                "--can {iface}: no such network interface (CAN interfaces here: {}); a USB \
+                 CAN adapter not plugged in, or a HAT's overlay not loaded? For a virtual bus: \
+                 sudo modprobe vcan && sudo ip link add dev vcan0 type vcan && sudo ip link set \
+                 up vcan0",
+                can_interfaces()
+            )));
+        };
+        if ty.parse::<u32>().ok() != Some(ARPHRD_CAN) {
+            return Err(Failure::Runtime(format!(
+                "--can {iface}: not a CAN interface (link type {ty}; CAN interfaces here: {})",
+                can_interfaces()
+            )));
+        }
+        let flags = read_sys(iface, "flags")
+            .and_then(|f| u32::from_str_radix(f.trim_start_matches("0x"), 16).ok())
+            .unwrap_or(IFF_UP);
+        if flags & IFF_UP == 0 {
+            return Err(Failure::Runtime(format!(
+                "--can {iface}: the interface is down; bring it up at the gimbal's 1 Mbit/s: \
+                 sudo ip link set {iface} up type can bitrate 1000000 (a vcan: sudo ip link set \
+                 {iface} up)"
+            )));
+        }
+        let socket = CanSocket::open(iface)
+            .map_err(|e| Failure::Runtime(format!("--can {iface}: cannot open: {e}")))?;
+        socket
+            .set_nonblocking(true)
+            .map_err(|e| Failure::Runtime(format!("--can {iface}: {e}")))?;
+        socket
+            .set_error_filter_accept_all()
+            .map_err(|e| Failure::Runtime(format!("--can {iface}: {e}")))?;
+        Ok(socket)
+    }
+
+    impl BusFault for socketcan::Error {
+        fn describe(&self) -> String {
+            use socketcan::CanError as E;
+            match self {
+                socketcan::Error::Can(E::BusOff) => "bus off: the controller left the bus after \
+                     too many errors (check wiring, the two 120 ohm terminations and the 1 Mbit/s \
+                     bitrate; `ip link set IFACE type can restart-ms 100` lets it rejoin)"
+                    .into(),
+                socketcan::Error::Can(E::NoAck) => {
+                    "no ACK: no other node acknowledged (is the gimbal powered and on this bus?)"
+                        .into()
+                }
+                socketcan::Error::Can(e) => format!("error frame: {e}"),
+                socketcan::Error::Io(e) => match e.raw_os_error() {
+                    Some(libc::ENOBUFS) => "transmit queue full (no node acknowledges the frames: \
+                         is the gimbal powered and the bus terminated?)"
+                        .into(),
+                    Some(libc::ENETDOWN) => "the interface went down".into(),
+                    Some(libc::ENODEV | libc::ENXIO) => {
+                        "the interface went away (a USB CAN adapter unplugged?)".into()
+                    }
+                    _ => format!("I/O error: {e}"),
+                },
+            }
+        }
+
+        fn is_fatal(&self) -> bool {
+            matches!(self, socketcan::Error::Io(e)
+                if matches!(e.raw_os_error(), Some(libc::ENETDOWN | libc::ENODEV | libc::ENXIO | libc::EBADF)))
+        }
+    }
+}
+
+#[cfg(test)]
+impl BusFault for idu_gimbal::mock::MockError {
+    fn describe(&self) -> String {
+        format!("{}", embedded_can::Error::kind(self))
+    }
+
+    fn is_fatal(&self) -> bool {
+        false
+    }
+}

@@ -1,0 +1,394 @@
+//! The byte-stream transports: the serial server over TCP and the gimbal's UART on a serial
+//! port, both through the library's `SerialGimbal` over a non-blocking [`StreamPort`].
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::TcpStream;
+use std::time::Duration;
+
+use idu_gimbal::driver::{PortError, SerialGimbal, SerialPort};
+use idu_gimbal::link::serial::SerialLink;
+use idu_gimbal::wire::serial::StreamStats;
+use idu_gimbal::{Instant, Transport};
+
+use super::{Mode, SerialSpec, Session, GIMBAL_BAUD};
+use crate::error::Failure;
+
+/// A non-blocking byte stream: a TCP connection or a serial port, for the library's
+/// [`SerialGimbal`] (as its [`SerialPort`]) and for `mavlink --autopilot-serial`.
+///
+/// Reads and writes never wait: nothing to read or no room is `Ok(0)`. Every error is the
+/// end of the stream, already worded for the user: the server closed the connection, the
+/// serial port went away.
+pub struct StreamPort {
+    io: Io,
+    name: String,
+    /// The most bytes one read takes (see [`Mode::Monitor`]).
+    read_cap: usize,
+}
+
+enum Io {
+    Tcp(TcpStream),
+    Tty(Box<dyn serialport::SerialPort>),
+}
+
+/// Why a stream ended, in words for stderr.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ended(pub String);
+
+impl StreamPort {
+    /// Connects to the serial server (3 s timeout) and makes the socket non-blocking.
+    pub fn tcp(target: &str) -> Result<StreamPort, Failure> {
+        let stream = crate::net::connect(target)?;
+        stream
+            .set_nonblocking(true)
+            .map_err(|e| Failure::io(target, e))?;
+        Ok(StreamPort {
+            io: Io::Tcp(stream),
+            name: target.to_owned(),
+            read_cap: usize::MAX,
+        })
+    }
+
+    /// Opens a serial port at `spec.baud` 8N1, no flow control, exclusively (a second
+    /// program on the same port is refused), and drops whatever arrived before.
+    /// `arg` names the option in messages (`--serial`, `--autopilot-serial`).
+    pub fn serial(spec: &SerialSpec, arg: &str) -> Result<StreamPort, Failure> {
+        let path = &spec.path;
+        let port = serialport::new(path, spec.baud)
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .timeout(Duration::ZERO)
+            .open()
+            .map_err(|e| open_error(arg, path, &e))?;
+        let _ = port.clear(serialport::ClearBuffer::Input);
+        Ok(StreamPort {
+            io: Io::Tty(port),
+            name: path.clone(),
+            read_cap: usize::MAX,
+        })
+    }
+
+    fn is_tcp(&self) -> bool {
+        matches!(self.io, Io::Tcp(_))
+    }
+
+    /// Reads what waits, at most `buf.len()` (and the read cap); `Ok(0)` when nothing does.
+    pub fn read_now(&mut self, buf: &mut [u8]) -> Result<usize, Ended> {
+        let cap = buf.len().min(self.read_cap);
+        let buf = &mut buf[..cap];
+        loop {
+            let r = match &mut self.io {
+                Io::Tcp(s) => s.read(buf),
+                Io::Tty(p) => p.read(buf),
+            };
+            return match r {
+                Ok(0) if buf.is_empty() => Ok(0),
+                Ok(0) => Err(self.ended(None)),
+                Ok(n) => Ok(n),
+                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => Ok(0),
+                Err(e) => Err(self.ended(Some(e))),
+            };
+        }
+    }
+
+    /// Writes what the port takes now; `Ok(0)` when it takes nothing.
+    pub fn write_now(&mut self, bytes: &[u8]) -> Result<usize, Ended> {
+        if bytes.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            let r = match &mut self.io {
+                Io::Tcp(s) => s.write(bytes),
+                Io::Tty(p) => p.write(bytes),
+            };
+            return match r {
+                Ok(0) if self.is_tcp() => Err(self.ended(None)),
+                Ok(n) => Ok(n),
+                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => Ok(0),
+                Err(e) => Err(self.ended(Some(e))),
+            };
+        }
+    }
+
+    /// The words for the end of the stream.
+    fn ended(&self, e: Option<std::io::Error>) -> Ended {
+        let name = &self.name;
+        Ended(match (&self.io, e) {
+            (Io::Tcp(_), None) => format!("{name} closed the connection"),
+            (Io::Tcp(_), Some(e)) => format!("connection to {name} lost: {e}"),
+            (Io::Tty(_), e) => {
+                let why = e.map_or_else(|| "end of file".to_owned(), |e| e.to_string());
+                format!(
+                    "{name}: the serial port went away ({why}): was the USB adapter unplugged \
+                     or the other end closed? (gimbalctl stops rather than wait for it)"
+                )
+            }
+        })
+    }
+
+    /// Closes the port without losing what was written: TCP sends FIN and waits briefly
+    /// for the server (see [`crate::net::close_gently`]); a tty drains its output.
+    pub fn close(self) {
+        match self.io {
+            Io::Tcp(s) => {
+                let _ = s.set_nonblocking(false);
+                crate::net::close_gently(s);
+            }
+            Io::Tty(mut p) => {
+                let _ = p.flush();
+            }
+        }
+    }
+}
+
+impl SerialPort for StreamPort {
+    type ReadError = Ended;
+    type WriteError = Ended;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Ended> {
+        self.read_now(buf)
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<usize, Ended> {
+        self.write_now(bytes)
+    }
+}
+
+/// Opening a serial port failed: the usual causes in words.
+fn open_error(arg: &str, path: &str, e: &serialport::Error) -> Failure {
+    use serialport::ErrorKind as K;
+    let what = match e.kind {
+        K::Io(ErrorKind::NotFound) => format!(
+            "no such device (is the adapter plugged in? serial ports are usually \
+             /dev/ttyUSB*, /dev/ttyACM*, /dev/ttyAMA*, /dev/serial/by-id/*): {}",
+            e.description
+        ),
+        K::Io(ErrorKind::PermissionDenied) => {
+            format!("permission denied: {}{}", owner_hint(path), e.description)
+        }
+        K::NoDevice => format!("busy: another program has it open ({})", e.description),
+        _ if e.description.contains("Inappropriate ioctl")
+            || e.description.contains("Not a typewriter") =>
+        {
+            "not a serial port (not a tty)".to_owned()
+        }
+        _ => e.description.clone(),
+    };
+    Failure::Runtime(format!("{arg} {path}: cannot open: {what}"))
+}
+
+/// "add yourself to group G" when the device's group can be named.
+#[cfg(unix)]
+fn owner_hint(path: &str) -> String {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(meta) = std::fs::metadata(path) else {
+        return String::new();
+    };
+    let gid = meta.gid();
+    let group = std::fs::read_to_string("/etc/group")
+        .ok()
+        .and_then(|groups| {
+            groups.lines().find_map(|l| {
+                let mut f = l.split(':');
+                let name = f.next()?;
+                let id = f.nth(1)?.parse::<u32>().ok()?;
+                (id == gid).then(|| name.to_owned())
+            })
+        });
+    match group {
+        Some(g) => format!(
+            "the device belongs to group {g}: add yourself to it (sudo usermod -aG {g} $USER, \
+             then log in again) or run as root; "
+        ),
+        None => format!("the device belongs to group id {gid}; "),
+    }
+}
+
+#[cfg(not(unix))]
+fn owner_hint(_path: &str) -> String {
+    String::new()
+}
+
+/// A serial port's reads in [`Mode::Monitor`]: at most one postback (27 bytes) each.
+const MONITOR_READ: usize = 27;
+
+/// The library's `SerialGimbal` over a [`StreamPort`]: the serial server or the UART.
+pub struct StreamSession {
+    gimbal: SerialGimbal<StreamPort>,
+    name: String,
+    /// The baud rate, for the hint on garbage (a TCP stream has none).
+    baud: Option<u32>,
+    /// Stream counters at the last note.
+    noted: StreamStats,
+    /// Bytes received at the start of the last poll, and the most one poll reads.
+    before: u32,
+    per_poll: u32,
+}
+
+impl StreamSession {
+    /// The serial server (or `gimbalctl sim`) at `target`.
+    pub fn tcp(target: &str, mode: Mode) -> Result<StreamSession, Failure> {
+        Ok(Self::new(StreamPort::tcp(target)?, None, mode))
+    }
+
+    /// The gimbal's UART.
+    pub fn serial(spec: &SerialSpec, mode: Mode) -> Result<StreamSession, Failure> {
+        Ok(Self::new(
+            StreamPort::serial(spec, "--serial")?,
+            Some(spec.baud),
+            mode,
+        ))
+    }
+
+    /// A session over an open port; `baud` for the wrong-baud hint.
+    pub fn new(mut port: StreamPort, baud: Option<u32>, mode: Mode) -> StreamSession {
+        // The library's driver reads 32 bytes at a time, `max_rx_per_poll` times.
+        let (reads, chunk) = match mode {
+            Mode::Drive => (32, 32),
+            Mode::Monitor => {
+                port.read_cap = MONITOR_READ;
+                (1, MONITOR_READ as u32)
+            }
+        };
+        let name = port.name.clone();
+        StreamSession {
+            gimbal: SerialGimbal::new(port, mode.config(reads)),
+            name,
+            baud,
+            noted: StreamStats::default(),
+            before: 0,
+            per_poll: u32::from(reads) * chunk,
+        }
+    }
+
+    /// Bytes received that held no frame (skipped, or in frames with a bad CRC or bad
+    /// fixed bytes).
+    fn garbage(s: &StreamStats) -> u64 {
+        u64::from(s.skipped_bytes) + 27 * u64::from(s.crc_errors) + 24 * u64::from(s.invalid_frames)
+    }
+
+    fn baud_hint(&self) -> String {
+        match self.baud {
+            Some(b) if b != GIMBAL_BAUD => format!(
+                ": wrong baud rate? this port runs at {b}, the gimbal's UART at {GIMBAL_BAUD} 8N1"
+            ),
+            Some(_) => {
+                ": wrong baud rate (the gimbal's UART runs at 115200 8N1), or noise on the line?"
+                    .to_owned()
+            }
+            None => String::new(),
+        }
+    }
+}
+
+impl Transport for StreamSession {
+    type Link = SerialLink;
+
+    fn link(&self) -> &SerialLink {
+        self.gimbal.link()
+    }
+
+    fn link_mut(&mut self) -> &mut SerialLink {
+        self.gimbal.link_mut()
+    }
+}
+
+impl Session for StreamSession {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn poll_once(&mut self, now: Instant) -> Result<(), Failure> {
+        self.before = self.gimbal.stats().bytes_received;
+        match self.gimbal.poll(now) {
+            Ok(()) => Ok(()),
+            Err(PortError::Read(Ended(why)) | PortError::Write(Ended(why))) => {
+                Err(Failure::Runtime(why))
+            }
+        }
+    }
+
+    fn drained(&self) -> bool {
+        self.gimbal.stats().bytes_received.wrapping_sub(self.before) < self.per_poll
+    }
+
+    fn postbacks(&self) -> u32 {
+        self.gimbal.stats().link.postbacks
+    }
+
+    fn sent(&self) -> u64 {
+        u64::from(self.gimbal.stats().bytes_sent) / 24
+    }
+
+    fn has_transmit(&self) -> bool {
+        self.gimbal.link().has_transmit()
+    }
+
+    fn is_rate_holding(&self) -> bool {
+        self.gimbal.link().link().is_rate_holding()
+    }
+
+    fn send_text(&mut self, _text: &[u8]) -> Result<(), String> {
+        Err("the serial link carries no text (CAN only)".into())
+    }
+
+    fn counters(&self) -> [String; 3] {
+        let s = self.gimbal.stats();
+        let garbage = Self::garbage(&s.stream);
+        [
+            format!(
+                "postbacks {}  crc errors {}  skipped bytes {}",
+                s.link.postbacks, s.stream.crc_errors, s.stream.skipped_bytes
+            ),
+            format!(
+                "frames sent {}  bytes sent {}  bytes received {}  queue full {}",
+                s.bytes_sent / 24,
+                s.bytes_sent,
+                s.bytes_received,
+                s.link.queue_full
+            ),
+            if garbage > 0 && s.link.postbacks == 0 {
+                // Fits the 80-column panel.
+                match self.baud {
+                    Some(b) if b != GIMBAL_BAUD => format!(
+                        "no frame in {garbage} bytes: wrong baud rate? ({b} here; the gimbal: {GIMBAL_BAUD})"
+                    ),
+                    Some(_) => format!(
+                        "no frame in {garbage} bytes: wrong baud rate (the gimbal: 115200 8N1)?"
+                    ),
+                    None => format!("no frame in {garbage} bytes"),
+                }
+            } else {
+                String::new()
+            },
+        ]
+    }
+
+    fn take_notes(&mut self) -> Vec<String> {
+        let s = self.gimbal.stats().stream;
+        let new = Self::garbage(&s).saturating_sub(Self::garbage(&self.noted));
+        if new == 0 {
+            return Vec::new();
+        }
+        let crc = s.crc_errors.wrapping_sub(self.noted.crc_errors);
+        self.noted = s;
+        vec![format!(
+            "{new} bytes from {} held no valid frame ({crc} bad CRCs; {} postbacks so far){}",
+            self.name,
+            s.postbacks,
+            self.baud_hint()
+        )]
+    }
+
+    fn take_frames(&mut self) -> Vec<super::Seen> {
+        Vec::new()
+    }
+
+    fn finish(self) {
+        self.gimbal.release().close();
+    }
+}

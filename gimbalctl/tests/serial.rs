@@ -1,0 +1,555 @@
+//! The serial paths end to end on pseudo-terminals: `sim --pty` plays the gimbal's UART,
+//! `send`, `monitor` and `mavlink` open its slave side with `--serial PATH`; a test-made pty
+//! pair plays a pulled USB adapter, a line at the wrong baud rate, and (for
+//! `mavlink --autopilot-serial`) the autopilot's TELEM port, speaking MAVLink built with
+//! `mavio` (the bridge's re-export).
+//!
+//! Every wait is bounded; every child is killed when its test ends.
+
+#![cfg(unix)]
+
+mod common;
+
+use common::*;
+use std::io::{BufRead, BufReader, Read};
+use std::net::UdpSocket;
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use idu_gimbal_mavlink::attitude::YawPitch;
+use idu_gimbal_mavlink::framing::{Check, FrameReader};
+use idu_gimbal_mavlink::mavio;
+use mavio::dialects::common::enums::{
+    GimbalDeviceFlags, MavAutopilot, MavCmd, MavModeFlag, MavState, MavType,
+};
+use mavio::dialects::common::messages::{
+    CommandLong, GimbalDeviceAttitudeStatus, GimbalDeviceInformation, GimbalDeviceSetAttitude,
+    Heartbeat,
+};
+use mavio::mavspec::rust::spec::MessageSpecStatic;
+use mavio::protocol::{Frame, V2};
+use mavio::Message;
+
+/// The sim's stderr lines, as they come.
+type Log = Arc<Mutex<Vec<String>>>;
+
+/// `gimbalctl sim --pty`: the guard, the slave's path, the sim's log.
+fn start_pty_sim() -> (Guard, String, Log) {
+    let mut child = Command::new(BIN)
+        .args(["sim", "--pty", "--exit-after-ms", "60000"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn sim --pty");
+    let stdout = child.stdout.take().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let guard = Guard(child);
+    let mut first = String::new();
+    BufReader::new(stdout).read_line(&mut first).unwrap();
+    assert!(
+        first.starts_with("gimbalctl sim: serial port at /dev/"),
+        "{first}"
+    );
+    let path = first.trim().rsplit(' ').next().unwrap().to_owned();
+    let log: Log = Arc::default();
+    let l = log.clone();
+    thread::spawn(move || {
+        for line in BufReader::new(stderr).lines() {
+            let Ok(line) = line else { break };
+            l.lock().unwrap().push(line);
+        }
+    });
+    (guard, path, log)
+}
+
+/// Polls `log` until a line ends with `suffix`.
+fn wait_log(log: &Log, suffix: &str, timeout: Duration) {
+    let deadline = Instant::now() + timeout;
+    while !log.lock().unwrap().iter().any(|l| l.ends_with(suffix)) {
+        assert!(
+            Instant::now() < deadline,
+            "never logged {suffix:?}: {:?}",
+            log.lock().unwrap()
+        );
+        thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Waits until gimbalctl has opened the slave side of `pty`.
+fn wait_open(pty: &mut TestPty) {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !pty.is_open() {
+        assert!(Instant::now() < deadline, "{} never opened", pty.path);
+        thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Starts gimbalctl with `args`, stdout and stderr collected.
+fn spawn(args: &[&str]) -> (Guard, thread::JoinHandle<String>, Arc<Mutex<String>>) {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn gimbalctl");
+    let mut out = child.stdout.take().unwrap();
+    let err = child.stderr.take().unwrap();
+    let stdout = thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let stderr: Arc<Mutex<String>> = Arc::default();
+    let e = stderr.clone();
+    thread::spawn(move || {
+        for line in BufReader::new(err).lines() {
+            let Ok(line) = line else { break };
+            let mut e = e.lock().unwrap();
+            e.push_str(&line);
+            e.push('\n');
+        }
+    });
+    (Guard(child), stdout, stderr)
+}
+
+#[test]
+fn send_and_monitor_over_the_simulated_uart() {
+    let (_sim, path, log) = start_pty_sim();
+    let out = ok(&["monitor", "--serial", &path, "--count", "2"]);
+    let lines = out.lines();
+    assert_eq!(lines.len(), 2, "{}", out.stdout);
+    assert!(lines[0].starts_with("pitch 0.00 deg"), "{}", out.stdout);
+    // The baud rate is taken (a pty ignores it).
+    ok(&[
+        "send",
+        "--serial",
+        &format!("{path}:115200"),
+        "pitch",
+        "-30",
+    ]);
+    wait_log(&log, &format!("{path}: pitch -30"), Duration::from_secs(5));
+    // The gimbal slews at 60 deg/s: -30 within 1.5 s of postbacks.
+    let out = ok(&["monitor", "--serial", &path, "--json", "--count", "4"]);
+    let last = out.json().pop().unwrap();
+    assert_eq!(last["pitch_deg"], -30, "{}", out.stdout);
+    assert_eq!(last["id"], serde_json::Value::Null);
+    // Vehicle frames are CAN only: a usage error, nothing opened.
+    let out = usage_error(&["send", "--serial", &path, "gps", "47", "8"]);
+    assert!(out.stderr.contains("--can"), "{}", out.stderr);
+}
+
+#[test]
+fn send_holds_a_rate_over_the_uart() {
+    let (_sim, path, log) = start_pty_sim();
+    ok(&[
+        "send",
+        "--serial",
+        &path,
+        "--repeat-ms",
+        "50",
+        "--for-ms",
+        "300",
+        "rate",
+        "0",
+        "10",
+    ]);
+    wait_log(&log, &format!("{path}: rate 0 10"), Duration::from_secs(5));
+    wait_log(&log, &format!("{path}: rate 0 0"), Duration::from_secs(5));
+}
+
+/// The other end of the line closing mid-session (a USB adapter pulled): exit 1 at once,
+/// saying so, after the postbacks that came.
+#[test]
+fn a_port_that_goes_away_is_exit_1() {
+    let mut pty = TestPty::new();
+    let path = pty.path.clone();
+    let (mut monitor, stdout, stderr) = spawn(&["monitor", "--serial", &path]);
+    // A postback once gimbalctl has the port open (the open drops older bytes), then the
+    // line goes away.
+    wait_open(&mut pty);
+    thread::sleep(Duration::from_millis(100));
+    assert!(pty.write(&postback(1, 0, 3, -1234, 9000, 0)));
+    thread::sleep(Duration::from_millis(300));
+    drop(pty);
+    let code = wait_with_timeout(&mut monitor.0, TIMEOUT);
+    let stderr = stderr.lock().unwrap().clone();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("went away"), "{stderr}");
+    assert!(stderr.contains(&path), "{stderr}");
+    assert!(stderr.contains("after 1 postback"), "{stderr}");
+    let out = stdout.join().unwrap();
+    assert!(
+        out.starts_with("pitch -12.34 deg  heading 90.00 deg"),
+        "{out}"
+    );
+}
+
+/// The sim going away under `send --repeat-ms` and `mavlink` ends them too.
+#[test]
+fn the_sim_exiting_ends_a_session_with_exit_1() {
+    let (sim, path, _log) = start_pty_sim();
+    let (mut bridge, _out, stderr) = spawn(&[
+        "mavlink",
+        "--serial",
+        &path,
+        "--listen",
+        "127.0.0.1:0",
+        "--exit-after-ms",
+        "20000",
+    ]);
+    thread::sleep(Duration::from_millis(700));
+    drop(sim);
+    let code = wait_with_timeout(&mut bridge.0, TIMEOUT);
+    let stderr = stderr.lock().unwrap().clone();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("went away"), "{stderr}");
+}
+
+/// Bytes that hold no frame (what a wrong baud rate gives): counted and said on stderr
+/// with the likely cause, while monitor goes on.
+#[test]
+fn garbage_on_the_line_is_counted_and_said() {
+    let mut pty = TestPty::new();
+    let path = pty.path.clone();
+    let (_monitor, _stdout, stderr) = spawn(&["monitor", "--serial", &format!("{path}:9600")]);
+    wait_open(&mut pty);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        // 0x55 never starts a frame.
+        pty.write(&[0x55; 64]);
+        let err = stderr.lock().unwrap().clone();
+        if err.contains("held no valid frame") && err.contains("no postback") {
+            assert!(err.contains("wrong baud rate"), "{err}");
+            assert!(err.contains("9600") && err.contains("115200"), "{err}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "never said: {err}");
+        thread::sleep(Duration::from_millis(100));
+    }
+}
+
+#[test]
+fn serial_usage_and_open_errors() {
+    for (args, words) in [
+        (
+            &["monitor", "--serial", "/dev/ttyUSB0:0"][..],
+            &["--serial", "[50, 4000000]"][..],
+        ),
+        (&["monitor", "--serial", "/dev/ttyUSB0:"], &["--serial"]),
+        (
+            &[
+                "monitor",
+                "--serial",
+                "/dev/ttyS0",
+                "--tcp",
+                "127.0.0.1:2000",
+            ],
+            &["--serial", "--tcp"],
+        ),
+        (
+            &["mavlink", "--sim", "--autopilot-serial", "/dev/x:7"],
+            &["--autopilot-serial", "[50, 4000000]"],
+        ),
+        (
+            &[
+                "mavlink",
+                "--sim",
+                "--autopilot-serial",
+                "/dev/x",
+                "--listen",
+                "127.0.0.1:0",
+            ],
+            &["--autopilot-serial", "--listen"],
+        ),
+        (
+            &["sim", "--pty", "--listen", "127.0.0.1:0"],
+            &["--pty", "--listen"],
+        ),
+    ] {
+        let out = usage_error(args);
+        for w in words {
+            assert!(
+                out.stderr.contains(w),
+                "{args:?}: {w:?} not in {}",
+                out.stderr
+            );
+        }
+    }
+    for (args, words) in [
+        (
+            &["monitor", "--serial", "/dev/gimbalctl-no-such-tty"][..],
+            &["no such device", "plugged in"][..],
+        ),
+        (
+            &["send", "--serial", "/dev/null", "center"],
+            &["not a serial port"],
+        ),
+        (
+            &[
+                "mavlink",
+                "--sim",
+                "--autopilot-serial",
+                "/dev/gimbalctl-no-such-tty",
+            ],
+            &["--autopilot-serial", "no such device"],
+        ),
+    ] {
+        let out = run(args);
+        assert_eq!(out.code, 1, "{args:?}: {out:?}");
+        assert!(out.stdout.is_empty(), "{out:?}");
+        for w in words {
+            assert!(
+                out.stderr.contains(w),
+                "{args:?}: {w:?} not in {}",
+                out.stderr
+            );
+        }
+    }
+}
+
+/// A tty the user may not open: exit 1 naming the group to join. Run as `nobody` through
+/// `runuser` when the tests run as root; said and skipped otherwise.
+#[test]
+fn permission_denied_names_the_group() {
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    let runuser = Command::new("runuser").arg("--help").output().is_ok();
+    if !root || !runuser {
+        println!("skipped: needs root and runuser to try a tty as another user");
+        return;
+    }
+    let pty = TestPty::new();
+    let path = pty.path.clone();
+    let out = Command::new("runuser")
+        .args(["-u", "nobody", "--", BIN, "monitor", "--serial", &path])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if stderr.contains("Permission denied") && !stderr.contains("gimbalctl") {
+        println!("skipped: nobody cannot run {BIN}: {stderr}");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(out.stdout.is_empty());
+    assert!(stderr.contains("permission denied"), "{stderr}");
+    assert!(stderr.contains("add yourself to it"), "{stderr}");
+}
+
+// ---------------------------------------------------------------------------------------
+// MAVLink over the serial paths
+
+const GIMBAL: u8 = 154;
+const AP: (u8, u8) = (1, 1);
+
+fn frame(seq: u8, message: &dyn Message) -> Vec<u8> {
+    let f = Frame::builder()
+        .version(V2)
+        .sequence(seq)
+        .system_id(AP.0)
+        .component_id(AP.1)
+        .message(message)
+        .expect("a message mavio encodes")
+        .build();
+    let mut buf = [0u8; 300];
+    let n = f.serialize(&mut buf).expect("serialize");
+    buf[..n].to_vec()
+}
+
+fn autopilot_heartbeat() -> Heartbeat {
+    Heartbeat {
+        type_: MavType::Quadrotor,
+        autopilot: MavAutopilot::Px4,
+        base_mode: MavModeFlag::empty(),
+        custom_mode: 0,
+        system_status: MavState::Active,
+        mavlink_version: 3,
+    }
+}
+
+fn pitch_setpoint(deg: f32) -> GimbalDeviceSetAttitude {
+    GimbalDeviceSetAttitude {
+        target_system: AP.0,
+        target_component: GIMBAL,
+        // The yaw in the vehicle frame: the serial link is nose-referenced.
+        flags: GimbalDeviceFlags::empty(),
+        q: YawPitch {
+            yaw_rad: 0.0,
+            pitch_rad: deg.to_radians(),
+        }
+        .to_quaternion(),
+        angular_velocity_x: f32::NAN,
+        angular_velocity_y: f32::NAN,
+        angular_velocity_z: f32::NAN,
+    }
+}
+
+fn request_information() -> CommandLong {
+    CommandLong {
+        target_system: AP.0,
+        target_component: GIMBAL,
+        command: MavCmd::RequestMessage,
+        param1: GimbalDeviceInformation::spec().id() as f32,
+        ..Default::default()
+    }
+}
+
+/// What the autopilot has heard from the gimbal component: message ids.
+#[derive(Default)]
+struct Heard {
+    reader: FrameReader,
+    ids: Vec<u32>,
+}
+
+impl Heard {
+    fn feed(&mut self, bytes: &[u8]) {
+        let ids = &mut self.ids;
+        self.reader.feed(bytes, |f| {
+            if let Some(frame) = f.to_frame() {
+                if frame.component_id() == GIMBAL {
+                    ids.push(frame.message_id());
+                }
+            }
+            Check::Unhandled
+        });
+    }
+
+    fn has<M: MessageSpecStatic>(&self) -> bool {
+        self.ids.contains(&M::spec().id())
+    }
+}
+
+/// `mavlink --serial` (the gimbal on the simulated UART) with the autopilot on UDP.
+#[test]
+fn mavlink_bridges_udp_to_the_uart_gimbal() {
+    let (_sim, path, log) = start_pty_sim();
+    // A free port, named on the command line (the first stdout line would say it too).
+    let port = {
+        let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+        s.local_addr().unwrap().port()
+    };
+    let listen = format!("127.0.0.1:{port}");
+    let (_bridge, _out, stderr) = spawn(&[
+        "mavlink",
+        "--serial",
+        &path,
+        "--listen",
+        &listen,
+        "--exit-after-ms",
+        "30000",
+    ]);
+    let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+    sock.set_read_timeout(Some(Duration::from_millis(50)))
+        .unwrap();
+    let mut heard = Heard::default();
+    let deadline = Instant::now() + Duration::from_secs(15);
+    let mut seq = 0u8;
+    let mut buf = [0u8; 2048];
+    loop {
+        for m in [
+            &autopilot_heartbeat() as &dyn Message,
+            &request_information(),
+            &pitch_setpoint(-30.0),
+        ] {
+            let _ = sock.send_to(&frame(seq, m), &listen);
+            seq = seq.wrapping_add(1);
+        }
+        while let Ok(n) = sock.recv(&mut buf) {
+            heard.feed(&buf[..n]);
+        }
+        let logged = log
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|l| l.ends_with(&format!("{path}: pitch -30")));
+        if logged
+            && heard.has::<Heartbeat>()
+            && heard.has::<GimbalDeviceInformation>()
+            && heard.has::<GimbalDeviceAttitudeStatus>()
+        {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "heard {:?}; sim {:?}; bridge {}",
+            heard.ids,
+            log.lock().unwrap(),
+            stderr.lock().unwrap()
+        );
+        thread::sleep(Duration::from_millis(100));
+    }
+    assert!(stderr.lock().unwrap().contains("gimbal link up"));
+}
+
+/// `mavlink --serial --autopilot-serial`: the gimbal on the simulated UART, the autopilot on
+/// a second pty (the test, at the default 921600 baud), MAVLink as a byte stream both ways;
+/// then the autopilot's port closing ends the bridge with exit 1.
+#[test]
+fn mavlink_bridges_an_autopilot_on_a_serial_port() {
+    let (_sim, path, log) = start_pty_sim();
+    let mut ap = TestPty::new();
+    let ap_path = ap.path.clone();
+    let (mut bridge, out, stderr) = spawn(&[
+        "mavlink",
+        "--serial",
+        &path,
+        "--autopilot-serial",
+        &ap_path,
+        "--exit-after-ms",
+        "30000",
+    ]);
+    let mut heard = Heard::default();
+    let deadline = Instant::now() + Duration::from_secs(15);
+    let mut seq = 0u8;
+    wait_open(&mut ap);
+    loop {
+        let mut bytes = Vec::new();
+        for m in [
+            &autopilot_heartbeat() as &dyn Message,
+            &request_information(),
+            &pitch_setpoint(-45.0),
+        ] {
+            bytes.extend(frame(seq, m));
+            seq = seq.wrapping_add(1);
+        }
+        // A byte stream: in uneven pieces.
+        for piece in bytes.chunks(7) {
+            ap.write(piece);
+        }
+        heard.feed(&ap.read_for(Duration::from_millis(100)));
+        let logged = log
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|l| l.ends_with(&format!("{path}: pitch -45")));
+        if logged && heard.has::<Heartbeat>() && heard.has::<GimbalDeviceInformation>() {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "heard {:?}; sim {:?}; bridge {}",
+            heard.ids,
+            log.lock().unwrap(),
+            stderr.lock().unwrap()
+        );
+    }
+    // The autopilot's port goes away: exit 1, saying which.
+    drop(ap);
+    let code = wait_with_timeout(&mut bridge.0, TIMEOUT);
+    let err = stderr.lock().unwrap().clone();
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains(&ap_path) && err.contains("went away"), "{err}");
+    let first = out.join().unwrap();
+    assert!(
+        first.starts_with(&format!(
+            "gimbalctl mavlink: autopilot on {ap_path} at 921600 baud, gimbal: the UART on {path}"
+        )),
+        "{first}"
+    );
+}
