@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Mutation testing (issue 12): runs cargo-mutants over the protocol code of `idu-gimbal`
-# (src/wire, src/link, the driver as src/driver.rs or src/driver/) and fails when fewer
+# Mutation testing: runs cargo-mutants over the protocol code of `idu-gimbal`
+# (src/wire, src/link, src/driver) and fails when fewer
 # than 95% of the viable mutants are caught. Not part of CI: too slow. Results and the
 # survivor triage are in TESTING.md, "Mutation testing".
 #

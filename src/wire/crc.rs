@@ -10,7 +10,7 @@
 //!
 //! # Measurements (thumbv7em-none-eabihf, opt-level "s", guest instructions under QEMU)
 //!
-//! Measured by `examples/qemu_bench.rs` on QEMU's `netduinoplus2` (an STM32F405) with
+//! Measured by `benches/mcu/src/bin/qemu_bench.rs` on QEMU's `netduinoplus2` (an STM32F405) with
 //! `-icount shift=0`, marginal cost per byte; flash from `arm-none-eabi-nm --size-sort`
 //! (see `BENCHMARKS.md`):
 //!
