@@ -48,14 +48,12 @@ export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-0}"
 echo "$(cargo mutants --version), jobs $jobs, timeout ${timeout}s, PROPTEST_CASES $PROPTEST_CASES"
 start=$(date +%s)
 rc=0
-# Both driver layouts: src/driver.rs before the serial transport, src/driver/{mod,can,serial}.rs now.
 # #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
 cargo mutants \
     --package idu-gimbal \
     --all-features \
     --file 'src/wire/**' \
     --file 'src/link/**' \
-    --file src/driver.rs \
     --file 'src/driver/**' \
     --exclude src/link/tests.rs \
     --exclude src/link/deadline_tests.rs \
