@@ -140,7 +140,7 @@ enum Top {
         /// Also send to this UDP peer (repeatable); peers heard from are always sent to
         #[arg(long, value_name = "ADDR")]
         to: Vec<String>,
-        /// The autopilot on a serial port instead of UDP (a TELEM port), PATH[:BAUD] (921600 8N1 when BAUD is omitted)
+        /// The autopilot on a serial port instead of UDP (a TELEM port): PATH, or PATH:BAUD (921600 8N1 when BAUD is omitted)
         #[arg(long, value_name = "PATH[:BAUD]", conflicts_with_all = ["listen", "to"])]
         autopilot_serial: Option<String>,
         /// MAVLink system id (default: the autopilot's, from its heartbeat)

@@ -9,7 +9,7 @@
 //!
 //! - `--tcp` and `--serial`: a [`StreamSession`], the library's `SerialGimbal` over a
 //!   non-blocking [`StreamPort`] (a `TcpStream`, or a `serialport` tty at BAUD 8N1);
-//! - `--can`: a [`CanSession`], the library's `Gimbal<C>` over a [`Tap`] around any
+//! - `--can`: a [`can::CanSession`], the library's `Gimbal<C>` over a [`can::Tap`] around any
 //!   `embedded_can::nb::Can`: the SocketCAN socket in non-blocking mode here, the core's
 //!   in-memory mock bus in the tests. Only the opening of the socket is SocketCAN's.
 //!
@@ -52,7 +52,7 @@ pub struct GimbalArgs {
     /// The gimbal on a SocketCAN interface (Linux), e.g. can0 (1 Mbit/s, set with ip link)
     #[arg(long, value_name = "IFACE")]
     pub can: Option<String>,
-    /// The gimbal's UART on a serial port, PATH[:BAUD] (115200 8N1 when BAUD is omitted), e.g. /dev/ttyUSB0
+    /// The gimbal's UART on a serial port: PATH, or PATH:BAUD (115200 8N1 when BAUD is omitted), e.g. /dev/ttyUSB0
     #[arg(long, value_name = "PATH[:BAUD]")]
     pub serial: Option<String>,
 }
