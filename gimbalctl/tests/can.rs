@@ -29,14 +29,7 @@ fn can_usage_and_open_errors() {
         ),
         (&["control", "--can", ""], &["--can"]),
     ] {
-        let out = usage_error(args);
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {w:?} not in {}",
-                out.stderr
-            );
-        }
+        usage_error_naming(args, words);
     }
     for (args, words) in [
         (
@@ -49,16 +42,7 @@ fn can_usage_and_open_errors() {
             &["no such network interface"],
         ),
     ] {
-        let out = run(args);
-        assert_eq!(out.code, 1, "{args:?}: {out:?}");
-        assert!(out.stdout.is_empty(), "{out:?}");
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {w:?} not in {}",
-                out.stderr
-            );
-        }
+        failure_naming(args, words);
     }
 }
 
@@ -103,23 +87,7 @@ fn send_and_monitor_on_vcan0() {
         }
     }
     // monitor: another controller's command, then a postback, from the test's socket.
-    let (mut monitor, stdout) = {
-        use std::io::Read;
-        use std::process::{Command, Stdio};
-        let mut child = Command::new(BIN)
-            .args(["monitor", "--can", "vcan0", "--count", "1"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let mut out = child.stdout.take().unwrap();
-        let t = std::thread::spawn(move || {
-            let mut s = String::new();
-            let _ = out.read_to_string(&mut s);
-            s
-        });
-        (Guard(child), t)
-    };
+    let (mut monitor, stdout, _stderr) = spawn(&["monitor", "--can", "vcan0", "--count", "1"]);
     std::thread::sleep(Duration::from_millis(500));
     bus.write_frame(&ext(0x0F01, &[0x0F, 0x07, 0, 0, 0, 0, 0, 0]))
         .unwrap();

@@ -10,7 +10,7 @@
 mod common;
 
 use common::*;
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -66,6 +66,26 @@ impl Tmux {
         self.run(&["has-session", "-t", "ctl"]).status.success()
     }
 
+    /// Waits up to 10 s for the panel with the link up; the pane.
+    fn wait_link_up(&self) -> String {
+        self.wait_pane("the link up", Duration::from_secs(10), |p| {
+            p.contains("link up") && p.contains("pitch") && p.contains("q quit")
+        })
+    }
+
+    /// Holds `key` for `hold`: a key event every 50 ms, as a terminal's key-repeat sends
+    /// them. When the hold started, and when its last key was sent.
+    fn hold(&self, key: &str, hold: Duration) -> (Instant, Instant) {
+        let started = Instant::now();
+        let mut last_key = started;
+        while started.elapsed() < hold {
+            self.keys(&[key]);
+            last_key = Instant::now();
+            thread::sleep(Duration::from_millis(50));
+        }
+        (started, last_key)
+    }
+
     /// Polls the pane until `pred` holds, or panics with the pane after `timeout`.
     fn wait_pane(&self, what: &str, timeout: Duration, pred: impl Fn(&str) -> bool) -> String {
         let deadline = Instant::now() + timeout;
@@ -89,37 +109,8 @@ impl Drop for Tmux {
     }
 }
 
-/// The sim's stderr lines, each with when it arrived.
-type Log = Arc<Mutex<Vec<(Instant, String)>>>;
-
 /// The sim's postbacks' pitch (0.01 deg), each with when it arrived.
 type Pitches = Arc<Mutex<Vec<(Instant, i16)>>>;
-
-fn start_sim_logged() -> (Guard, String, Log) {
-    let mut child = Command::new(BIN)
-        .args(["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "60000"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn sim");
-    let stdout = child.stdout.take().unwrap();
-    let stderr = child.stderr.take().unwrap();
-    let guard = Guard(child);
-    let mut first = String::new();
-    BufReader::new(stdout).read_line(&mut first).unwrap();
-    assert!(first.contains("listening on 127.0.0.1:"), "{first}");
-    let addr = first.trim().rsplit(' ').next().unwrap().to_owned();
-    let log: Log = Arc::default();
-    let l = log.clone();
-    thread::spawn(move || {
-        for line in BufReader::new(stderr).lines() {
-            let Ok(line) = line else { break };
-            l.lock().unwrap().push((Instant::now(), line));
-        }
-    });
-    (guard, addr, log)
-}
 
 /// A raw client recording the pitch of every postback the sim sends.
 fn observe(addr: &str) -> Pitches {
@@ -135,37 +126,14 @@ fn observe(addr: &str) -> Pitches {
                 break;
             }
             buf.extend_from_slice(&chunk[..n]);
-            while buf.len() >= 27 {
-                let msg: Vec<u8> = buf.drain(..27).collect();
-                assert_eq!(&msg[..3], &[0xEB, 0x90, 0x0C]);
-                assert_eq!(&msg[25..], &crc16_modbus(&msg[..25]).to_le_bytes());
-                let pitch = i16::from_le_bytes([msg[19], msg[20]]);
-                p.lock().unwrap().push((Instant::now(), pitch));
+            for msg in take_postbacks(&mut buf) {
+                p.lock()
+                    .unwrap()
+                    .push((Instant::now(), postback_pitch(&msg)));
             }
         }
     });
     pitches
-}
-
-/// Polls the sim's log for a line ending with `suffix` that arrived after `after`.
-fn wait_log(log: &Log, suffix: &str, after: Instant, timeout: Duration) -> Instant {
-    let deadline = Instant::now() + timeout;
-    loop {
-        if let Some((t, _)) = log
-            .lock()
-            .unwrap()
-            .iter()
-            .find(|(t, l)| *t >= after && l.ends_with(suffix))
-        {
-            return *t;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "the sim never logged {suffix:?}: {:?}",
-            log.lock().unwrap()
-        );
-        thread::sleep(Duration::from_millis(5));
-    }
 }
 
 /// Waits for two postbacks arriving after `after` with the same pitch: the gimbal stands
@@ -189,196 +157,6 @@ fn wait_still(pitches: &Pitches, after: Instant) -> i16 {
         );
         thread::sleep(Duration::from_millis(20));
     }
-}
-
-#[test]
-fn control_moves_the_simulated_gimbal_and_stops_it() {
-    let (_sim, addr, log) = start_sim_logged();
-    let pitches = observe(&addr);
-    let tmux = Tmux::new();
-    let rc = std::env::temp_dir().join(format!("gimbalctl-control-{}.rc", std::process::id()));
-    let _ = std::fs::remove_file(&rc);
-    let cmd = format!("'{BIN}' control --tcp {addr}; echo $? > '{}'", rc.display());
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-x",
-        "80",
-        "-y",
-        "24",
-        "-s",
-        "ctl",
-        &cmd,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
-
-    // The panel, within 80x24: the postback, the link up, the keys.
-    let pane = tmux.wait_pane("the link up", Duration::from_secs(10), |p| {
-        p.contains("link up") && p.contains("pitch") && p.contains("q quit")
-    });
-    assert!(pane.lines().count() <= 24, "{pane}");
-    assert!(pane.lines().all(|l| l.chars().count() <= 80), "{pane}");
-    let p0 = wait_still(&pitches, Instant::now());
-
-    // Up held for 1.5 s: a key event every 50 ms, as a terminal's key-repeat sends them.
-    let started = Instant::now();
-    let mut last_key = started;
-    while started.elapsed() < Duration::from_millis(1500) {
-        tmux.keys(&["Up"]);
-        last_key = Instant::now();
-        thread::sleep(Duration::from_millis(50));
-    }
-    let first_rate = wait_log(&log, ": rate 0 20", started, Duration::from_secs(5));
-    assert!(
-        first_rate <= last_key,
-        "the hold started only after the last key"
-    );
-    // Released: the core's dead-man sends one zero rate 250 ms after the last key event.
-    // Bound: 250 ms, plus control's 10 ms loop and the sim's 5 ms tick, plus margin for a
-    // loaded 2-core machine; a hold that did not stop would never log it.
-    let stopped = wait_log(&log, ": rate 0 0", last_key, Duration::from_secs(5));
-    let after = stopped.duration_since(last_key);
-    assert!(
-        after <= Duration::from_millis(1000),
-        "stopped {after:?} after the last key"
-    );
-    // The gimbal moved up (20 deg/s for about 1.5 s; a hold that lapsed between key
-    // events would move 5 deg per event at most) and then stood still.
-    let p1 = wait_still(&pitches, stopped + Duration::from_millis(100));
-    assert!(p1 - p0 >= 1500, "pitch {p0} -> {p1} (0.01 deg)");
-    // The panel shows where it stopped.
-    let sign = if p1 < 0 { "-" } else { "" };
-    let abs = p1.unsigned_abs();
-    let shown = format!("{sign}{}.{:02} deg", abs / 100, abs % 100);
-    tmux.wait_pane(&shown, Duration::from_secs(5), |p| p.contains(&shown));
-
-    // c: centre; d: look down; then q: a zero rate first, and exit 0.
-    let t = Instant::now();
-    tmux.keys(&["c"]);
-    wait_log(&log, ": center", t, Duration::from_secs(5));
-    let t = Instant::now();
-    tmux.keys(&["d"]);
-    wait_log(&log, ": look-down", t, Duration::from_secs(5));
-    let t = Instant::now();
-    tmux.keys(&["q"]);
-    let zero = wait_log(&log, ": rate 0 0", t, Duration::from_secs(5));
-    let gone = wait_log(&log, " disconnected", t, Duration::from_secs(5));
-    assert!(zero <= gone);
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while tmux.alive() {
-        assert!(
-            Instant::now() < deadline,
-            "control did not exit: {}",
-            tmux.pane()
-        );
-        thread::sleep(Duration::from_millis(50));
-    }
-    let code = std::fs::read_to_string(&rc).unwrap_or_default();
-    let _ = std::fs::remove_file(&rc);
-    assert_eq!(code.trim(), "0");
-}
-
-#[test]
-fn control_needs_a_terminal_and_valid_arguments() {
-    // stdin a pipe: usage error before any connection is tried.
-    let out = usage_error(&["control", "--tcp", "127.0.0.1:1"]);
-    assert!(
-        out.stderr.contains("stdin is not a terminal"),
-        "{}",
-        out.stderr
-    );
-    let out = usage_error(&["control", "--tcp", "127.0.0.1:1", "--speed", "0"]);
-    assert!(
-        out.stderr.contains("--speed") && out.stderr.contains("[1, 100]"),
-        "{}",
-        out.stderr
-    );
-    let out = usage_error(&["control", "--tcp", "127.0.0.1:1", "--speed", "-5"]);
-    assert!(out.stderr.contains("[1, 100]"), "{}", out.stderr);
-    let out = usage_error(&["control", "--tcp", "host:99999"]);
-    assert!(out.stderr.contains("--tcp"), "{}", out.stderr);
-    let out = usage_error(&["control"]);
-    assert!(out.stderr.contains("--tcp"), "{}", out.stderr);
-}
-
-/// A server that is not there: exit 1 before the panel is drawn, stderr naming it.
-#[test]
-fn control_without_a_server_is_a_runtime_failure() {
-    let port = {
-        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        l.local_addr().unwrap().port()
-    };
-    let tmux = Tmux::new();
-    let dir = std::env::temp_dir();
-    let rc = dir.join(format!(
-        "gimbalctl-control-refused-{}.rc",
-        std::process::id()
-    ));
-    let err = dir.join(format!(
-        "gimbalctl-control-refused-{}.err",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_file(&rc);
-    let cmd = format!(
-        "'{BIN}' control --tcp 127.0.0.1:{port} 2> '{}'; echo $? > '{}'",
-        err.display(),
-        rc.display()
-    );
-    let out = tmux.run(&[
-        "new-session",
-        "-d",
-        "-x",
-        "80",
-        "-y",
-        "24",
-        "-s",
-        "ctl",
-        &cmd,
-    ]);
-    assert!(out.status.success(), "tmux new-session: {out:?}");
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while !rc.exists() || std::fs::read_to_string(&rc).unwrap_or_default().is_empty() {
-        assert!(
-            Instant::now() < deadline,
-            "control did not exit: {}",
-            tmux.pane()
-        );
-        thread::sleep(Duration::from_millis(20));
-    }
-    let code = std::fs::read_to_string(&rc).unwrap();
-    let stderr = std::fs::read_to_string(&err).unwrap_or_default();
-    let _ = std::fs::remove_file(&rc);
-    let _ = std::fs::remove_file(&err);
-    assert_eq!(code.trim(), "1", "{stderr}");
-    assert!(stderr.contains(&format!("127.0.0.1:{port}")), "{stderr}");
-}
-
-/// `gimbalctl sim --pty`, logged as [`start_sim_logged`] logs the TCP sim: the guard, the
-/// slave's path, the log.
-fn start_pty_sim_logged() -> (Guard, String, Log) {
-    let mut child = Command::new(BIN)
-        .args(["sim", "--pty", "--exit-after-ms", "60000"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn sim --pty");
-    let stdout = child.stdout.take().unwrap();
-    let stderr = child.stderr.take().unwrap();
-    let guard = Guard(child);
-    let mut first = String::new();
-    BufReader::new(stdout).read_line(&mut first).unwrap();
-    assert!(first.contains("serial port at /dev/"), "{first}");
-    let path = first.trim().rsplit(' ').next().unwrap().to_owned();
-    let log: Log = Arc::default();
-    let l = log.clone();
-    thread::spawn(move || {
-        for line in BufReader::new(stderr).lines() {
-            let Ok(line) = line else { break };
-            l.lock().unwrap().push((Instant::now(), line));
-        }
-    });
-    (guard, path, log)
 }
 
 /// Runs `control ARGS` in a detached 80x24 tmux session; the file its exit status goes to.
@@ -417,30 +195,128 @@ fn exit_status(tmux: &Tmux, rc: &std::path::Path) -> String {
     code.trim().to_owned()
 }
 
+#[test]
+fn control_moves_the_simulated_gimbal_and_stops_it() {
+    // Up to 60 s to say where it listens: as long as it runs.
+    let (_sim, addr, log) =
+        start_sim_logged(&["--exit-after-ms", "60000"], Duration::from_secs(60));
+    let pitches = observe(&addr);
+    let tmux = Tmux::new();
+    let rc = control_in_tmux(&tmux, &format!("--tcp {addr}"), "control");
+
+    // The panel, within 80x24: the postback, the link up, the keys.
+    let pane = tmux.wait_link_up();
+    assert!(pane.lines().count() <= 24, "{pane}");
+    assert!(pane.lines().all(|l| l.chars().count() <= 80), "{pane}");
+    let p0 = wait_still(&pitches, Instant::now());
+
+    // Up held for 1.5 s.
+    let (started, last_key) = tmux.hold("Up", Duration::from_millis(1500));
+    let first_rate = log.wait_after(": rate 0 20", started, Duration::from_secs(5));
+    assert!(
+        first_rate <= last_key,
+        "the hold started only after the last key"
+    );
+    // Released: the core's dead-man sends one zero rate 250 ms after the last key event.
+    // Bound: 250 ms, plus control's 10 ms loop and the sim's 5 ms tick, plus margin for a
+    // loaded 2-core machine; a hold that did not stop would never log it.
+    let stopped = log.wait_after(": rate 0 0", last_key, Duration::from_secs(5));
+    let after = stopped.duration_since(last_key);
+    assert!(
+        after <= Duration::from_millis(1000),
+        "stopped {after:?} after the last key"
+    );
+    // The gimbal moved up (20 deg/s for about 1.5 s; a hold that lapsed between key
+    // events would move 5 deg per event at most) and then stood still.
+    let p1 = wait_still(&pitches, stopped + Duration::from_millis(100));
+    assert!(p1 - p0 >= 1500, "pitch {p0} -> {p1} (0.01 deg)");
+    // The panel shows where it stopped.
+    let sign = if p1 < 0 { "-" } else { "" };
+    let abs = p1.unsigned_abs();
+    let shown = format!("{sign}{}.{:02} deg", abs / 100, abs % 100);
+    tmux.wait_pane(&shown, Duration::from_secs(5), |p| p.contains(&shown));
+
+    // c: centre; d: look down; then q: a zero rate first, and exit 0.
+    let t = Instant::now();
+    tmux.keys(&["c"]);
+    log.wait_after(": center", t, Duration::from_secs(5));
+    let t = Instant::now();
+    tmux.keys(&["d"]);
+    log.wait_after(": look-down", t, Duration::from_secs(5));
+    let t = Instant::now();
+    tmux.keys(&["q"]);
+    let zero = log.wait_after(": rate 0 0", t, Duration::from_secs(5));
+    let gone = log.wait_after(" disconnected", t, Duration::from_secs(5));
+    assert!(zero <= gone);
+    assert_eq!(exit_status(&tmux, &rc), "0");
+}
+
+#[test]
+fn control_needs_a_terminal_and_valid_arguments() {
+    // stdin a pipe: usage error before any connection is tried.
+    usage_error_naming(
+        &["control", "--tcp", "127.0.0.1:1"],
+        &["stdin is not a terminal"],
+    );
+    usage_error_naming(
+        &["control", "--tcp", "127.0.0.1:1", "--speed", "0"],
+        &["--speed", "[1, 100]"],
+    );
+    usage_error_naming(
+        &["control", "--tcp", "127.0.0.1:1", "--speed", "-5"],
+        &["[1, 100]"],
+    );
+    usage_error_naming(&["control", "--tcp", "host:99999"], &["--tcp"]);
+    usage_error_naming(&["control"], &["--tcp"]);
+}
+
+/// A server that is not there: exit 1 before the panel is drawn, stderr naming it.
+#[test]
+fn control_without_a_server_is_a_runtime_failure() {
+    let port = closed_port();
+    let tmux = Tmux::new();
+    let err = std::env::temp_dir().join(format!(
+        "gimbalctl-control-refused-{}.err",
+        std::process::id()
+    ));
+    let rc = control_in_tmux(
+        &tmux,
+        &format!("--tcp 127.0.0.1:{port} 2> '{}'", err.display()),
+        "control-refused",
+    );
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !rc.exists() || std::fs::read_to_string(&rc).unwrap_or_default().is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "control did not exit: {}",
+            tmux.pane()
+        );
+        thread::sleep(Duration::from_millis(20));
+    }
+    let code = std::fs::read_to_string(&rc).unwrap();
+    let stderr = std::fs::read_to_string(&err).unwrap_or_default();
+    let _ = std::fs::remove_file(&rc);
+    let _ = std::fs::remove_file(&err);
+    assert_eq!(code.trim(), "1", "{stderr}");
+    assert!(stderr.contains(&format!("127.0.0.1:{port}")), "{stderr}");
+}
+
 /// The panel on the gimbal's UART (`--serial`, the simulated gimbal on a pty): the same
 /// keys, the same rate hold and dead-man, through the library's `SerialGimbal`.
 #[test]
 fn control_drives_the_gimbal_over_its_uart() {
-    let (_sim, path, log) = start_pty_sim_logged();
+    let (_sim, path, log) = start_pty_sim();
     let tmux = Tmux::new();
     let rc = control_in_tmux(&tmux, &format!("--serial {path}"), "serial");
-    let pane = tmux.wait_pane("the link up", Duration::from_secs(10), |p| {
-        p.contains("link up") && p.contains("pitch") && p.contains("q quit")
-    });
+    let pane = tmux.wait_link_up();
     assert!(pane.contains(&format!("control {path}")), "{pane}");
-    let started = Instant::now();
-    let mut last_key = started;
-    while started.elapsed() < Duration::from_millis(600) {
-        tmux.keys(&["Up"]);
-        last_key = Instant::now();
-        thread::sleep(Duration::from_millis(50));
-    }
-    wait_log(&log, ": rate 0 20", started, Duration::from_secs(5));
-    let stopped = wait_log(&log, ": rate 0 0", last_key, Duration::from_secs(5));
+    let (started, last_key) = tmux.hold("Up", Duration::from_millis(600));
+    log.wait_after(": rate 0 20", started, Duration::from_secs(5));
+    let stopped = log.wait_after(": rate 0 0", last_key, Duration::from_secs(5));
     assert!(stopped.duration_since(last_key) <= Duration::from_millis(1000));
     let t = Instant::now();
     tmux.keys(&["c"]);
-    wait_log(&log, ": center", t, Duration::from_secs(5));
+    log.wait_after(": center", t, Duration::from_secs(5));
     tmux.keys(&["q"]);
     assert_eq!(exit_status(&tmux, &rc), "0");
 }

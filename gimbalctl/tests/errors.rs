@@ -110,14 +110,7 @@ const OUT_OF_RANGE: &[(&[&str], &[&str])] = &[
 #[test]
 fn out_of_range_values_exit_2_naming_the_argument_and_range() {
     for (args, words) in OUT_OF_RANGE {
-        let out = usage_error(args);
-        for w in *words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {:?} lacks {w:?}",
-                out.stderr
-            );
-        }
+        usage_error_naming(args, words);
     }
 }
 
@@ -195,8 +188,7 @@ fn bad_usage_exits_2() {
     ] {
         usage_error(args);
     }
-    let out = usage_error(&["encode", "frobnicate"]);
-    assert!(out.stderr.contains("frobnicate"), "{}", out.stderr);
+    usage_error_naming(&["encode", "frobnicate"], &["frobnicate"]);
 }
 
 #[test]
@@ -231,25 +223,16 @@ fn help_and_version_exit_0() {
 
 #[test]
 fn runtime_failures_exit_1() {
-    let out = run(&["decode", "/nonexistent/gimbalctl.log"]);
-    assert_eq!(out.code, 1, "{out:?}");
-    assert!(out.stdout.is_empty());
-    assert!(out.stderr.contains("/nonexistent/gimbalctl.log"));
+    let missing = "/nonexistent/gimbalctl.log";
+    failure_naming(&["decode", missing], &[missing]);
 
-    // A port with nobody listening: bind one, then free it.
-    let port = {
-        let l = TcpListener::bind("127.0.0.1:0").unwrap();
-        l.local_addr().unwrap().port()
-    };
-    let target = format!("127.0.0.1:{port}");
+    // A port with nobody listening.
+    let target = format!("127.0.0.1:{}", closed_port());
     for args in [
         vec!["send", "--tcp", &target, "pitch", "-30"],
         vec!["monitor", "--tcp", &target, "--count", "1"],
     ] {
-        let out = run(&args);
-        assert_eq!(out.code, 1, "{args:?}: {out:?}");
-        assert!(out.stdout.is_empty());
-        assert!(out.stderr.contains(&target), "{out:?}");
+        failure_naming(&args, &[target.as_str()]);
     }
 
     // sim cannot listen on a port that is taken.
@@ -328,13 +311,6 @@ fn rtsp_addresses() {
             &["32"],
         ),
     ] {
-        let out = usage_error(args);
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {:?} lacks {w:?}",
-                out.stderr
-            );
-        }
+        usage_error_naming(args, words);
     }
 }

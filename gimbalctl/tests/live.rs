@@ -10,10 +10,9 @@
 mod common;
 
 use common::*;
-use std::io::{BufRead, BufReader, Write};
-use std::process::{ChildStdin, Command, Stdio};
-use std::sync::mpsc::{self, Receiver};
-use std::thread;
+use std::io::Write;
+use std::process::{ChildStdin, Stdio};
+use std::sync::mpsc::Receiver;
 use std::time::Duration;
 
 /// How long each decoded object may take to appear (see the module docs).
@@ -21,24 +20,13 @@ const PER_OBJECT: Duration = Duration::from_secs(10);
 
 /// Starts `gimbalctl ARGS` with piped stdin and stdout; stdout lines arrive on the channel.
 fn spawn(args: &[&str]) -> (Guard, ChildStdin, Receiver<String>) {
-    let mut child = Command::new(BIN)
-        .args(args)
+    let mut child = command(args)
         .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("spawn gimbalctl");
     let stdin = child.stdin.take().unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
+    let rx = lines(child.stdout.take().unwrap());
     (Guard(child), stdin, rx)
 }
 

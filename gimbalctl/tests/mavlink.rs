@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use std::net::{TcpListener, UdpSocket};
+use std::net::UdpSocket;
 
 #[test]
 fn usage_errors_name_the_argument() {
@@ -30,14 +30,7 @@ fn usage_errors_name_the_argument() {
         (&["mavlink", "--sim", "--listen", "nowhere"], &["--listen"]),
         (&["mavlink", "--sim", "--to", "nowhere"], &["--to"]),
     ] {
-        let out = usage_error(args);
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {w:?} not in {}",
-                out.stderr
-            );
-        }
+        usage_error_naming(args, words);
     }
 }
 
@@ -46,17 +39,13 @@ fn runtime_failures_exit_1() {
     // A UDP port already taken.
     let taken = UdpSocket::bind("127.0.0.1:0").unwrap();
     let addr = taken.local_addr().unwrap().to_string();
-    let out = run(&["mavlink", "--sim", "--listen", &addr]);
-    assert_eq!(out.code, 1, "{}", out.stderr);
-    assert!(out.stdout.is_empty());
-    assert!(out.stderr.contains("cannot listen on"));
+    failure_naming(
+        &["mavlink", "--sim", "--listen", &addr],
+        &["cannot listen on"],
+    );
     // No serial server there.
-    let closed = TcpListener::bind("127.0.0.1:0").unwrap();
-    let addr = closed.local_addr().unwrap().to_string();
-    drop(closed);
-    let out = run(&["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"]);
-    assert_eq!(out.code, 1, "{}", out.stderr);
-    assert!(out.stdout.is_empty());
+    let addr = format!("127.0.0.1:{}", closed_port());
+    failure_naming(&["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"], &[]);
 }
 
 #[test]

@@ -16,7 +16,9 @@ ground station: two sessions, each against a fresh bridge, with the reader besid
   sequence numbers from 1 (libraries/AP_Camera/AP_Camera_MAVLinkCamV2.cpp);
 - a QGroundControl-like reader beside each (src/Gimbal/GimbalController.cc): earth yaw from
   the status's frame flags and the vehicle heading (delta_yaw), checked against the heading
-  the simulated gimbal was steered to.
+  the simulated gimbal was steered to;
+- then ArduPilot on a TELEM port: the autopilot on a pseudo-terminal (`--autopilot-serial`),
+  the gimbal on its UART (`sim --pty`, `--serial`), as on a companion computer.
 
 It also checks the rate hold and its dead-man, image capture at an interval, and that every
 command gets the right ACK.
@@ -25,11 +27,14 @@ Usage: mavlink_e2e.py PATH/TO/gimbalctl
 Ends with a line "N passed, M failed"; exit status 0 only if nothing failed.
 """
 
+import collections
 import math
 import os
 import subprocess
 import sys
+import termios
 import time
+import tty
 
 os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink import mavutil  # noqa: E402
@@ -137,19 +142,54 @@ class Gcs:
         return angle_diff(yaw + math.degrees(s.delta_yaw), 0)
 
 
-class Autopilot:
-    """An autopilot as `persona` ("px4-normal" or "ardupilot") behaves towards the gimbal."""
+class PtyLink:
+    """pymavlink over the master side of a pseudo-terminal: the autopilot's TELEM port, whose
+    other side (a path) the bridge opens with --autopilot-serial. Offers what Autopilot uses
+    of a mavutil connection: `.mav` to send and `recv_match(blocking=False)`."""
 
-    def __init__(self, port, persona, results):
+    def __init__(self):
+        self.fd, slave = os.openpty()
+        tty.setraw(slave)
+        self.path = os.ttyname(slave)
+        # The bridge opens the path itself; keeping the slave open here would hold back a
+        # hang-up, and close the port under it at exit.
+        os.close(slave)
+        os.set_blocking(self.fd, False)
+        self.mav = mav.MAVLink(self, srcSystem=AP_SYSTEM, srcComponent=AP_COMPONENT)
+        self.pending = collections.deque()
+
+    def write(self, buf):
+        os.write(self.fd, buf)
+
+    def recv_match(self, blocking=False):
+        if not self.pending:
+            try:
+                data = os.read(self.fd, 4096)
+            except (BlockingIOError, OSError):
+                data = b""
+            if data:
+                self.pending.extend(self.mav.parse_buffer(data) or [])
+        return self.pending.popleft() if self.pending else None
+
+
+class Autopilot:
+    """An autopilot as `persona` ("px4-normal" or "ardupilot") behaves towards the gimbal:
+    on UDP `port`, with a ground station beside it, or on `link` (a PtyLink) alone."""
+
+    def __init__(self, port, persona, results, link=None):
         self.persona = persona
         self.r = results
-        self.m = mavutil.mavlink_connection(
-            f"udpout:127.0.0.1:{port}",
-            source_system=AP_SYSTEM,
-            source_component=AP_COMPONENT,
-            dialect="common",
-        )
-        self.gcs = Gcs(port)
+        if link is None:
+            self.m = mavutil.mavlink_connection(
+                f"udpout:127.0.0.1:{port}",
+                source_system=AP_SYSTEM,
+                source_component=AP_COMPONENT,
+                dialect="common",
+            )
+            self.gcs = Gcs(port)
+        else:
+            self.m = link
+            self.gcs = None
         self.start = time.monotonic()
         self.next_hb = 0.0
         # ArduPilot streams the autopilot state at 50 Hz to a MAVLink gimbal by itself
@@ -182,7 +222,8 @@ class Autopilot:
 
     def tick(self):
         t = self.now()
-        self.gcs.tick(t)
+        if self.gcs is not None:
+            self.gcs.tick(t)
         if t >= self.next_hb:
             self.next_hb = t + 1.0
             autopilot = mav.MAV_AUTOPILOT_ARDUPILOTMEGA if self.persona == "ardupilot" else mav.MAV_AUTOPILOT_PX4
@@ -305,7 +346,10 @@ class Autopilot:
                 return None
             # ArduPilot's reading: body-frame yaw + the vehicle's yaw.
             ap_earth = angle_diff(euler_yaw(self.status.q) + VEHICLE_YAW, 0) if abs(pitch) < 90 else a[0] + VEHICLE_YAW
-            qgc_earth = self.gcs.earth_yaw()
+            # The ground station's reading; on a serial port, the status's own yaw + delta_yaw.
+            qgc_earth = self.gcs.earth_yaw() if self.gcs is not None else (
+                angle_diff(euler_yaw(self.status.q) + math.degrees(self.status.delta_yaw), 0)
+                if not math.isnan(self.status.delta_yaw) else None)
             if qgc_earth is None or abs(angle_diff(qgc_earth, want_earth_yaw)) > ANGLE_TOL:
                 return None
             if abs(angle_diff(ap_earth, want_earth_yaw)) > ANGLE_TOL:
@@ -320,10 +364,12 @@ class Autopilot:
                    f"{what}: vehicle frame, delta_yaw the vehicle heading "
                    f"({math.degrees(s.delta_yaw) if s else None})")
 
-    def status_fresh(self):
+    def status_fresh(self, min_gaps=50):
+        """The status kept coming (at 10 Hz: `min_gaps` gaps take 5 s at least) and none of
+        its gaps reached ArduPilot's 1 s health limit."""
         gaps = self.status_gaps
         worst = max(gaps) if gaps else math.inf
-        self.check(len(gaps) > 50 and worst < STATUS_MAX_GAP,
+        self.check(len(gaps) > min_gaps and worst < STATUS_MAX_GAP,
                    f"attitude status fresh throughout: {len(gaps)} gaps, worst {worst * 1000:.0f} ms")
 
 
@@ -467,11 +513,46 @@ def session(gimbalctl, persona, run, results):
         proc.wait()
 
 
+def serial_session(gimbalctl, results):
+    """ArduPilot on a TELEM port: the gimbal on its UART (`sim --pty`), the autopilot on a
+    second pseudo-terminal (`--autopilot-serial`), as on a companion computer."""
+    persona = "ardupilot-serial"
+    sim = subprocess.Popen([gimbalctl, "sim", "--pty", "--exit-after-ms", "60000"],
+                           stdout=subprocess.PIPE, stderr=sys.stderr, text=True)
+    bridge = None
+    try:
+        sim_path = sim.stdout.readline().split()[-1]
+        link = PtyLink()
+        bridge = subprocess.Popen(
+            [gimbalctl, "mavlink", "--serial", sim_path, "--autopilot-serial", f"{link.path}:921600",
+             "--exit-after-ms", "60000"], stdout=subprocess.PIPE, stderr=sys.stderr, text=True)
+        print(f"mavlink_e2e: {persona}: gimbal on {sim_path}, autopilot on {link.path}", flush=True)
+        ap = Autopilot(None, "ardupilot", results, link=link)
+        ap.persona = persona
+        ap.ask_information(GIMBAL)
+        # On the UART the gimbal's headings are nose-referenced: setpoints in either frame
+        # are converted with the vehicle's heading from the autopilot state.
+        ap.settle("setpoint yaw 20 (flags 0) pitch -45", 0, 20, -45, 50)
+        locks = mav.GIMBAL_DEVICE_FLAGS_ROLL_LOCK | mav.GIMBAL_DEVICE_FLAGS_PITCH_LOCK | mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK
+        ap.settle("setpoint yaw 80 (earth) pitch -10", locks, 80, -10, 80)
+        ap.setpoint = None
+        # A shorter session: 20 gaps are 2 s of status.
+        ap.status_fresh(min_gaps=20)
+    except Exception as e:  # a crash is a failure with its reason, not a traceback only
+        results.check(False, f"[{persona}] crashed: {e!r}")
+    finally:
+        for p in (bridge, sim):
+            if p is not None:
+                p.kill()
+                p.wait()
+
+
 def main():
     gimbalctl = sys.argv[1]
     results = Results()
     session(gimbalctl, "px4-normal", px4_normal, results)
     session(gimbalctl, "ardupilot", ardupilot, results)
+    serial_session(gimbalctl, results)
     print(f"mavlink_e2e: {results.passed} passed, {results.failed} failed")
     return 0 if results.failed == 0 else 1
 

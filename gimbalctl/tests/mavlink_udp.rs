@@ -9,12 +9,12 @@
 
 mod common;
 
-use common::{hex, Guard, BIN};
+use common::mavlink::{frame, heartbeat, request_information, GIMBAL};
+use common::{hex, start, Guard, Log};
 
 use std::collections::HashSet;
-use std::io::{BufRead, BufReader, ErrorKind, Read};
+use std::io::ErrorKind;
 use std::net::{SocketAddr, UdpSocket};
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::thread;
@@ -22,22 +22,16 @@ use std::time::{Duration, Instant};
 
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::mavio;
-use mavio::dialects::common::enums::{
-    MavAutopilot, MavCmd, MavModeFlag, MavResult, MavState, MavType,
-};
+use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavResult, MavType};
 use mavio::dialects::common::messages::{
-    CommandAck, CommandLong, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
+    CommandAck, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
 };
 use mavio::dialects::common::Common;
 use mavio::protocol::{Frame, V2};
 use mavio::Message;
 
-/// The gimbal device's component id.
-const GIMBAL: u8 = 154;
 /// A ground station: system 255, component 190 (MAV_COMP_ID_MISSIONPLANNER).
 const GCS: (u8, u8) = (255, 190);
-/// GIMBAL_DEVICE_INFORMATION's message id, as MAV_CMD_REQUEST_MESSAGE's param1.
-const GIMBAL_DEVICE_INFORMATION: f32 = 283.0;
 /// How long a client waits for the bridge's heartbeat or status (sent every 100 ms).
 const TRAFFIC: Duration = Duration::from_secs(3);
 /// How long a client waits for the answers to a request (normally ~10 ms).
@@ -49,45 +43,23 @@ const RUN_LIMIT_MS: &str = "60000";
 struct Bridge {
     guard: Guard,
     addr: SocketAddr,
-    stderr: thread::JoinHandle<String>,
+    stderr: Log,
 }
 
 impl Bridge {
     fn start() -> Bridge {
-        let mut child = Command::new(BIN)
-            .args([
+        let (guard, line, stderr) = start(
+            &[
                 "mavlink",
                 "--sim",
                 "--listen",
                 "127.0.0.1:0",
                 "--exit-after-ms",
                 RUN_LIMIT_MS,
-            ])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("spawn gimbalctl mavlink");
-        let stdout = child.stdout.take().expect("stdout");
-        let mut err = child.stderr.take().expect("stderr");
-        let guard = Guard(child);
-        let (tx, rx) = mpsc::channel();
-        thread::spawn(move || {
-            let mut lines = BufReader::new(stdout).lines();
-            if let Some(Ok(line)) = lines.next() {
-                let _ = tx.send(line);
-            }
-            // Drained to the end so the bridge never blocks on a full pipe.
-            for _ in lines {}
-        });
-        let stderr = thread::spawn(move || {
-            let mut s = String::new();
-            let _ = err.read_to_string(&mut s);
-            s
-        });
-        let line = rx
-            .recv_timeout(Duration::from_secs(10))
-            .expect("the bridge says where it listens");
+            ],
+            "gimbalctl mavlink: listening on ",
+            Duration::from_secs(10),
+        );
         let addr = line
             .split("listening on ")
             .nth(1)
@@ -105,7 +77,7 @@ impl Bridge {
     fn stop(self) -> String {
         let Bridge { guard, stderr, .. } = self;
         drop(guard);
-        stderr.join().expect("stderr reader")
+        stderr.finish()
     }
 }
 
@@ -113,48 +85,9 @@ fn socket() -> UdpSocket {
     UdpSocket::bind("127.0.0.1:0").expect("bind a client socket")
 }
 
-/// One MAVLink 2 frame from `(system, component)`.
-fn frame(from: (u8, u8), seq: u8, message: &dyn Message) -> Vec<u8> {
-    let f = Frame::builder()
-        .version(V2)
-        .sequence(seq)
-        .system_id(from.0)
-        .component_id(from.1)
-        .message(message)
-        .expect("a message mavio encodes")
-        .build();
-    let mut buf = [0u8; 300];
-    let n = f.serialize(&mut buf).expect("serialize");
-    buf[..n].to_vec()
-}
-
 /// A ground station's heartbeat.
 fn gcs_heartbeat() -> Heartbeat {
-    Heartbeat {
-        type_: MavType::Gcs,
-        autopilot: MavAutopilot::Invalid,
-        base_mode: MavModeFlag::empty(),
-        custom_mode: 0,
-        system_status: MavState::Active,
-        mavlink_version: 3,
-    }
-}
-
-/// MAV_CMD_REQUEST_MESSAGE for GIMBAL_DEVICE_INFORMATION, to the gimbal of any system.
-fn request_information() -> CommandLong {
-    CommandLong {
-        target_system: 0,
-        target_component: GIMBAL,
-        command: MavCmd::RequestMessage,
-        confirmation: 0,
-        param1: GIMBAL_DEVICE_INFORMATION,
-        param2: 0.0,
-        param3: 0.0,
-        param4: 0.0,
-        param5: 0.0,
-        param6: 0.0,
-        param7: 0.0,
-    }
+    heartbeat(MavType::Gcs, MavAutopilot::Invalid)
 }
 
 /// The one frame a datagram from the bridge must hold: whole, and valid in the common
@@ -215,7 +148,7 @@ fn hears_gimbal(sock: &UdpSocket, deadline: Instant) -> bool {
     false
 }
 
-/// What a client has of the answers to [`request_information`].
+/// What a client has of the answers to [`request_information`] (of any system).
 #[derive(Default, Debug)]
 struct Answers {
     /// COMMAND_ACK, MAV_RESULT_ACCEPTED, addressed to the client.
@@ -320,7 +253,7 @@ fn garbage(rng: &mut Rng, seq: u8) -> Vec<u8> {
         if rng.below(2) == 0 {
             frame(GCS, seq, &gcs_heartbeat())
         } else {
-            frame(GCS, seq, &request_information())
+            frame(GCS, seq, &request_information(0))
         }
     };
     match rng.below(4) {
@@ -416,7 +349,7 @@ fn garbage_floods_never_become_peers_nor_hide_a_good_client() {
         let mut answers = Answers::default();
         let mut seq = 0u8;
         while !answers.all() && Instant::now() < deadline {
-            for m in [&gcs_heartbeat() as &dyn Message, &request_information()] {
+            for m in [&gcs_heartbeat() as &dyn Message, &request_information(0)] {
                 client
                     .send_to(&frame(GCS, seq, m), bridge.addr)
                     .expect("send");
@@ -485,7 +418,7 @@ fn each_datagram_is_parsed_on_its_own() {
     let mut cut = frame(a, 0, &gcs_heartbeat());
     cut.extend_from_slice(&ftp[..half]);
     let mut whole = frame(b, 0, &gcs_heartbeat());
-    whole.extend(frame(b, 1, &request_information()));
+    whole.extend(frame(b, 1, &request_information(0)));
     assert!(
         whole.len() < ftp.len() - half,
         "{} bytes would all go into the cut frame ({} missing)",

@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::thread;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -70,13 +70,7 @@ fn read_postbacks(s: &mut TcpStream, n: usize) -> Vec<Vec<u8>> {
         let k = s.read(&mut chunk).expect("postbacks keep coming");
         assert!(k > 0, "sim closed the connection");
         buf.extend_from_slice(&chunk[..k]);
-        while buf.len() >= 27 {
-            let msg: Vec<u8> = buf.drain(..27).collect();
-            assert_eq!(&msg[..3], &[0xEB, 0x90, 0x0C], "{msg:02X?}");
-            let crc = crc16_modbus(&msg[..25]).to_le_bytes();
-            assert_eq!(&msg[25..], &crc, "{msg:02X?}");
-            got.push(msg);
-        }
+        got.extend(take_postbacks(&mut buf));
     }
     got
 }
@@ -112,11 +106,10 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
     let elapsed = start.elapsed();
     assert!(elapsed >= Duration::from_millis(300), "{elapsed:?}");
     read_postbacks(&mut a, 1);
-    let pitch = |m: &[u8]| i16::from_le_bytes([m[19], m[20]]);
-    let mut seen = first.iter().map(|m| pitch(m)).collect::<Vec<_>>();
+    let mut seen = first.iter().map(|m| postback_pitch(m)).collect::<Vec<_>>();
     while !seen.contains(&-3000) {
         assert!(start.elapsed() < Duration::from_secs(4), "pitch: {seen:?}");
-        seen.extend(read_postbacks(&mut b, 1).iter().map(|m| pitch(m)));
+        seen.extend(read_postbacks(&mut b, 1).iter().map(|m| postback_pitch(m)));
     }
     // A client leaving frees a slot.
     drop(a);
@@ -128,8 +121,7 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
 #[test]
 fn sim_exits_after_the_given_time() {
     let start = Instant::now();
-    let mut child = Command::new(BIN)
-        .args(["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "300"])
+    let mut child = command(&["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "300"])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()

@@ -378,29 +378,28 @@ fn plot_of_a_flight_log_has_its_series_axes_and_faults() {
         lost[0] > LOST_AT - 0.1 && lost[0] < LOST_AT + 0.6,
         "lost marker at {lost:?}"
     );
-    // The link gap: from the last postback before 40 s to the first after 45 s.
-    let gaps: Vec<(f64, f64)> = elements(&svg, "rect")
-        .into_iter()
-        // Spans the panel's height (the legend sample is 10 px).
-        .filter(|e| attr(e, "fill") == Some("#C7C7C7") && num(e, "height") > 50.0)
-        .filter(|e| panels.index(num(e, "y")) == 3)
-        .map(|e| (to_t(num(e, "x")), to_t(num(e, "x") + num(e, "width"))))
-        .filter(|g| g.1 - g.0 > 0.5)
-        .collect();
+    // The status panel's rectangles filled with `fill` that are `big` (not the legend's
+    // sample), as (from, to) in s, of more than 0.5 s.
+    let spans = |fill: &str, big: &dyn Fn(&str) -> bool| -> Vec<(f64, f64)> {
+        elements(&svg, "rect")
+            .into_iter()
+            .filter(|e| attr(e, "fill") == Some(fill) && big(e))
+            .filter(|e| panels.index(num(e, "y")) == 3)
+            .map(|e| (to_t(num(e, "x")), to_t(num(e, "x") + num(e, "width"))))
+            .filter(|g| g.1 - g.0 > 0.5)
+            .collect()
+    };
+    // The link gap: from the last postback before 40 s to the first after 45 s. It spans
+    // the panel's height (the legend sample is 10 px).
+    let gaps = spans("#C7C7C7", &|e| num(e, "height") > 50.0);
     assert_eq!(gaps.len(), 1, "{gaps:?}");
     assert!(
         (gaps[0].0 - 39.75).abs() < 0.2 && (gaps[0].1 - 45.25).abs() < 0.2,
         "{gaps:?}"
     );
-    // Tracking: one band, 50 to 55 s.
-    let bands: Vec<(f64, f64)> = elements(&svg, "rect")
-        .into_iter()
-        // Below the legend's 10 px sample, which sits in the upper right.
-        .filter(|e| attr(e, "fill") == Some("#FFBB78") && num(e, "width") > 25.0)
-        .filter(|e| panels.index(num(e, "y")) == 3)
-        .map(|e| (to_t(num(e, "x")), to_t(num(e, "x") + num(e, "width"))))
-        .filter(|g| g.1 - g.0 > 0.5)
-        .collect();
+    // Tracking: one band, 50 to 55 s (below the legend's 10 px sample, which sits in the
+    // upper right).
+    let bands = spans("#FFBB78", &|e| num(e, "width") > 25.0);
     assert_eq!(bands.len(), 1, "{bands:?}");
     assert!(
         (bands[0].0 - 50.25).abs() < 0.2 && (bands[0].1 - 55.25).abs() < 0.2,
@@ -443,14 +442,11 @@ fn plot_errors() {
             out.stderr
         );
     }
-    let out = usage_error(&["plot", "-"]);
-    assert!(out.stderr.contains("--output"), "{}", out.stderr);
+    usage_error_naming(&["plot", "-"], &["--output"]);
     // A missing log and an empty one: runtime failures.
-    let out = run(&["plot", "/nonexistent/log", "-o", "/tmp/never.svg"]);
-    assert_eq!(out.code, 1, "{out:?}");
-    assert!(
-        out.stdout.is_empty() && out.stderr.contains("/nonexistent/log"),
-        "{out:?}"
+    failure_naming(
+        &["plot", "/nonexistent/log", "-o", "/tmp/never.svg"],
+        &["/nonexistent/log"],
     );
     let out = run_stdin(&["plot", "-o", "/tmp/never.svg"], b"garbage\n");
     assert_eq!(out.code, 1, "{out:?}");
@@ -504,22 +500,21 @@ fn plot_of_a_stream_capture() {
     let texts = texts(&svg);
     let panels = Panels::of(&texts);
     let to_t = fit(&x_ticks(&texts, &panels, 3));
-    let crc: Vec<f64> = polylines(&svg, "#D62728")
-        .iter()
-        .filter(|l| l.len() == 2 && (l[1].1 - l[0].1).abs() > 50.0)
-        .filter(|l| panels.index(l[0].1) == 3)
-        .map(|l| to_t(l[0].0))
-        .collect();
+    // Fault markers of `color` in the status panel, at their times.
+    let marks = |color: &str| -> Vec<f64> {
+        polylines(&svg, color)
+            .iter()
+            .filter(|l| l.len() == 2 && (l[1].1 - l[0].1).abs() > 50.0)
+            .filter(|l| panels.index(l[0].1) == 3)
+            .map(|l| to_t(l[0].0))
+            .collect()
+    };
+    let crc = marks("#D62728");
     // Ten good postbacks before it: 5.0 s.
     assert_eq!(crc.len(), 1, "{crc:?}");
     assert!((crc[0] - 5.0).abs() < 0.1, "{crc:?}");
     // The noise after the 16th good postback (the 17th sent): 7.5 s.
-    let lost: Vec<f64> = polylines(&svg, "#FF7F0E")
-        .iter()
-        .filter(|l| l.len() == 2 && (l[1].1 - l[0].1).abs() > 50.0)
-        .filter(|l| panels.index(l[0].1) == 3)
-        .map(|l| to_t(l[0].0))
-        .collect();
+    let lost = marks("#FF7F0E");
     assert_eq!(lost.len(), 1, "{lost:?}");
     assert!((lost[0] - 7.5).abs() < 0.1, "{lost:?}");
 }

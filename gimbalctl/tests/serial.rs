@@ -10,73 +10,22 @@
 
 mod common;
 
+use common::mavlink::{frame, heartbeat, request_information, GIMBAL};
 use common::*;
-use std::io::{BufRead, BufReader, Read};
 use std::net::UdpSocket;
 use std::process::{Command, Stdio};
-use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::mavio;
-use mavio::dialects::common::enums::{
-    GimbalDeviceFlags, MavAutopilot, MavCmd, MavModeFlag, MavState, MavType,
-};
+use mavio::dialects::common::enums::{GimbalDeviceFlags, MavAutopilot, MavType};
 use mavio::dialects::common::messages::{
-    CommandLong, GimbalDeviceAttitudeStatus, GimbalDeviceInformation, GimbalDeviceSetAttitude,
-    Heartbeat,
+    GimbalDeviceAttitudeStatus, GimbalDeviceInformation, GimbalDeviceSetAttitude, Heartbeat,
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
-use mavio::protocol::{Frame, V2};
 use mavio::Message;
-
-/// The sim's stderr lines, as they come.
-type Log = Arc<Mutex<Vec<String>>>;
-
-/// `gimbalctl sim --pty`: the guard, the slave's path, the sim's log.
-fn start_pty_sim() -> (Guard, String, Log) {
-    let mut child = Command::new(BIN)
-        .args(["sim", "--pty", "--exit-after-ms", "60000"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn sim --pty");
-    let stdout = child.stdout.take().unwrap();
-    let stderr = child.stderr.take().unwrap();
-    let guard = Guard(child);
-    let mut first = String::new();
-    BufReader::new(stdout).read_line(&mut first).unwrap();
-    assert!(
-        first.starts_with("gimbalctl sim: serial port at /dev/"),
-        "{first}"
-    );
-    let path = first.trim().rsplit(' ').next().unwrap().to_owned();
-    let log: Log = Arc::default();
-    let l = log.clone();
-    thread::spawn(move || {
-        for line in BufReader::new(stderr).lines() {
-            let Ok(line) = line else { break };
-            l.lock().unwrap().push(line);
-        }
-    });
-    (guard, path, log)
-}
-
-/// Polls `log` until a line ends with `suffix`.
-fn wait_log(log: &Log, suffix: &str, timeout: Duration) {
-    let deadline = Instant::now() + timeout;
-    while !log.lock().unwrap().iter().any(|l| l.ends_with(suffix)) {
-        assert!(
-            Instant::now() < deadline,
-            "never logged {suffix:?}: {:?}",
-            log.lock().unwrap()
-        );
-        thread::sleep(Duration::from_millis(10));
-    }
-}
 
 /// Waits until gimbalctl has opened the slave side of `pty`.
 fn wait_open(pty: &mut TestPty) {
@@ -87,33 +36,15 @@ fn wait_open(pty: &mut TestPty) {
     }
 }
 
-/// Starts gimbalctl with `args`, stdout and stderr collected.
-fn spawn(args: &[&str]) -> (Guard, thread::JoinHandle<String>, Arc<Mutex<String>>) {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn gimbalctl");
-    let mut out = child.stdout.take().unwrap();
-    let err = child.stderr.take().unwrap();
-    let stdout = thread::spawn(move || {
-        let mut s = String::new();
-        let _ = out.read_to_string(&mut s);
-        s
-    });
-    let stderr: Arc<Mutex<String>> = Arc::default();
-    let e = stderr.clone();
-    thread::spawn(move || {
-        for line in BufReader::new(err).lines() {
-            let Ok(line) = line else { break };
-            let mut e = e.lock().unwrap();
-            e.push_str(&line);
-            e.push('\n');
-        }
-    });
-    (Guard(child), stdout, stderr)
+/// Waits for `child`, whose port was just taken away, to end with exit 1 saying that it
+/// went away; its stderr.
+#[track_caller]
+fn went_away(child: &mut Guard, stderr: &Log) -> String {
+    let code = wait_with_timeout(&mut child.0, TIMEOUT);
+    let stderr = stderr.text();
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("went away"), "{stderr}");
+    stderr
 }
 
 #[test]
@@ -131,15 +62,14 @@ fn send_and_monitor_over_the_simulated_uart() {
         "pitch",
         "-30",
     ]);
-    wait_log(&log, &format!("{path}: pitch -30"), Duration::from_secs(5));
+    log.wait(&format!("{path}: pitch -30"), Duration::from_secs(5));
     // The gimbal slews at 60 deg/s: -30 within 1.5 s of postbacks.
     let out = ok(&["monitor", "--serial", &path, "--json", "--count", "4"]);
     let last = out.json().pop().unwrap();
     assert_eq!(last["pitch_deg"], -30, "{}", out.stdout);
     assert_eq!(last["id"], serde_json::Value::Null);
     // Vehicle frames are CAN only: a usage error, nothing opened.
-    let out = usage_error(&["send", "--serial", &path, "gps", "47", "8"]);
-    assert!(out.stderr.contains("--can"), "{}", out.stderr);
+    usage_error_naming(&["send", "--serial", &path, "gps", "47", "8"], &["--can"]);
 }
 
 #[test]
@@ -157,8 +87,8 @@ fn send_holds_a_rate_over_the_uart() {
         "0",
         "10",
     ]);
-    wait_log(&log, &format!("{path}: rate 0 10"), Duration::from_secs(5));
-    wait_log(&log, &format!("{path}: rate 0 0"), Duration::from_secs(5));
+    log.wait(&format!("{path}: rate 0 10"), Duration::from_secs(5));
+    log.wait(&format!("{path}: rate 0 0"), Duration::from_secs(5));
 }
 
 /// The other end of the line closing mid-session (a USB adapter pulled): exit 1 at once,
@@ -175,10 +105,7 @@ fn a_port_that_goes_away_is_exit_1() {
     assert!(pty.write(&postback(1, 0, 3, -1234, 9000, 0)));
     thread::sleep(Duration::from_millis(300));
     drop(pty);
-    let code = wait_with_timeout(&mut monitor.0, TIMEOUT);
-    let stderr = stderr.lock().unwrap().clone();
-    assert_eq!(code, Some(1), "{stderr}");
-    assert!(stderr.contains("went away"), "{stderr}");
+    let stderr = went_away(&mut monitor, &stderr);
     assert!(stderr.contains(&path), "{stderr}");
     assert!(stderr.contains("after 1 postback"), "{stderr}");
     let out = stdout.join().unwrap();
@@ -203,10 +130,7 @@ fn the_sim_exiting_ends_a_session_with_exit_1() {
     ]);
     thread::sleep(Duration::from_millis(700));
     drop(sim);
-    let code = wait_with_timeout(&mut bridge.0, TIMEOUT);
-    let stderr = stderr.lock().unwrap().clone();
-    assert_eq!(code, Some(1), "{stderr}");
-    assert!(stderr.contains("went away"), "{stderr}");
+    went_away(&mut bridge, &stderr);
 }
 
 /// Bytes that hold no frame (what a wrong baud rate gives): counted and said on stderr
@@ -221,7 +145,7 @@ fn garbage_on_the_line_is_counted_and_said() {
     loop {
         // 0x55 never starts a frame.
         pty.write(&[0x55; 64]);
-        let err = stderr.lock().unwrap().clone();
+        let err = stderr.text();
         if err.contains("held no valid frame") && err.contains("no postback") {
             assert!(err.contains("wrong baud rate"), "{err}");
             assert!(err.contains("9600") && err.contains("115200"), "{err}");
@@ -270,14 +194,7 @@ fn serial_usage_and_open_errors() {
             &["--pty", "--listen"],
         ),
     ] {
-        let out = usage_error(args);
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {w:?} not in {}",
-                out.stderr
-            );
-        }
+        usage_error_naming(args, words);
     }
     for (args, words) in [
         (
@@ -298,16 +215,7 @@ fn serial_usage_and_open_errors() {
             &["--autopilot-serial", "no such device"],
         ),
     ] {
-        let out = run(args);
-        assert_eq!(out.code, 1, "{args:?}: {out:?}");
-        assert!(out.stdout.is_empty(), "{out:?}");
-        for w in words {
-            assert!(
-                out.stderr.contains(w),
-                "{args:?}: {w:?} not in {}",
-                out.stderr
-            );
-        }
+        failure_naming(args, words);
     }
 }
 
@@ -345,32 +253,11 @@ fn permission_denied_names_the_group() {
 // ---------------------------------------------------------------------------------------
 // MAVLink over the serial paths
 
-const GIMBAL: u8 = 154;
+/// The autopilot: system 1, component 1.
 const AP: (u8, u8) = (1, 1);
 
-fn frame(seq: u8, message: &dyn Message) -> Vec<u8> {
-    let f = Frame::builder()
-        .version(V2)
-        .sequence(seq)
-        .system_id(AP.0)
-        .component_id(AP.1)
-        .message(message)
-        .expect("a message mavio encodes")
-        .build();
-    let mut buf = [0u8; 300];
-    let n = f.serialize(&mut buf).expect("serialize");
-    buf[..n].to_vec()
-}
-
 fn autopilot_heartbeat() -> Heartbeat {
-    Heartbeat {
-        type_: MavType::Quadrotor,
-        autopilot: MavAutopilot::Px4,
-        base_mode: MavModeFlag::empty(),
-        custom_mode: 0,
-        system_status: MavState::Active,
-        mavlink_version: 3,
-    }
+    heartbeat(MavType::Quadrotor, MavAutopilot::Px4)
 }
 
 fn pitch_setpoint(deg: f32) -> GimbalDeviceSetAttitude {
@@ -387,16 +274,6 @@ fn pitch_setpoint(deg: f32) -> GimbalDeviceSetAttitude {
         angular_velocity_x: f32::NAN,
         angular_velocity_y: f32::NAN,
         angular_velocity_z: f32::NAN,
-    }
-}
-
-fn request_information() -> CommandLong {
-    CommandLong {
-        target_system: AP.0,
-        target_component: GIMBAL,
-        command: MavCmd::RequestMessage,
-        param1: GimbalDeviceInformation::spec().id() as f32,
-        ..Default::default()
     }
 }
 
@@ -422,6 +299,19 @@ impl Heard {
 
     fn has<M: MessageSpecStatic>(&self) -> bool {
         self.ids.contains(&M::spec().id())
+    }
+
+    /// Panics once `deadline` has passed, saying what was heard and what the sim and the
+    /// bridge logged.
+    #[track_caller]
+    fn assert_before(&self, deadline: Instant, sim: &Log, bridge: &Log) {
+        assert!(
+            Instant::now() < deadline,
+            "heard {:?}; sim {}; bridge {}",
+            self.ids,
+            sim.text(),
+            bridge.text()
+        );
     }
 }
 
@@ -454,20 +344,16 @@ fn mavlink_bridges_udp_to_the_uart_gimbal() {
     loop {
         for m in [
             &autopilot_heartbeat() as &dyn Message,
-            &request_information(),
+            &request_information(AP.0),
             &pitch_setpoint(-30.0),
         ] {
-            let _ = sock.send_to(&frame(seq, m), &listen);
+            let _ = sock.send_to(&frame(AP, seq, m), &listen);
             seq = seq.wrapping_add(1);
         }
         while let Ok(n) = sock.recv(&mut buf) {
             heard.feed(&buf[..n]);
         }
-        let logged = log
-            .lock()
-            .unwrap()
-            .iter()
-            .any(|l| l.ends_with(&format!("{path}: pitch -30")));
+        let logged = log.has(&format!("{path}: pitch -30"));
         if logged
             && heard.has::<Heartbeat>()
             && heard.has::<GimbalDeviceInformation>()
@@ -475,16 +361,10 @@ fn mavlink_bridges_udp_to_the_uart_gimbal() {
         {
             break;
         }
-        assert!(
-            Instant::now() < deadline,
-            "heard {:?}; sim {:?}; bridge {}",
-            heard.ids,
-            log.lock().unwrap(),
-            stderr.lock().unwrap()
-        );
+        heard.assert_before(deadline, &log, &stderr);
         thread::sleep(Duration::from_millis(100));
     }
-    assert!(stderr.lock().unwrap().contains("gimbal link up"));
+    assert!(stderr.text().contains("gimbal link up"));
 }
 
 /// `mavlink --serial --autopilot-serial`: the gimbal on the simulated UART, the autopilot on
@@ -512,10 +392,10 @@ fn mavlink_bridges_an_autopilot_on_a_serial_port() {
         let mut bytes = Vec::new();
         for m in [
             &autopilot_heartbeat() as &dyn Message,
-            &request_information(),
+            &request_information(AP.0),
             &pitch_setpoint(-45.0),
         ] {
-            bytes.extend(frame(seq, m));
+            bytes.extend(frame(AP, seq, m));
             seq = seq.wrapping_add(1);
         }
         // A byte stream: in uneven pieces.
@@ -523,28 +403,16 @@ fn mavlink_bridges_an_autopilot_on_a_serial_port() {
             ap.write(piece);
         }
         heard.feed(&ap.read_for(Duration::from_millis(100)));
-        let logged = log
-            .lock()
-            .unwrap()
-            .iter()
-            .any(|l| l.ends_with(&format!("{path}: pitch -45")));
+        let logged = log.has(&format!("{path}: pitch -45"));
         if logged && heard.has::<Heartbeat>() && heard.has::<GimbalDeviceInformation>() {
             break;
         }
-        assert!(
-            Instant::now() < deadline,
-            "heard {:?}; sim {:?}; bridge {}",
-            heard.ids,
-            log.lock().unwrap(),
-            stderr.lock().unwrap()
-        );
+        heard.assert_before(deadline, &log, &stderr);
     }
     // The autopilot's port goes away: exit 1, saying which.
     drop(ap);
-    let code = wait_with_timeout(&mut bridge.0, TIMEOUT);
-    let err = stderr.lock().unwrap().clone();
-    assert_eq!(code, Some(1), "{err}");
-    assert!(err.contains(&ap_path) && err.contains("went away"), "{err}");
+    let err = went_away(&mut bridge, &stderr);
+    assert!(err.contains(&ap_path), "{err}");
     let first = out.join().unwrap();
     assert!(
         first.starts_with(&format!(

@@ -1,11 +1,16 @@
-//! Helpers shared by the integration tests: run the built binary with a timeout, and
-//! reference encodings written from the spec (independent of the library and the tool).
+//! Helpers shared by the integration tests: run the built binary, to its end with a timeout
+//! or in the background with its output collected; the checks most error tests make;
+//! reference encodings written from the spec (independent of the library and the tool); and,
+//! in [`mavlink`], MAVLink frames for the bridge's tests.
 
 #![allow(dead_code)]
 
+pub mod mavlink;
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -52,7 +57,21 @@ pub fn wait_with_timeout(child: &mut Child, timeout: Duration) -> Option<i32> {
     }
 }
 
-fn reader<R: Read + Send + 'static>(r: Option<R>) -> thread::JoinHandle<String> {
+/// `gimbalctl ARGS`, ready to spawn: stdin closed, stdout and stderr piped (a caller may
+/// change any of them first).
+pub fn command(args: &[&str]) -> Command {
+    let mut command = Command::new(BIN);
+    command
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    command
+}
+
+/// Reads `r` to its end on a thread of its own (a child never blocks on a full pipe); the
+/// text, once the thread is joined.
+pub fn reader<R: Read + Send + 'static>(r: Option<R>) -> thread::JoinHandle<String> {
     thread::spawn(move || {
         let mut s = Vec::new();
         if let Some(mut r) = r {
@@ -62,13 +81,23 @@ fn reader<R: Read + Send + 'static>(r: Option<R>) -> thread::JoinHandle<String> 
     })
 }
 
+/// The lines of `r` on a channel as they come, read on a thread of its own to the end, also
+/// once the receiver is gone (a child never blocks on a full pipe).
+pub fn lines<R: Read + Send + 'static>(r: R) -> Receiver<String> {
+    let (tx, rx) = mpsc::channel();
+    thread::spawn(move || {
+        for line in BufReader::new(r).lines() {
+            let Ok(line) = line else { break };
+            let _ = tx.send(line);
+        }
+    });
+    rx
+}
+
 /// Runs the binary with `args` and `stdin`, within `timeout`.
 pub fn run_timeout(args: &[&str], stdin: &[u8], timeout: Duration) -> Out {
-    let mut child = Command::new(BIN)
-        .args(args)
+    let mut child = command(args)
         .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
         .spawn()
         .expect("spawn gimbalctl");
     let input = stdin.to_vec();
@@ -109,12 +138,48 @@ pub fn ok(args: &[&str]) -> Out {
 }
 
 /// Runs, expecting a usage error: exit 2, nothing on stdout, something on stderr.
+#[track_caller]
 pub fn usage_error(args: &[&str]) -> Out {
     let out = run(args);
     assert_eq!(out.code, 2, "gimbalctl {args:?}: {out:?}");
     assert!(out.stdout.is_empty(), "gimbalctl {args:?}: {out:?}");
     assert!(!out.stderr.is_empty(), "gimbalctl {args:?}: {out:?}");
     out
+}
+
+/// A [`usage_error`] whose stderr names each of `words` (the argument, its range).
+#[track_caller]
+pub fn usage_error_naming(args: &[&str], words: &[&str]) -> Out {
+    let out = usage_error(args);
+    assert_names(args, &out, words);
+    out
+}
+
+/// Runs, expecting a runtime failure: exit 1, nothing on stdout, each of `words` on stderr.
+#[track_caller]
+pub fn failure_naming(args: &[&str], words: &[&str]) -> Out {
+    let out = run(args);
+    assert_eq!(out.code, 1, "gimbalctl {args:?}: {out:?}");
+    assert!(out.stdout.is_empty(), "gimbalctl {args:?}: {out:?}");
+    assert_names(args, &out, words);
+    out
+}
+
+#[track_caller]
+fn assert_names(args: &[&str], out: &Out, words: &[&str]) {
+    for w in words {
+        assert!(
+            out.stderr.contains(w),
+            "gimbalctl {args:?}: {w:?} not in {}",
+            out.stderr
+        );
+    }
+}
+
+/// A loopback TCP port that nobody listens on: bound, then freed.
+pub fn closed_port() -> u16 {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    l.local_addr().unwrap().port()
 }
 
 /// CRC-16/MODBUS, bit by bit, from its definition (reflected 0xA001, init 0xFFFF, no
@@ -215,32 +280,159 @@ pub fn assert_json_eq(got: &serde_json::Value, expected: &serde_json::Value) {
     assert_eq!(norm(got), norm(expected));
 }
 
-/// Starts `gimbalctl sim` on an ephemeral port; returns the guard and its address.
-pub fn start_sim(extra: &[&str]) -> (Guard, String) {
+/// A child's stderr, line by line, each line with when it arrived (read on a thread of its
+/// own, as it comes).
+pub struct Log {
+    lines: Arc<Mutex<Vec<(Instant, String)>>>,
+    since: Instant,
+    reader: thread::JoinHandle<()>,
+}
+
+impl Log {
+    pub fn collect<R: Read + Send + 'static>(r: R) -> Log {
+        let lines: Arc<Mutex<Vec<(Instant, String)>>> = Arc::default();
+        let l = lines.clone();
+        let since = Instant::now();
+        let reader = thread::spawn(move || {
+            for line in BufReader::new(r).lines() {
+                let Ok(line) = line else { break };
+                l.lock().unwrap().push((Instant::now(), line));
+            }
+        });
+        Log {
+            lines,
+            since,
+            reader,
+        }
+    }
+
+    /// The lines so far, each ended by a newline.
+    pub fn text(&self) -> String {
+        text(&self.lines)
+    }
+
+    /// Whether a line so far ends with `suffix`.
+    pub fn has(&self, suffix: &str) -> bool {
+        self.lines
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|(_, l)| l.ends_with(suffix))
+    }
+
+    /// Polls for a line ending with `suffix` that arrived at `after` or later; when it
+    /// arrived. Panics with the log after `timeout`.
+    #[track_caller]
+    pub fn wait_after(&self, suffix: &str, after: Instant, timeout: Duration) -> Instant {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some((t, _)) = self
+                .lines
+                .lock()
+                .unwrap()
+                .iter()
+                .find(|(t, l)| *t >= after && l.ends_with(suffix))
+            {
+                return *t;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "never logged {suffix:?}:\n{}",
+                self.text()
+            );
+            thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    /// [`Log::wait_after`] for any line since the log began.
+    #[track_caller]
+    pub fn wait(&self, suffix: &str, timeout: Duration) -> Instant {
+        self.wait_after(suffix, self.since, timeout)
+    }
+
+    /// All of it, once the stream has ended (the child gone).
+    pub fn finish(self) -> String {
+        let Log { lines, reader, .. } = self;
+        reader.join().expect("the log's reader");
+        text(&lines)
+    }
+}
+
+fn text(lines: &Mutex<Vec<(Instant, String)>>) -> String {
+    let lines = lines.lock().unwrap();
+    lines.iter().map(|(_, l)| format!("{l}\n")).collect()
+}
+
+/// Starts `gimbalctl ARGS` in the background (stdin closed, killed when the guard drops): the
+/// guard, all of its stdout once it ends, its stderr as it comes.
+pub fn spawn(args: &[&str]) -> (Guard, thread::JoinHandle<String>, Log) {
+    let mut child = command(args).spawn().expect("spawn gimbalctl");
+    let stdout = reader(child.stdout.take());
+    let stderr = Log::collect(child.stderr.take().unwrap());
+    (Guard(child), stdout, stderr)
+}
+
+/// Starts `gimbalctl ARGS` in the background (stdin closed, killed when the guard drops) and
+/// waits up to `within` for its first stdout line, which must start with `says` (where it
+/// listens, say): the guard, that line, its stderr. The rest of stdout is drained.
+pub fn start(args: &[&str], says: &str, within: Duration) -> (Guard, String, Log) {
+    let mut child = command(args).spawn().expect("spawn gimbalctl");
+    let stdout = lines(child.stdout.take().unwrap());
+    let stderr = Log::collect(child.stderr.take().unwrap());
+    let guard = Guard(child);
+    let first = stdout
+        .recv_timeout(within)
+        .unwrap_or_else(|e| panic!("gimbalctl {args:?} said nothing ({e}): {}", stderr.text()));
+    assert!(first.starts_with(says), "{first}");
+    (guard, first, stderr)
+}
+
+/// `gimbalctl sim --listen 127.0.0.1:0 EXTRA`, given `within` to say where it listens: the
+/// guard, that address, its log.
+pub fn start_sim_logged(extra: &[&str], within: Duration) -> (Guard, String, Log) {
     let mut args = vec!["sim", "--listen", "127.0.0.1:0"];
     args.extend_from_slice(extra);
-    let mut child = Command::new(BIN)
-        .args(&args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn sim");
-    let stdout = child.stdout.take().unwrap();
-    let guard = Guard(child);
-    let (tx, rx) = mpsc::channel();
-    thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            let _ = tx.send(line);
-        }
-    });
-    let first = rx
-        .recv_timeout(Duration::from_secs(10))
-        .expect("sim said where it listens");
+    let (guard, first, log) = start(&args, "gimbalctl sim: listening on 127.0.0.1:", within);
     let addr = first.rsplit(' ').next().expect("an address").to_owned();
-    assert!(first.contains("listening on 127.0.0.1:"), "{first}");
+    (guard, addr, log)
+}
+
+/// Starts `gimbalctl sim` on an ephemeral port; returns the guard and its address.
+pub fn start_sim(extra: &[&str]) -> (Guard, String) {
+    let (guard, addr, _log) = start_sim_logged(extra, Duration::from_secs(10));
     (guard, addr)
+}
+
+/// `gimbalctl sim --pty` for 60 s at most: the guard, the slave's path, the sim's log. The
+/// path is awaited for as long (until the sim would end anyway).
+pub fn start_pty_sim() -> (Guard, String, Log) {
+    let (guard, first, log) = start(
+        &["sim", "--pty", "--exit-after-ms", "60000"],
+        "gimbalctl sim: serial port at /dev/",
+        Duration::from_secs(60),
+    );
+    let path = first.rsplit(' ').next().expect("a path").to_owned();
+    (guard, path, log)
+}
+
+/// Takes the whole 27-byte postbacks off the front of `buf` (what a raw client of the sim
+/// received), each checked: its header and the reference CRC.
+#[track_caller]
+pub fn take_postbacks(buf: &mut Vec<u8>) -> Vec<Vec<u8>> {
+    let mut got = Vec::new();
+    while buf.len() >= 27 {
+        let msg: Vec<u8> = buf.drain(..27).collect();
+        assert_eq!(&msg[..3], &[0xEB, 0x90, 0x0C], "{msg:02X?}");
+        let crc = crc16_modbus(&msg[..25]).to_le_bytes();
+        assert_eq!(&msg[25..], &crc, "{msg:02X?}");
+        got.push(msg);
+    }
+    got
+}
+
+/// A postback's pitch, in 0.01 deg.
+pub fn postback_pitch(msg: &[u8]) -> i16 {
+    i16::from_le_bytes([msg[19], msg[20]])
 }
 
 /// A pseudo-terminal made by a test: its master side (the test's end of the line) and the
