@@ -76,10 +76,11 @@ impl DriverErrors {
     }
 }
 
-/// Everything counted: the link's counters and the CAN driver's errors.
+/// Everything [`Gimbal`] counts: its link's counters and the CAN driver's errors. (Every
+/// driver's `stats()` has this shape: `link`, what its link counts, then its own errors.)
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Stats {
+pub struct GimbalStats {
     /// The link's counters.
     pub link: LinkStats,
     /// CAN driver errors by kind.
@@ -326,8 +327,8 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     }
 
     /// All counters.
-    pub fn stats(&self) -> Stats {
-        Stats {
+    pub fn stats(&self) -> GimbalStats {
+        GimbalStats {
             link: self.link.stats(),
             driver_errors: self.errors,
         }

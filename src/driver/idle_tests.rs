@@ -5,7 +5,6 @@
 
 use super::*;
 use crate::geo::Position;
-use crate::link::serial::SerialStats;
 use crate::link::{Config, Event};
 use crate::mock::serial::{Pipe, Rx, SerialFaults, Tx};
 use crate::mock::{Bus, Endpoint, MockFrame};
@@ -171,7 +170,7 @@ impl<'a> CanSide<'a> {
 
 impl Side for CanSide<'_> {
     type Poll = Result<(), DriverError>;
-    type Observed = (Vec<(Id, Vec<u8>)>, Vec<Event>, Stats);
+    type Observed = (Vec<(Id, Vec<u8>)>, Vec<Event>, GimbalStats);
 
     fn apply(&mut self, op: &Op, now: Instant) {
         if apply_common!(self.gimbal, op, now) {
@@ -259,7 +258,7 @@ impl Side for SerialSide<'_> {
         (),
         PortError<crate::mock::serial::MockSerialError, crate::mock::serial::MockSerialError>,
     >;
-    type Observed = (Vec<u8>, Vec<Event>, SerialStats, PortErrors);
+    type Observed = (Vec<u8>, Vec<Event>, SerialGimbalStats);
 
     fn apply(&mut self, op: &Op, now: Instant) {
         if apply_common!(self.gimbal, op, now) {
@@ -298,7 +297,7 @@ impl Side for SerialSide<'_> {
             line.extend_from_slice(&buf[..n]);
         }
         let events = core::iter::from_fn(|| self.gimbal.next_event()).collect();
-        (line, events, self.gimbal.stats(), self.gimbal.port_errors())
+        (line, events, self.gimbal.stats())
     }
 }
 

@@ -23,5 +23,5 @@ pub mod serial;
 #[cfg(all(test, feature = "mock"))]
 mod idle_tests;
 
-pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, Stats};
-pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialPort};
+pub use can::{AllFaults, Blocking, Classify, DriverError, DriverErrors, Gimbal, GimbalStats};
+pub use serial::{Io, Nb, PortError, PortErrors, SerialGimbal, SerialGimbalStats, SerialPort};

@@ -236,6 +236,17 @@ pub struct PortErrors {
     pub write: u32,
 }
 
+/// Everything [`SerialGimbal`] counts: its serial link's counters and the port's errors
+/// (the shape of every driver's `stats()`: `link`, then its own errors).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SerialGimbalStats {
+    /// The serial link's counters: the link's, the stream parser's, bytes each way.
+    pub link: SerialStats,
+    /// Port errors by direction.
+    pub port_errors: PortErrors,
+}
+
 /// How many bytes one read asks for: two control frames, or a postback and change.
 const READ_CHUNK: usize = 32;
 
@@ -398,14 +409,12 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
         }
     }
 
-    /// The link's and the stream's counters.
-    pub fn stats(&self) -> SerialStats {
-        self.link.stats()
-    }
-
-    /// Port errors by direction.
-    pub fn port_errors(&self) -> PortErrors {
-        self.errors
+    /// All counters.
+    pub fn stats(&self) -> SerialGimbalStats {
+        SerialGimbalStats {
+            link: self.link.stats(),
+            port_errors: self.errors,
+        }
     }
 
     /// Gives back the port.

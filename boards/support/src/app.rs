@@ -10,7 +10,7 @@
 //! out each driver error, each event with the newest postback, and the counters every 10 s.
 
 use embedded_can::nb::Can;
-use idu_gimbal::driver::{DriverError, Stats};
+use idu_gimbal::driver::{DriverError, GimbalStats};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, Gimbal, GimbalControl, Instant};
@@ -22,7 +22,7 @@ pub enum Report {
     /// An event, with the newest postback (for [`Event::Postback`]).
     Event(Event, Option<Postback>),
     /// The counters, every 10 s.
-    Stats(Stats),
+    Stats(GimbalStats),
 }
 
 /// The loop's schedule: the next vehicle push and the next counters line.

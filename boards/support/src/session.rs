@@ -164,7 +164,7 @@ impl Rig for SerialRig<'_> {
     const WIRE: &'static str = "an in-memory serial line (the 24/27-byte UART framing)";
     const CARRIES_VEHICLE: bool = false;
     fn poll(&mut self, now: Instant) {
-        // A port error is counted in port_errors(); the session goes on.
+        // A port error is counted in stats().port_errors; the session goes on.
         let _ = self.gimbal.poll(now);
     }
     fn run_gimbal(&mut self, now: Instant) {
@@ -180,7 +180,7 @@ impl Rig for SerialRig<'_> {
         self.gimbal.is_link_up()
     }
     fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.postbacks
+        self.gimbal.stats().link.link.postbacks
     }
     fn send(&mut self, command: GimbalCommand) -> bool {
         self.gimbal.send(command).is_ok()
@@ -203,7 +203,7 @@ impl Rig for SerialRig<'_> {
         self.sim.sim().stats()
     }
     fn summary(&self, out: &mut dyn Write) {
-        let s = self.gimbal.stats();
+        let s = self.gimbal.stats().link;
         let _ = writeln!(
             out,
             "bytes sent {} received {}; frames sent {}; postbacks {}; bytes skipped {}, CRC errors {}",

@@ -553,7 +553,7 @@ mod fw {
             );
             qemu::exit(false);
         }
-        let stats = gimbal.stats();
+        let stats = gimbal.stats().link;
         if stats.link.postbacks != 3 * N + 3 * N
             || stats.stream.crc_errors != 0
             || stats.stream.skipped_bytes != 0

@@ -119,11 +119,7 @@ mod fw {
 
             if now.is_at_or_after(next_stats) {
                 next_stats = now.add_millis(10_000);
-                defmt::info!(
-                    "stats: {}, port errors {}",
-                    gimbal.stats(),
-                    gimbal.port_errors()
-                );
+                defmt::info!("stats: {}", gimbal.stats());
             }
         }
     }
