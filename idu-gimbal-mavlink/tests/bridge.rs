@@ -744,3 +744,27 @@ fn an_earth_frame_yaw_rate_becomes_a_motor_rate_or_is_refused() {
         )]
     );
 }
+
+/// Flag bits outside the dialect (a newer autopilot's): `mavio` reads bitmasks with
+/// `from_bits_truncate`, so they are dropped. None of the fields the bridge acts on can
+/// carry a bit it must see: a setpoint's meaning is fixed by the bits it knows (RETRACT,
+/// NEUTRAL, the locks and the two yaw frames; common.xml tells a receiver that knows no
+/// frame flag to read YAW_LOCK), and the autopilot state's estimator flags are not acted on.
+/// So a setpoint with unknown bits is followed exactly as the same setpoint without them,
+/// never refused and never read as another.
+#[test]
+fn unknown_flag_bits_do_not_change_a_setpoint() {
+    let known = GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME;
+    let mut plain = bridge();
+    plain.receive(&frame(AP, 0, &set_attitude(known, 30.0, -20.0)), t(10));
+    let expected = queued(plain.gimbal_mut());
+    assert_eq!(expected.len(), 2);
+    for unknown in [0x0400u16, 0x8000, 0xFC00] {
+        let mut b = bridge();
+        let flags = GimbalDeviceFlags::from_bits_retain(known.bits() | unknown);
+        b.receive(&frame(AP, 0, &set_attitude(flags, 30.0, -20.0)), t(10));
+        assert_eq!(b.stats().reader.bad_frames, 0, "{unknown:#x}");
+        assert_eq!(b.stats().refused_setpoints, 0, "{unknown:#x}");
+        assert_eq!(queued(b.gimbal_mut()), expected, "{unknown:#x}");
+    }
+}
