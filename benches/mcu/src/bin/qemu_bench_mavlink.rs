@@ -2,11 +2,14 @@
 //! instructions under QEMU `-icount shift=0` (the method of the core's
 //! `qemu_bench`, whose meter this shares).
 //!
-//! - **Per received byte**: the autopilot's traffic as ArduPilot sends it to a MAVLink
-//!   gimbal (per 20 ms: AUTOPILOT_STATE_FOR_GIMBAL_DEVICE; per 50 ms: a
-//!   GIMBAL_DEVICE_SET_ATTITUDE; per second: a HEARTBEAT and a GLOBAL_POSITION_INT), fed in
-//!   one-second batches from 8-byte reads, divided by its bytes. The goal, <= 60, is
-//!   enforced (exit 1 when over).
+//! - **Per received byte**: one second of what ArduPilot sends its MAVLink gimbal v2
+//!   backend (`AP_Mount_Gremsy.cpp`): AUTOPILOT_STATE_FOR_GIMBAL_DEVICE at 50 Hz (the
+//!   interval it asks of its own link, with its earth yaw rate in `angular_velocity_z`),
+//!   a GIMBAL_DEVICE_SET_ATTITUDE at every 50 Hz update (earth frame: ROLL|PITCH|YAW_LOCK,
+//!   NaN rates), aiming at a target that moves 2.5°/s in yaw (so about one setpoint in
+//!   four moves past the 0.2° dead-band and re-commands the gimbal), GLOBAL_POSITION_INT at
+//!   the 5 Hz the bridge asks for, and a HEARTBEAT; fed in one-second batches from 8-byte
+//!   reads, divided by its bytes. The goal, <= 60, is enforced (exit 1 when over).
 //! - **Latency**: the receive call that takes the last byte of a SET_ATTITUDE, which parses
 //!   it and queues its heading and pitch commands in the CAN driver's queue; in
 //!   instructions and in microseconds at 168 MHz (one instruction a cycle, a lower bound).
@@ -47,7 +50,7 @@ mod fw {
     const GOAL_PER_BYTE: f32 = 60.0;
 
     /// One second of the autopilot's traffic.
-    const SECOND: usize = 50 * 64 + 20 * 64 + 2 * 64;
+    const SECOND: usize = 50 * 64 + 50 * 64 + 6 * 64;
 
     fn push(out: &mut heapless::Vec<u8, SECOND>, seq: &mut u8, m: &dyn Message) {
         let Ok(b) = Frame::builder()
@@ -70,15 +73,18 @@ mod fw {
         }
     }
 
-    fn set_attitude(i: u32) -> GimbalDeviceSetAttitude {
+    /// ArduPilot's angle setpoint (earth frame) for yaw and pitch in degrees.
+    fn set_attitude(yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
         GimbalDeviceSetAttitude {
             target_system: 1,
             target_component: 154,
-            flags: GimbalDeviceFlags::YAW_LOCK,
-            // A new angle each time: every setpoint re-commands the gimbal.
+            // ArduPilot's earth frame (AP_Mount_Gremsy.cpp: all three locks).
+            flags: GimbalDeviceFlags::ROLL_LOCK
+                | GimbalDeviceFlags::PITCH_LOCK
+                | GimbalDeviceFlags::YAW_LOCK,
             q: YawPitch {
-                yaw_rad: (i as f32 * 1.5).to_radians(),
-                pitch_rad: -(i as f32 * 0.5).to_radians(),
+                yaw_rad: yaw_deg.to_radians(),
+                pitch_rad: pitch_deg.to_radians(),
             }
             .to_quaternion(),
             angular_velocity_x: f32::NAN,
@@ -102,22 +108,24 @@ mod fw {
                 mavlink_version: 3,
             },
         );
-        push(
-            &mut out,
-            &mut seq,
-            &GlobalPositionInt {
-                time_boot_ms: 0,
-                lat: 473_977_420,
-                lon: 85_455_940,
-                alt: 488_000,
-                relative_alt: 38_000,
-                vx: 0,
-                vy: 0,
-                vz: 0,
-                hdg: 3000,
-            },
-        );
         for i in 0..50u32 {
+            if i % 10 == 0 {
+                push(
+                    &mut out,
+                    &mut seq,
+                    &GlobalPositionInt {
+                        time_boot_ms: i * 20,
+                        lat: 473_977_420 + i as i32,
+                        lon: 85_455_940,
+                        alt: 488_000,
+                        relative_alt: 38_000,
+                        vx: 120,
+                        vy: 0,
+                        vz: 0,
+                        hdg: 3000,
+                    },
+                );
+            }
             push(
                 &mut out,
                 &mut seq,
@@ -136,14 +144,19 @@ mod fw {
                     vz: 0.0,
                     v_estimated_delay_us: 0,
                     feed_forward_angular_velocity_z: 0.0,
-                    estimator_status: EstimatorStatusFlags::empty(),
-                    landed_state: MavLandedState::InAir,
-                    angular_velocity_z: 0.0,
+                    // ArduPilot's nav filter status, its low bits (attitude, velocity and
+                    // position estimates good), and its earth yaw rate.
+                    estimator_status: EstimatorStatusFlags::from_bits_truncate(0x037F),
+                    landed_state: MavLandedState::Undefined,
+                    angular_velocity_z: 0.0123,
                 },
             );
-            if i % 5 == 0 && i / 5 < 20 {
-                push(&mut out, &mut seq, &set_attitude(i));
-            }
+            // A target moving 2.5°/s in yaw at 50 Hz: 0.05° a setpoint.
+            push(
+                &mut out,
+                &mut seq,
+                &set_attitude(20.0 + i as f32 * 0.05, -30.0),
+            );
         }
         out
     }
@@ -186,7 +199,7 @@ mod fw {
         }
         let per_byte = per_second / bytes.len() as f32;
         table.budget(
-            "bridge: per received byte (an ArduPilot second: 50 Hz state, 20 Hz setpoints)",
+            "bridge: per received byte (an ArduPilot second: 50 Hz state and setpoints, 5 Hz position)",
             per_byte,
             "",
             GOAL_PER_BYTE,
@@ -255,7 +268,13 @@ mod fw {
         const N: u32 = 64;
         for i in 0..N {
             frame.clear();
-            push(&mut frame, &mut seq, &set_attitude(100 + i));
+            // A new angle each time (1.5° and 0.5° apart): each re-commands the gimbal.
+            let k = (100 + i) as f32;
+            push(
+                &mut frame,
+                &mut seq,
+                &set_attitude(k * 1.5, -k * 0.5 % 90.0),
+            );
             let (head, last) = frame.split_at(frame.len() - 1);
             let now = Instant::from_millis(t + i);
             bridge.receive(head, now);
