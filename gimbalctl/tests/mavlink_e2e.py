@@ -410,8 +410,10 @@ def px4_normal(ap):
     ap.settle("setpoint yaw 90 (earth) pitch -30", earth, 90, -30, 90)
     ap.check(ap.setpoint_asked and ap.setpoint_interval <= 0.05,
              f"the gimbal asked for setpoints at 20 Hz (now every {ap.setpoint_interval * 1000:.0f} ms)")
+    # What this script then sends: its own loop, so only a floor (a loaded machine may
+    # slow it); that PX4 was asked for 20 Hz is checked above.
     recent = [t for t in ap.setpoint_times if t > ap.now() - 1.0]
-    ap.check(len(recent) >= 15, f"setpoints now at {len(recent)} a second")
+    ap.check(len(recent) >= 10, f"setpoints now at {len(recent)} a second")
     ap.settle("setpoint yaw 20 (vehicle) pitch -60", mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME, 20, -60, 50)
 
     # Rate: 20 deg/s of yaw for 1 s, then the stream stops: the core's dead-man (250 ms)
@@ -460,10 +462,13 @@ def px4_normal(ap):
     ap.command(CAMERA, mav.MAV_CMD_IMAGE_START_CAPTURE, 0, 0.5, 3, 0, expect=mav.MAV_RESULT_ACCEPTED)
     ap.wait("three images", lambda: len(ap.find_all("CAMERA_IMAGE_CAPTURED", since)) >= 3, timeout=3.0)
     ap.wait("no fourth", lambda: False, timeout=1.0)
-    images = [(t, m.image_index) for t, m in ap.messages if t >= since and m.get_type() == "CAMERA_IMAGE_CAPTURED"]
+    # Spaced by the bridge's own clock (time_boot_ms, when each was taken), not by when
+    # this script happened to read them.
+    images = [(m.time_boot_ms / 1000, m.image_index) for t, m in ap.messages
+              if t >= since and m.get_type() == "CAMERA_IMAGE_CAPTURED"]
     spacing = [b[0] - a[0] for a, b in zip(images, images[1:])]
     ap.check([i for _, i in images] == [0, 1, 2] and all(0.35 < d < 0.65 for d in spacing),
-             f"three images 0.5 s apart, consecutive indexes: {[(round(t - since, 2), i) for t, i in images]}")
+             f"three images 0.5 s apart, consecutive indexes: {[(round(t - images[0][0], 3), i) for t, i in images]}")
 
     # Bad commands get the right ACK, never silence.
     ap.command(GIMBAL, mav.MAV_CMD_DO_SET_MODE, 1, expect=mav.MAV_RESULT_UNSUPPORTED)
