@@ -36,22 +36,17 @@ pub trait Rig {
     const CARRIES_VEHICLE: bool;
     /// Polls the driver.
     fn poll(&mut self, now: Instant);
+    /// The driver: commands, vehicle data, events and postbacks through the core's command
+    /// surface, the same on both transports.
+    type Driver: GimbalControl;
+    /// The driver, to ask.
+    fn driver(&self) -> &Self::Driver;
+    /// The driver, to command.
+    fn driver_mut(&mut self) -> &mut Self::Driver;
     /// Moves what the driver sent to the gimbal, runs it, and sends back its postbacks.
     fn run_gimbal(&mut self, now: Instant);
-    /// The driver's next event.
-    fn next_event(&mut self) -> Option<Event>;
-    /// The newest postback the driver has.
-    fn latest_postback(&self, now: Instant) -> Option<Postback>;
-    /// Whether the driver's link is up.
-    fn is_link_up(&self) -> bool;
     /// Postbacks the driver received.
     fn postbacks(&self) -> u32;
-    /// Queues a command; false when the queue is full.
-    fn send(&mut self, command: GimbalCommand) -> bool;
-    /// Starts or refreshes a rate hold.
-    fn set_rate(&mut self, rate: Rate, now: Instant);
-    /// The vehicle's state: pushed to the gimbal over CAN, kept for point-at over serial.
-    fn vehicle(&mut self, attitude: Attitude, gps: Gps, altitude: Altitude, now: Instant);
     /// Queues a text: `None` when the transport carries none, `Some(false)` when refused.
     fn send_text(&mut self, text: &[u8]) -> Option<bool>;
     /// The simulated gimbal's state and counters.
@@ -79,9 +74,16 @@ impl<'a> CanRig<'a> {
     }
 }
 
-impl Rig for CanRig<'_> {
+impl<'a> Rig for CanRig<'a> {
     const WIRE: &'static str = "an in-memory CAN bus";
     const CARRIES_VEHICLE: bool = true;
+    type Driver = Gimbal<Endpoint<'a, 2, 32>>;
+    fn driver(&self) -> &Self::Driver {
+        &self.gimbal
+    }
+    fn driver_mut(&mut self) -> &mut Self::Driver {
+        &mut self.gimbal
+    }
     fn poll(&mut self, now: Instant) {
         // A driver error is counted in the stats; the session goes on.
         let _ = self.gimbal.poll(now);
@@ -97,28 +99,8 @@ impl Rig for CanRig<'_> {
             }
         }
     }
-    fn next_event(&mut self) -> Option<Event> {
-        self.gimbal.next_event()
-    }
-    fn latest_postback(&self, now: Instant) -> Option<Postback> {
-        self.gimbal.latest_postback(now).map(|(p, _)| p)
-    }
-    fn is_link_up(&self) -> bool {
-        self.gimbal.is_link_up()
-    }
     fn postbacks(&self) -> u32 {
         self.gimbal.stats().link.postbacks
-    }
-    fn send(&mut self, command: GimbalCommand) -> bool {
-        self.gimbal.send(command).is_ok()
-    }
-    fn set_rate(&mut self, rate: Rate, now: Instant) {
-        let _ = self.gimbal.set_rate(rate, now);
-    }
-    fn vehicle(&mut self, attitude: Attitude, gps: Gps, altitude: Altitude, now: Instant) {
-        self.gimbal.set_attitude(attitude, now);
-        self.gimbal.set_gps(gps, now);
-        self.gimbal.set_altitude(altitude, now);
     }
     fn send_text(&mut self, text: &[u8]) -> Option<bool> {
         Some(self.gimbal.send_text(text).is_ok())
@@ -160,9 +142,16 @@ impl<'a> SerialRig<'a> {
     }
 }
 
-impl Rig for SerialRig<'_> {
+impl<'a> Rig for SerialRig<'a> {
     const WIRE: &'static str = "an in-memory serial line (the 24/27-byte UART framing)";
     const CARRIES_VEHICLE: bool = false;
+    type Driver = SerialGimbal<Io<Rx<'a, 256>, Tx<'a, 256>>>;
+    fn driver(&self) -> &Self::Driver {
+        &self.gimbal
+    }
+    fn driver_mut(&mut self) -> &mut Self::Driver {
+        &mut self.gimbal
+    }
     fn poll(&mut self, now: Instant) {
         // A port error is counted in stats().port_errors; the session goes on.
         let _ = self.gimbal.poll(now);
@@ -170,28 +159,8 @@ impl Rig for SerialRig<'_> {
     fn run_gimbal(&mut self, now: Instant) {
         let _ = self.sim.serve(&mut self.sim_port, now);
     }
-    fn next_event(&mut self) -> Option<Event> {
-        self.gimbal.next_event()
-    }
-    fn latest_postback(&self, now: Instant) -> Option<Postback> {
-        self.gimbal.latest_postback(now).map(|(p, _)| p)
-    }
-    fn is_link_up(&self) -> bool {
-        self.gimbal.is_link_up()
-    }
     fn postbacks(&self) -> u32 {
         self.gimbal.stats().link.link.postbacks
-    }
-    fn send(&mut self, command: GimbalCommand) -> bool {
-        self.gimbal.send(command).is_ok()
-    }
-    fn set_rate(&mut self, rate: Rate, now: Instant) {
-        let _ = self.gimbal.set_rate(rate, now);
-    }
-    fn vehicle(&mut self, attitude: Attitude, gps: Gps, altitude: Altitude, now: Instant) {
-        self.gimbal.set_attitude(attitude, now);
-        self.gimbal.set_gps(gps, now);
-        self.gimbal.set_altitude(altitude, now);
     }
     fn send_text(&mut self, _text: &[u8]) -> Option<bool> {
         None
@@ -260,14 +229,17 @@ impl<R: Rig, W: Write> Session<R, W> {
                 Gps::new(47.397_742, 8.545_594),
                 Altitude::new(450.0),
             ) {
-                self.rig.vehicle(att, gps, alt, now);
+                let driver = self.rig.driver_mut();
+                driver.set_attitude(att, now);
+                driver.set_gps(gps, now);
+                driver.set_altitude(alt, now);
             }
         }
         self.rig.poll(now);
-        while let Some(event) = self.rig.next_event() {
+        while let Some(event) = self.rig.driver_mut().next_event() {
             match event {
                 Event::Postback => {
-                    let Some(p) = self.rig.latest_postback(now) else {
+                    let Some(p) = self.rig.driver().latest_postback(now).map(|(p, _age)| p) else {
                         continue;
                     };
                     self.latest = Some(p);
@@ -279,7 +251,7 @@ impl<R: Rig, W: Write> Session<R, W> {
                         p.heading_deg(),
                         p.motor_heading_deg(),
                         p.mode.name().unwrap_or("unknown"),
-                        if self.rig.is_link_up() { "up" } else { "down" },
+                        if self.rig.driver().is_link_up() { "up" } else { "down" },
                     );
                 }
                 Event::LinkUp => {
@@ -327,7 +299,7 @@ impl<R: Rig, W: Write> Session<R, W> {
 
     fn step(&mut self, what: &str, command: GimbalCommand) {
         let _ = writeln!(self.out, "> {what}");
-        if !self.rig.send(command) {
+        if self.rig.driver_mut().send(command).is_err() {
             self.failures += 1;
             let _ = writeln!(self.out, "  FAIL queue full");
         }
@@ -380,7 +352,7 @@ impl<R: Rig, W: Write> Session<R, W> {
         if let Ok(rate) = Rate::new(20.0, 0.0) {
             for _ in 0..50 {
                 let now = Instant::from_millis(self.now);
-                self.rig.set_rate(rate, now);
+                let _ = self.rig.driver_mut().set_rate(rate, now);
                 self.run(20);
             }
         }
