@@ -244,12 +244,42 @@ pub(crate) struct Tx<'a> {
     pub(crate) gimbal_type: Option<GimbalType>,
 }
 
+/// Queues `message` from `(system_id, component)`; a full outbox is counted in `full`.
+/// The one way every frame the bridge sends goes out.
+fn push_counted(
+    out: &mut Outbox<OUTBOX_LEN>,
+    system_id: u8,
+    full: &mut u32,
+    component: u8,
+    message: &dyn Message,
+) {
+    if out.push(system_id, component, message).is_err() {
+        bump(full);
+    }
+}
+
+/// The `COMMAND_ACK` of `command` with `result`, to its sender `to`.
+fn ack_of(command: MavCmd, result: MavResult, to: (u8, u8)) -> CommandAck {
+    CommandAck {
+        command,
+        result,
+        progress: 0,
+        result_param2: 0,
+        target_system: to.0,
+        target_component: to.1,
+    }
+}
+
 impl Tx<'_> {
     /// Queues `message` from `component`; a full outbox is counted.
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
-        if self.out.push(self.system_id, component, message).is_err() {
-            bump(self.outbox_full);
-        }
+        push_counted(
+            self.out,
+            self.system_id,
+            self.outbox_full,
+            component,
+            message,
+        );
     }
 
     /// Bytes the outbox has room for.
@@ -396,7 +426,7 @@ pub(crate) fn bump(counter: &mut u32) {
 }
 
 /// A name in a fixed MAVLink char field, zero-padded.
-fn name<const N: usize>(s: &str) -> [u8; N] {
+pub(crate) fn name<const N: usize>(s: &str) -> [u8; N] {
     let mut out = [0u8; N];
     for (dst, src) in out.iter_mut().zip(s.bytes()) {
         *dst = src;
@@ -415,9 +445,13 @@ pub fn yaw_limit_deg(t: Option<GimbalType>) -> f32 {
 
 impl State {
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
-        if self.out.push(self.system_id, component, message).is_err() {
-            bump(&mut self.stats.outbox_full);
-        }
+        push_counted(
+            &mut self.out,
+            self.system_id,
+            &mut self.stats.outbox_full,
+            component,
+            message,
+        );
     }
 
     fn camera_component(&self) -> Option<u8> {
@@ -516,15 +550,7 @@ impl State {
 
     fn ack(&mut self, me: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
         bump(&mut self.stats.acks);
-        let ack = CommandAck {
-            command,
-            result,
-            progress: 0,
-            result_param2: 0,
-            target_system: to.0,
-            target_component: to.1,
-        };
-        self.send(me, &ack);
+        self.send(me, &ack_of(command, result, to));
     }
 
     fn command<G: GimbalControl>(
@@ -574,15 +600,7 @@ impl State {
             let acked = self.with_camera(gimbal, |camera, gimbal, tx| {
                 let (result, reply) = camera.command(gimbal, cmd, now, position);
                 // The ACK first, then what the command produced.
-                let ack = CommandAck {
-                    command: cmd.command,
-                    result,
-                    progress: 0,
-                    result_param2: 0,
-                    target_system: from.0,
-                    target_component: from.1,
-                };
-                tx.send(me, &ack);
+                tx.send(me, &ack_of(cmd.command, result, from));
                 camera.reply(reply, now, tx);
             });
             if acked.is_some() {
@@ -857,13 +875,13 @@ impl State {
                     param6: 0.0,
                     param7: 0.0,
                 };
-                if self
-                    .out
-                    .push(self.system_id, self.config.gimbal_component, &ask)
-                    .is_err()
-                {
-                    bump(&mut self.stats.outbox_full);
-                }
+                push_counted(
+                    &mut self.out,
+                    self.system_id,
+                    &mut self.stats.outbox_full,
+                    self.config.gimbal_component,
+                    &ask,
+                );
             }
         }
     }

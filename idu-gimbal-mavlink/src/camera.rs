@@ -42,9 +42,8 @@ use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings,
     StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
-use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use crate::bridge::Tx;
+use crate::bridge::{id_of, name, Tx};
 use crate::capture::{Capture, Image, Request};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
@@ -151,10 +150,6 @@ pub(crate) struct Camera {
     recording_since: Option<Instant>,
 }
 
-fn id_of<M: MessageSpecStatic>() -> u32 {
-    M::spec().id()
-}
-
 /// Whether a command is the camera's to answer.
 pub(crate) fn owns(cmd: &Command) -> bool {
     match cmd.command {
@@ -183,14 +178,6 @@ pub(crate) fn owns(cmd: &Command) -> bool {
         | MavCmd::SetCameraZoom => true,
         _ => false,
     }
-}
-
-fn name<const N: usize>(s: &str) -> [u8; N] {
-    let mut out = [0u8; N];
-    for (dst, src) in out.iter_mut().zip(s.bytes()) {
-        *dst = src;
-    }
-    out
 }
 
 /// `param` as a whole number in `i32`, or `None`.
@@ -581,10 +568,7 @@ impl Camera {
     }
 
     fn send_stream(&self, tx: &mut Tx<'_>) {
-        let mut uri = [0u8; URI_CAPACITY];
-        for (dst, src) in uri.iter_mut().zip(self.config.uri.bytes()) {
-            *dst = src;
-        }
+        let uri = name::<URI_CAPACITY>(self.config.uri());
         let (resolution_h, resolution_v) = self.config.resolution.unwrap_or((0, 0));
         let s = VideoStreamInformation {
             stream_id: 1,
