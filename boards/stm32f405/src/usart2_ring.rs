@@ -10,8 +10,9 @@ use core::cell::RefCell;
 
 use cortex_m::interrupt::Mutex;
 use heapless::Deque;
-use stm32f4xx_hal::pac;
-use stm32f4xx_hal::serial::{Error as LineError, Rx, RxListen};
+use stm32f4xx_hal::rcc::Rcc;
+use stm32f4xx_hal::serial::{Config as SerialConfig, Error as LineError, Rx, RxListen, Serial, Tx};
+use stm32f4xx_hal::{pac, prelude::*};
 
 /// Bytes received and not yet taken by the main loop.
 pub const RING: usize = 1024;
@@ -46,6 +47,23 @@ pub fn on_interrupt() {
             }
         }
     });
+}
+
+/// Opens USART2 on PA2 (TX) / PA3 (RX) at `baud`, 8N1 (the HAL's default framing), and
+/// starts the receive ring ([`start`]); gives back the transmit half.
+pub fn open(usart: pac::USART2, gpioa: pac::GPIOA, baud: u32, rcc: &mut Rcc) -> Tx<pac::USART2> {
+    let gpioa = gpioa.split(rcc);
+    let Ok(serial) = Serial::new(
+        usart,
+        (gpioa.pa2, gpioa.pa3),
+        SerialConfig::default().baudrate(baud.bps()),
+        rcc,
+    ) else {
+        panic!("USART2 configuration refused");
+    };
+    let (tx, rx) = serial.split();
+    start(rx);
+    tx
 }
 
 /// Hands the receive half to the interrupt and enables it (the program's USART2 handler

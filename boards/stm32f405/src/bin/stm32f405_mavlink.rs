@@ -22,8 +22,7 @@ mod fw {
     use cortex_m_rt::entry;
     use defmt_rtt as _;
     use panic_probe as _;
-    use stm32f4xx_hal::serial::{Config as SerialConfig, Serial};
-    use stm32f4xx_hal::{interrupt, pac, prelude::*};
+    use stm32f4xx_hal::{interrupt, pac};
 
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
@@ -51,17 +50,7 @@ mod fw {
         board::start_tick(cp.SYST, &rcc);
         let can = board::can1(dp.CAN1, dp.GPIOB, &mut rcc);
 
-        let gpioa = dp.GPIOA.split(&mut rcc);
-        let Ok(serial) = Serial::new(
-            dp.USART2,
-            (gpioa.pa2, gpioa.pa3),
-            SerialConfig::default().baudrate(MAVLINK_BAUD.bps()),
-            &mut rcc,
-        ) else {
-            panic!("USART2 configuration refused");
-        };
-        let (tx, rx) = serial.split();
-        usart2_ring::start(rx);
+        let tx = usart2_ring::open(dp.USART2, dp.GPIOA, MAVLINK_BAUD, &mut rcc);
         // The same non-blocking port adapter the serial gimbal driver uses.
         let mut autopilot = Nb::new(RingRx, tx);
         defmt::info!(

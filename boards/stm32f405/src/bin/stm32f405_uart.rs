@@ -29,8 +29,7 @@ mod fw {
     use cortex_m_rt::entry;
     use defmt_rtt as _;
     use panic_probe as _;
-    use stm32f4xx_hal::serial::{Config as SerialConfig, Serial};
-    use stm32f4xx_hal::{interrupt, pac, prelude::*};
+    use stm32f4xx_hal::{interrupt, pac};
 
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
@@ -67,17 +66,7 @@ mod fw {
         board::start_tick(cp.SYST, &rcc);
 
         // USART2 on PA2 (TX) / PA3 (RX), 115200 8N1 (the HAL's default framing).
-        let gpioa = dp.GPIOA.split(&mut rcc);
-        let Ok(serial) = Serial::new(
-            dp.USART2,
-            (gpioa.pa2, gpioa.pa3),
-            SerialConfig::default().baudrate(UART_BAUD.bps()),
-            &mut rcc,
-        ) else {
-            panic!("USART2 configuration refused");
-        };
-        let (tx, rx) = serial.split();
-        usart2_ring::start(rx);
+        let tx = usart2_ring::open(dp.USART2, dp.GPIOA, UART_BAUD, &mut rcc);
         defmt::info!("USART2 up: {=u32} baud 8N1, PA2 TX, PA3 RX", UART_BAUD);
 
         let mut gimbal: SerialGimbal<_> = SerialGimbal::new(Nb::new(RingRx, tx), Config::default());
