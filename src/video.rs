@@ -427,7 +427,9 @@ impl<'a> Camera<'a> {
         out: &mut W,
     ) -> Result<(), VideoError> {
         let address = self.address(stream)?;
-        write!(out, "{address}").map_err(|_| VideoError::DoesNotFit { len: address.len() })
+        address
+            .write_to(out)
+            .map_err(|_| VideoError::DoesNotFit { len: address.len() })
     }
 
     /// The URL of `stream`, in a string of [`URL_CAPACITY`] bytes (always large enough).
@@ -465,8 +467,8 @@ impl<'a> Address<'a> {
     /// The length of the URL in bytes (at most [`URL_CAPACITY`]).
     pub fn len(&self) -> usize {
         let mut counter = Counter(0);
-        // Counter never fails, and the address's Display only fails if the writer does.
-        let _ = fmt::write(&mut counter, format_args!("{self}"));
+        // Counter never fails, and writing the address only fails if the writer does.
+        let _ = self.write_to(&mut counter);
         counter.0
     }
 
@@ -476,21 +478,65 @@ impl<'a> Address<'a> {
     }
 }
 
-impl fmt::Display for Address<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (ip, port) = (self.camera.ip, interface::RTSP_PORT);
+impl Address<'_> {
+    /// Writes the URL with `write_str` only: no `core::fmt` machinery (`fmt::write`, the
+    /// integer formatting and padding behind `{}`), which on a microcontroller costs about
+    /// 3 KiB of flash for what is a handful of string pieces and four small numbers.
+    fn write_to<W: fmt::Write + ?Sized>(&self, out: &mut W) -> fmt::Result {
+        out.write_str("rtsp://")?;
+        if let Form::RealMonitor(_) = self.form {
+            let credentials = self.camera.credentials;
+            for piece in utf8_percent_encode(credentials.user, USERINFO) {
+                out.write_str(piece)?;
+            }
+            out.write_str(":")?;
+            for piece in utf8_percent_encode(credentials.password, USERINFO) {
+                out.write_str(piece)?;
+            }
+            out.write_str("@")?;
+        }
+        for (i, octet) in self.camera.ip.octets().into_iter().enumerate() {
+            if i > 0 {
+                out.write_str(".")?;
+            }
+            write_decimal(out, octet)?;
+        }
+        out.write_str(":")?;
+        write_decimal(out, interface::RTSP_PORT)?;
         match self.form {
-            Form::Live => write!(f, "rtsp://{ip}:{port}/live"),
-            Form::AvStream => write!(f, "rtsp://{ip}:{port}/ch1/sub/av_stream"),
+            Form::Live => out.write_str("/live"),
+            Form::AvStream => out.write_str("/ch1/sub/av_stream"),
             Form::RealMonitor(subtype) => {
-                let user = utf8_percent_encode(self.camera.credentials.user, USERINFO);
-                let password = utf8_percent_encode(self.camera.credentials.password, USERINFO);
-                write!(
-                    f,
-                    "rtsp://{user}:{password}@{ip}:{port}/cam/realmonitor?channel=1&subtype={subtype}"
-                )
+                out.write_str("/cam/realmonitor?channel=1&subtype=")?;
+                write_decimal(out, subtype)
             }
         }
+    }
+}
+
+/// `n` in decimal, with `write_str` only.
+fn write_decimal<W: fmt::Write + ?Sized>(out: &mut W, n: impl Into<u32>) -> fmt::Result {
+    let mut n: u32 = n.into();
+    let mut digits = [0u8; 10];
+    let mut start = digits.len();
+    loop {
+        start -= 1;
+        // A digit: n % 10 < 10 fits a u8; start stays within the 10 digits a u32 has.
+        if let Some(d) = digits.get_mut(start) {
+            *d = b'0' + (n % 10) as u8;
+        }
+        n /= 10;
+        if n == 0 || start == 0 {
+            break;
+        }
+    }
+    // ASCII digits: always UTF-8.
+    out.write_str(core::str::from_utf8(digits.get(start..).unwrap_or(&[])).unwrap_or(""))
+}
+
+impl fmt::Display for Address<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_to(f)
     }
 }
 
