@@ -60,13 +60,14 @@
 //! **Rate** (`0x04`, either peripheral): the rates are integrated for `rate_timeout_ms`
 //! after each rate command (the document: the gimbal moves only while the commands keep
 //! coming), then stop; a zero-rate command stops at once. A rate command, zero or not,
-//! cancels any angle target and sets the mode to full lock (1, "controllable speed").
+//! cancels any angle target and sets the mode to full lock (1, "controllable speed"),
+//! except while tracking (see **Tracking**).
 //!
 //! **Angles.** Targets are kept in motor coordinates ([`SimState::target_yaw_deg`] is the
 //! yaw motor angle) and stay set after they are reached; both axes slew toward them
 //! independently at up to `slew_dps` and land on them exactly, never overshooting (a step
 //! that ends within 0.001° of a target lands on it, so the rounding of many small steps
-//! cannot leave it short). Any angle command stops rate motion.
+//! cannot leave it short). Any angle command stops rate motion and ends tracking.
 //! - Heading (`0x08` type 1): while the attitude is fresh (an attitude frame arrived within
 //!   `attitude_timeout_ms`) the heading is north-referenced and the motor target is
 //!   heading − vehicle heading, computed once when the command arrives (a vehicle that
@@ -86,17 +87,52 @@
 //! to it and applies at once; zoom in/out move at 5×/s until zoom stop; reset sets 1×;
 //! "2× in" and "2× out" double and halve. Pointing zoom on the gimbal doubles the zoom
 //! (the document: "amplifies it twice"); no image is simulated, so the gimbal does not
-//! move. Every zoom command but in/out ends continuous zooming. Photos: single +1, burst
-//! +N, a timer takes one photo after its delay, a time-lapse one photo every delay until
-//! photo stop (which cancels both). Video start/stop sets [`SimState::recording`]. Focus,
-//! pointing focus and fast calibration are accepted and counted.
+//! move. Every zoom command but in/out ends continuous zooming. The field of view is
+//! [`CAMERA_HFOV_DEG`] (60°) wide at 1×, narrower when zoomed (hfov = 2·atan(tan 30° /
+//! zoom)), and 16:9 ([`field_of_view_deg`]). Photos: single +1, burst +N, a timer takes one
+//! photo after its delay, a time-lapse one photo every delay until photo stop (which
+//! cancels both). Video start/stop sets [`SimState::recording`]. Focus
+//! ([`SimState::focus`], 0 near to 1 far, [`FOCUS_INITIAL`] at first): focus + moves it
+//! toward far and focus − toward near at [`FOCUS_SPEED_PER_S`] (0.5/s) until focus stop,
+//! stopping at the end of the range (still focusing, as zoom in/out); either ends auto
+//! focus. Auto focus and pointing focus end continuous focusing and set
+//! [`SimState::auto_focus`]; pointing focus also keeps its point in
+//! [`SimState::focus_point`] (auto focus, focus + and − clear it). No image is simulated,
+//! so auto focus does not move the focus. All focus commands are counted in
+//! [`SimState::focus_commands`]. Fast calibration is counted and sets
+//! [`SimState::calibrating`] for [`CALIBRATION_MS`] (2 s; a new one restarts it); the
+//! gimbal keeps obeying meanwhile.
 //!
 //! **Dual-light camera.** Rate, start and stop tracking act as on the gimbal; the palette
-//! is stored; electronic zoom in/out/stop sets [`SimState::electronic_zooming`] only;
-//! pointing zoom is counted only (the thermal zoom is not modelled).
+//! is stored in [`SimState::palette`]; electronic zoom in/out/stop sets
+//! [`SimState::electronic_zooming`] only (no ratio); pointing zoom is counted only (the
+//! thermal zoom is not modelled).
 //!
-//! **Tracking.** Start tracking sets the flag and stores the box; stop tracking clears
-//! both. Tracking does not move the gimbal.
+//! **Tracking.** Start tracking (either peripheral) tracks the target at the box centre:
+//! image coordinates [0, 8191] on both axes, (0, 0) top-left, the centre (4096, 4096); x
+//! right is yaw right, y down is pitch down. The target is a fixed direction in the world:
+//! the pointing at that instant plus the box centre's angular offset, for a pinhole camera
+//! with the field of view at the current zoom, each axis on its own (yaw offset
+//! atan((x − 4096)/4096 · tan(hfov/2)), pitch offset −atan((y − 4096)/4096 · tan(vfov/2))).
+//! Its azimuth is kept relative to the last vehicle heading received (stale or not; 0
+//! before any), so a vehicle that turns is made up for. The angle targets aim at it and the
+//! gimbal slews there at `slew_dps` as for any angle target, within the pitch and motor
+//! limits. [`SimState::tracking_box`] keeps the box's size and its centre follows the
+//! target in the image, recomputed from the remaining angular offset and the current zoom
+//! (back to (4096, 4096) when the gimbal points at it). Start tracking stops any rate,
+//! sets lock (3) and replaces any target tracked. Tracking ends, the gimbal then holding
+//! its angles (targets = where it points; mode lock), on:
+//! - stop tracking (either peripheral; when not tracking it changes nothing);
+//! - a manual pointing command, as a real tracker hands the gimbal back to the operator:
+//!   heading, pitch, recenter, look down, nose-following (which then act as above), and a
+//!   non-zero rate (which then acts as above). A zero rate while tracking is a joystick at
+//!   rest: it is counted and otherwise ignored. Zoom, pointing zoom (only a zoom here) and
+//!   camera commands do not end it;
+//! - loss of the target, counted in [`SimState::targets_lost`]: exactly
+//!   [`SimConfig::tracking_lost_ms`] after start tracking (0: never), or as soon as the
+//!   target is out of the image (by zooming in, or past a pitch or motor limit).
+//!
+//! The postback's tracking flag is [`SimState::tracking`].
 //!
 //! **Vehicle frames** are stored (the last attitude stays in [`SimState::vehicle`] when it
 //! goes stale). **Text** frames go through a [`TextAssembler<64>`](TextAssembler); the last
@@ -126,8 +162,8 @@ use heapless::Deque;
 use crate::link::text::TextAssembler;
 use crate::time::Instant;
 use crate::wire::control::{
-    self, Command, DualLightCommand, ElectronicZoom, GimbalCommand, Palette, Photo, Rate,
-    TrackingBox, Video, Zoom,
+    self, Command, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, ImagePoint, Palette,
+    Photo, Rate, TrackingBox, Video, Zoom,
 };
 use crate::wire::postback::{self, ControlMode, DataId, GimbalType, Postback};
 use crate::wire::vehicle::{self, Altitude, Attitude, Gps, VehicleFrame};
@@ -149,6 +185,31 @@ pub const ZOOM_MAX: f32 = 30.0;
 pub const ZOOM_SPEED_PER_S: f32 = 5.0;
 /// The longest text kept, in bytes.
 pub const TEXT_CAPACITY: usize = 64;
+/// The camera's horizontal field of view at 1×, degrees (see [`field_of_view_deg`]).
+pub const CAMERA_HFOV_DEG: f32 = 60.0;
+/// The image's width over its height (16:9): sets the vertical field of view.
+pub const CAMERA_ASPECT: f32 = 16.0 / 9.0;
+/// The image centre on both axes, image units (the image spans [0, 8192) on each).
+pub const IMAGE_CENTRE: f32 = 4096.0;
+/// Focus position at power-on, in [0, 1] (0 near, 1 far).
+pub const FOCUS_INITIAL: f32 = 0.5;
+/// Continuous focus speed (focus + / −), focus range per second.
+pub const FOCUS_SPEED_PER_S: f32 = 0.5;
+/// How long a fast calibration lasts, ms.
+pub const CALIBRATION_MS: u32 = 2000;
+
+/// The camera's field of view at `zoom_ratio`, (horizontal, vertical) degrees.
+///
+/// Zooming divides the tangent of the half angle: hfov = 2·atan(tan(30°)/zoom), so 60° at
+/// 1×, 32.2° at 2×; the vertical half angle's tangent is the horizontal one's × 9/16. A
+/// ratio below 1 (or NaN) is taken as 1.
+pub fn field_of_view_deg(zoom_ratio: f32) -> (f32, f32) {
+    let (tx, ty) = half_fov_tangents(zoom_ratio);
+    (
+        2.0 * libm::atanf(tx).to_degrees(),
+        2.0 * libm::atanf(ty).to_degrees(),
+    )
+}
 
 /// How the simulated gimbal behaves.
 #[derive(Clone, Copy, PartialEq, Debug)]
@@ -167,6 +228,8 @@ pub struct SimConfig {
     pub attitude_timeout_ms: u32,
     /// Queue each postback as four CAN frames for [`Simulator::pop_frame`] (true).
     pub emit_can_frames: bool,
+    /// A tracked target is lost this long after start tracking, ms (10 000; 0: never).
+    pub tracking_lost_ms: u32,
 }
 
 impl Default for SimConfig {
@@ -178,6 +241,7 @@ impl Default for SimConfig {
             rate_timeout_ms: 200,
             attitude_timeout_ms: 1000,
             emit_can_frames: true,
+            tracking_lost_ms: 10_000,
         }
     }
 }
@@ -210,8 +274,11 @@ pub struct SimState {
     pub recording: bool,
     /// Whether the gimbal is tracking a target.
     pub tracking: bool,
-    /// The box given by the last start tracking, while tracking.
+    /// The tracked box, while tracking: the size given by start tracking, the centre where
+    /// the target is in the image now (back at (4096, 4096) once the gimbal points at it).
     pub tracking_box: Option<TrackingBox>,
+    /// Targets lost: by timeout ([`SimConfig::tracking_lost_ms`]) or out of the image.
+    pub targets_lost: u32,
     /// Control mode.
     pub mode: ControlMode,
     /// Photos taken.
@@ -222,8 +289,20 @@ pub struct SimState {
     pub palette: Option<Palette>,
     /// Focus and pointing focus commands received.
     pub focus_commands: u32,
+    /// Focus position in [0, 1]: 0 near, 1 far (starts at [`FOCUS_INITIAL`]).
+    pub focus: f32,
+    /// Continuous focus in progress: `Some(Focus::Plus)` (toward far) or
+    /// `Some(Focus::Minus)` (toward near).
+    pub focusing: Option<Focus>,
+    /// Whether the camera auto-focuses (set by auto focus and pointing focus, cleared by
+    /// focus + / −).
+    pub auto_focus: bool,
+    /// The point the last pointing focus asked for, while auto-focusing on it.
+    pub focus_point: Option<ImagePoint>,
     /// Fast calibration commands received.
     pub calibrations: u32,
+    /// Whether a fast calibration is running (for [`CALIBRATION_MS`] after the command).
+    pub calibrating: bool,
     /// Pointing zoom commands received (either peripheral).
     pub pointing_zooms: u32,
     /// The last command accepted.
@@ -255,12 +334,18 @@ impl SimState {
             recording: false,
             tracking: false,
             tracking_box: None,
+            targets_lost: 0,
             mode: ControlMode::HeadingFollow,
             photos: 0,
             photo_mode: None,
             palette: None,
             focus_commands: 0,
+            focus: FOCUS_INITIAL,
+            focusing: None,
+            auto_focus: false,
+            focus_point: None,
             calibrations: 0,
+            calibrating: false,
             pointing_zooms: 0,
             last_command: None,
             vehicle: None,
@@ -347,6 +432,13 @@ pub struct Simulator<const TX: usize = 16> {
     attitude_age_ms: Option<u32>,
     /// Time to the next timer or time-lapse photo, ms, while `state.photo_mode` is set.
     photo_left_ms: u32,
+    /// The tracked target while tracking: (azimuth, elevation) degrees, the azimuth
+    /// relative to the last vehicle heading received (0 before any), in [0, 360).
+    track_target: Option<(f32, f32)>,
+    /// Time left before the target is lost, ms, while tracking with a timeout.
+    tracking_left_ms: u32,
+    /// Time left of the fast calibration, ms, while `state.calibrating`.
+    calibration_left_ms: u32,
     text: TextAssembler<TEXT_CAPACITY>,
     tx: Deque<Frame, TX>,
 }
@@ -372,6 +464,9 @@ impl<const TX: usize> Simulator<TX> {
             rate_left_ms: 0,
             attitude_age_ms: None,
             photo_left_ms: 0,
+            track_target: None,
+            tracking_left_ms: 0,
+            calibration_left_ms: 0,
             text: TextAssembler::new(),
             tx: Deque::new(),
         };
@@ -534,9 +629,17 @@ impl<const TX: usize> Simulator<TX> {
             return;
         }
         self.integrate_rate(dt);
+        if let Some(ms) = self.tracking_ends_within(dt) {
+            // Slew toward the target until the instant it is lost, then hold there.
+            self.slew(ms);
+            self.lose_target();
+        }
+        // After a loss the targets are where the gimbal stopped: this moves nothing more.
         self.slew(dt);
         self.integrate_zoom(dt);
+        self.integrate_focus(dt);
         self.run_photo_timers(dt);
+        self.run_calibration(dt);
         self.attitude_age_ms = self.attitude_age_ms.map(|a| a.saturating_add(dt));
         self.refresh();
     }
@@ -569,6 +672,41 @@ impl<const TX: usize> Simulator<TX> {
         }
         if let Some(target) = self.state.target_yaw_deg {
             self.state.motor_yaw_deg = approach(self.state.motor_yaw_deg, target, step);
+        }
+    }
+
+    /// While tracking with a timeout: the ms into a `dt` step at which the target is lost,
+    /// if within it; otherwise counts the step off the time left.
+    fn tracking_ends_within(&mut self, dt: u32) -> Option<u32> {
+        if !self.state.tracking || self.config.tracking_lost_ms == 0 {
+            return None;
+        }
+        if dt >= self.tracking_left_ms {
+            Some(self.tracking_left_ms)
+        } else {
+            self.tracking_left_ms -= dt;
+            None
+        }
+    }
+
+    fn integrate_focus(&mut self, dt: u32) {
+        let delta = FOCUS_SPEED_PER_S * (dt as f32 / 1000.0);
+        self.state.focus = match self.state.focusing {
+            Some(Focus::Plus) => (self.state.focus + delta).min(1.0),
+            Some(Focus::Minus) => (self.state.focus - delta).max(0.0),
+            _ => return,
+        };
+    }
+
+    fn run_calibration(&mut self, dt: u32) {
+        if !self.state.calibrating {
+            return;
+        }
+        if dt >= self.calibration_left_ms {
+            self.state.calibrating = false;
+            self.calibration_left_ms = 0;
+        } else {
+            self.calibration_left_ms -= dt;
         }
     }
 
@@ -606,8 +744,14 @@ impl<const TX: usize> Simulator<TX> {
         }
     }
 
-    /// Recomputes the derived fields: reference and reported heading.
+    /// Recomputes the derived fields: reference and reported heading, and while tracking
+    /// the angle targets and the box (losing a target now out of the image).
     fn refresh(&mut self) {
+        self.refresh_heading();
+        self.follow_target();
+    }
+
+    fn refresh_heading(&mut self) {
         let fresh = self
             .attitude_age_ms
             .is_some_and(|age| age <= self.config.attitude_timeout_ms);
@@ -618,6 +762,35 @@ impl<const TX: usize> Simulator<TX> {
         self.state.north_referenced = vehicle_heading.is_some();
         self.state.heading_deg =
             wrap_360(vehicle_heading.unwrap_or(0.0) + self.state.motor_yaw_deg);
+    }
+
+    /// The heading tracked targets are kept relative to: the last vehicle heading
+    /// received, stale or not (a fixed frame, so that a stale attitude moves nothing), 0
+    /// before any.
+    fn tracking_reference(&self) -> f32 {
+        self.state.vehicle.map_or(0.0, |v| v.heading_deg())
+    }
+
+    /// While tracking: aims the angle targets at the target (a vehicle turn is made up for
+    /// within the motor's range) and moves the box to where the target is in the image.
+    fn follow_target(&mut self) {
+        let Some((azimuth, elevation)) = self.track_target else {
+            return;
+        };
+        let relative = azimuth - self.tracking_reference();
+        let s = &mut self.state;
+        s.target_yaw_deg = Some(clamp_yaw(wrap_180(relative)));
+        s.target_pitch_deg = Some(clamp_pitch(elevation));
+        let offset = (
+            wrap_180(relative - s.motor_yaw_deg),
+            elevation - s.pitch_deg,
+        );
+        match (image_point(offset, s.zoom_ratio), s.tracking_box) {
+            (Some(centre), Some(b)) => {
+                s.tracking_box = Some(TrackingBox::from_raw(centre, b.width16(), b.height16()));
+            }
+            _ => self.lose_target(),
+        }
     }
 
     fn apply(&mut self, command: Command) {
@@ -637,23 +810,27 @@ impl<const TX: usize> Simulator<TX> {
                 self.set_zoom(doubled);
             }
             GimbalCommand::NoseFollowing => {
+                self.end_tracking();
                 self.stop_rate();
                 self.state.mode = ControlMode::HeadingFollow;
                 self.state.target_yaw_deg = Some(0.0);
             }
             GimbalCommand::Recenter => {
+                self.end_tracking();
                 self.stop_rate_keep_mode();
                 self.state.target_pitch_deg = Some(0.0);
                 self.state.target_yaw_deg = Some(0.0);
             }
             GimbalCommand::Rate(r) => self.start_rate(r),
             GimbalCommand::StartTracking(b) => self.start_tracking(b),
-            GimbalCommand::StopTracking => self.stop_tracking(),
+            GimbalCommand::StopTracking => self.end_tracking(),
             GimbalCommand::LookDown => {
+                self.end_tracking();
                 self.stop_rate_keep_mode();
                 self.state.target_pitch_deg = Some(LOOK_DOWN_PITCH_DEG);
             }
             GimbalCommand::Heading(h) => {
+                self.end_tracking();
                 self.stop_rate();
                 let reference = if self.state.north_referenced {
                     self.state.vehicle.map_or(0.0, |v| v.heading_deg())
@@ -664,6 +841,7 @@ impl<const TX: usize> Simulator<TX> {
                 self.state.mode = ControlMode::Lock;
             }
             GimbalCommand::Pitch(p) => {
+                self.end_tracking();
                 self.stop_rate();
                 self.state.target_pitch_deg = Some(clamp_pitch(p.degrees()));
                 self.state.mode = ControlMode::Lock;
@@ -684,10 +862,33 @@ impl<const TX: usize> Simulator<TX> {
                     self.set_zoom(z);
                 }
             },
-            GimbalCommand::Focus(_) | GimbalCommand::PointingFocus(_) => {
+            GimbalCommand::Focus(f) => {
                 s.focus_commands = s.focus_commands.wrapping_add(1);
+                match f {
+                    Focus::Plus | Focus::Minus => {
+                        s.focusing = Some(f);
+                        s.auto_focus = false;
+                        s.focus_point = None;
+                    }
+                    Focus::Stop => s.focusing = None,
+                    Focus::Auto => {
+                        s.focusing = None;
+                        s.auto_focus = true;
+                        s.focus_point = None;
+                    }
+                }
             }
-            GimbalCommand::FastCalibration => s.calibrations = s.calibrations.wrapping_add(1),
+            GimbalCommand::PointingFocus(p) => {
+                s.focus_commands = s.focus_commands.wrapping_add(1);
+                s.focusing = None;
+                s.auto_focus = true;
+                s.focus_point = Some(p);
+            }
+            GimbalCommand::FastCalibration => {
+                s.calibrations = s.calibrations.wrapping_add(1);
+                s.calibrating = true;
+                self.calibration_left_ms = CALIBRATION_MS;
+            }
         }
     }
 
@@ -700,7 +901,7 @@ impl<const TX: usize> Simulator<TX> {
             DualLightCommand::Palette(p) => s.palette = Some(p),
             DualLightCommand::Rate(r) => self.start_rate(r),
             DualLightCommand::StartTracking(b) => self.start_tracking(b),
-            DualLightCommand::StopTracking => self.stop_tracking(),
+            DualLightCommand::StopTracking => self.end_tracking(),
             DualLightCommand::ElectronicZoom(z) => {
                 s.electronic_zooming = match z {
                     ElectronicZoom::In | ElectronicZoom::Out => Some(z),
@@ -711,6 +912,11 @@ impl<const TX: usize> Simulator<TX> {
     }
 
     fn start_rate(&mut self, rate: Rate) {
+        if rate.is_zero() && self.state.tracking {
+            // A joystick at rest is no manual input: the tracker keeps the gimbal.
+            return;
+        }
+        self.end_tracking();
         let s = &mut self.state;
         s.mode = ControlMode::FullLock;
         s.target_pitch_deg = None;
@@ -739,14 +945,35 @@ impl<const TX: usize> Simulator<TX> {
         }
     }
 
+    /// Starts tracking the target at the box centre (replacing any target tracked): it
+    /// becomes a fixed direction, the current pointing plus the box's angular offset.
     fn start_tracking(&mut self, b: TrackingBox) {
-        self.state.tracking = true;
-        self.state.tracking_box = Some(b);
+        self.stop_rate();
+        let (yaw, pitch) = angular_offset(b.centre(), self.state.zoom_ratio);
+        let azimuth = wrap_360(self.tracking_reference() + self.state.motor_yaw_deg + yaw);
+        self.track_target = Some((azimuth, self.state.pitch_deg + pitch));
+        self.tracking_left_ms = self.config.tracking_lost_ms;
+        let s = &mut self.state;
+        s.tracking = true;
+        s.tracking_box = Some(b);
+        s.mode = ControlMode::Lock;
     }
 
-    fn stop_tracking(&mut self) {
-        self.state.tracking = false;
-        self.state.tracking_box = None;
+    /// Ends tracking, if on, holding the gimbal where it points now.
+    fn end_tracking(&mut self) {
+        let s = &mut self.state;
+        if self.track_target.take().is_some() {
+            s.target_pitch_deg = Some(s.pitch_deg);
+            s.target_yaw_deg = Some(s.motor_yaw_deg);
+        }
+        s.tracking = false;
+        s.tracking_box = None;
+    }
+
+    /// Ends tracking as [`Self::end_tracking`] and counts the target lost.
+    fn lose_target(&mut self) {
+        self.end_tracking();
+        self.state.targets_lost = self.state.targets_lost.wrapping_add(1);
     }
 
     /// Sets the optical zoom (clamped) and ends continuous zooming.
@@ -784,6 +1011,54 @@ fn approach(current: f32, target: f32, step: f32) -> f32 {
     } else {
         current - step
     }
+}
+
+/// How far past the image edge (in half widths) a target may be before it counts as out of
+/// the image: absorbs the rounding of the angle round trip for a box on the edge.
+const EDGE_MARGIN: f32 = 1e-3;
+
+/// Tangents of the camera's half angles (horizontal, vertical) at `zoom_ratio`.
+fn half_fov_tangents(zoom_ratio: f32) -> (f32, f32) {
+    let zoom = if zoom_ratio > ZOOM_MIN {
+        zoom_ratio
+    } else {
+        ZOOM_MIN
+    };
+    let tx = libm::tanf((CAMERA_HFOV_DEG / 2.0).to_radians()) / zoom;
+    (tx, tx / CAMERA_ASPECT)
+}
+
+/// The direction of an image point from the camera's axis, (yaw, pitch) degrees: positive
+/// right and up. A pinhole camera, each axis on its own.
+fn angular_offset(p: ImagePoint, zoom_ratio: f32) -> (f32, f32) {
+    let (tx, ty) = half_fov_tangents(zoom_ratio);
+    let nx = (f32::from(p.x()) - IMAGE_CENTRE) / IMAGE_CENTRE;
+    let ny = (f32::from(p.y()) - IMAGE_CENTRE) / IMAGE_CENTRE;
+    // Image y grows downwards, pitch upwards.
+    (
+        libm::atanf(nx * tx).to_degrees(),
+        -libm::atanf(ny * ty).to_degrees(),
+    )
+}
+
+/// Where a direction (yaw, pitch) degrees from the camera's axis is in the image, or
+/// `None` when outside it: the inverse of [`angular_offset`], rounded and kept in
+/// [0, 8191].
+fn image_point((yaw, pitch): (f32, f32), zoom_ratio: f32) -> Option<ImagePoint> {
+    // At or beyond 90° the tangent no longer says the side: out of any image.
+    if !(libm::fabsf(yaw) < 90.0 && libm::fabsf(pitch) < 90.0) {
+        return None;
+    }
+    let (tx, ty) = half_fov_tangents(zoom_ratio);
+    let nx = libm::tanf(yaw.to_radians()) / tx;
+    let ny = -libm::tanf(pitch.to_radians()) / ty;
+    let limit = 1.0 + EDGE_MARGIN;
+    if !(libm::fabsf(nx) <= limit && libm::fabsf(ny) <= limit) {
+        return None;
+    }
+    let max = f32::from(ImagePoint::MAX);
+    let coordinate = |n: f32| libm::roundf(IMAGE_CENTRE + n * IMAGE_CENTRE).clamp(0.0, max) as i32;
+    ImagePoint::new(coordinate(nx), coordinate(ny)).ok()
 }
 
 fn clamp_pitch(deg: f32) -> f32 {
@@ -1072,17 +1347,20 @@ mod tests {
             GimbalCommand::Heading(Heading::new(300.0).unwrap()),
             t(0),
         );
-        send(
-            &mut sim,
-            GimbalCommand::StartTracking(TrackingBox::from_raw(
-                ImagePoint::new(4096, 4096).unwrap(),
-                8,
-                8,
-            )),
-            t(0),
-        );
         let mut times = heapless::Vec::<u32, 32>::new();
         for ms in (0..=10_000).step_by(10) {
+            if ms == 2000 {
+                // On target by now: tracking the image centre keeps it there.
+                send(
+                    &mut sim,
+                    GimbalCommand::StartTracking(TrackingBox::from_raw(
+                        ImagePoint::new(4096, 4096).unwrap(),
+                        8,
+                        8,
+                    )),
+                    t(ms),
+                );
+            }
             if let Some(pb) = sim.poll(t(ms)) {
                 times.push(ms).unwrap();
                 assert_eq!(sim.pending_frames(), 4);
@@ -1091,7 +1369,7 @@ mod tests {
                 let s = sim.state();
                 assert_eq!(pb.data_id, DataId::Attitude);
                 assert_eq!(pb.gimbal_type, GimbalType::X30);
-                assert!(pb.tracking);
+                assert_eq!(pb.tracking, ms >= 2000);
                 assert_eq!(pb.mode, ControlMode::Lock);
                 assert_eq!(f32::from(pb.pitch), libm::roundf(s.pitch_deg * 100.0));
                 assert_eq!(f32::from(pb.heading), libm::roundf(s.heading_deg * 100.0));
@@ -1325,7 +1603,10 @@ mod tests {
         );
         send(&mut sim, GimbalCommand::FastCalibration, now);
         assert_eq!(sim.state().focus_commands, 2);
+        assert!(sim.state().auto_focus);
+        assert_eq!(sim.state().focus_point, ImagePoint::new(1, 2).ok());
         assert_eq!(sim.state().calibrations, 1);
+        assert!(sim.state().calibrating);
         assert_eq!(
             sim.state().last_command,
             Some(Command::Gimbal(GimbalCommand::FastCalibration))
@@ -1544,6 +1825,338 @@ mod tests {
         assert_eq!(sim.stats().tx_overflows, 1);
     }
 
+    /// The yaw and pitch offsets, degrees, of image point (x, y) for a camera of 60°
+    /// horizontal field of view at 1× and 16:9, at `zoom`: computed in f64 from the
+    /// field of view, independently of the simulator's code.
+    fn expected_offset(x: f64, y: f64, zoom: f64) -> (f64, f64) {
+        let hfov = 2.0 * ((30f64).to_radians().tan() / zoom).atan();
+        let vfov = 2.0 * ((hfov / 2.0).tan() * 9.0 / 16.0).atan();
+        let nx = (x - 4096.0) / 4096.0;
+        let ny = (y - 4096.0) / 4096.0;
+        (
+            (nx * (hfov / 2.0).tan()).atan().to_degrees(),
+            -(ny * (vfov / 2.0).tan()).atan().to_degrees(),
+        )
+    }
+
+    fn track<const TX: usize>(sim: &mut Simulator<TX>, x: i32, y: i32, at: Instant) {
+        let b = TrackingBox::from_raw(ImagePoint::new(x, y).unwrap(), 4, 3);
+        send(sim, GimbalCommand::StartTracking(b), at);
+    }
+
+    fn box_centre<const TX: usize>(sim: &Simulator<TX>) -> (u16, u16) {
+        let c = sim.state().tracking_box.unwrap().centre();
+        (c.x(), c.y())
+    }
+
+    #[test]
+    fn tracking_slews_toward_the_box_and_brings_it_back_to_the_centre() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        // Right of and below the centre, at 1×.
+        track(&mut sim, 6144, 6144, t(0));
+        let (yaw, pitch) = expected_offset(6144.0, 6144.0, 1.0);
+        assert!((yaw - 16.102).abs() < 1e-3, "{yaw}"); // atan(0.5·tan 30°)
+        assert!((pitch + 9.223).abs() < 1e-3, "{pitch}"); // −atan(0.5·tan 30°·9/16)
+        let s = sim.state();
+        assert!(s.tracking);
+        assert_eq!(s.mode, ControlMode::Lock);
+        assert!((f64::from(s.target_yaw_deg.unwrap()) - yaw).abs() < 1e-3);
+        assert!((f64::from(s.target_pitch_deg.unwrap()) - pitch).abs() < 1e-3);
+        assert_eq!(box_centre(&sim), (6144, 6144));
+        assert!(sim.postback().tracking);
+
+        // After 100 ms at 60°/s: 6° on each axis, the box centre where the rest is.
+        sim.poll(t(100));
+        assert!(close(sim.state().heading_deg, 6.0));
+        assert!(close(sim.state().pitch_deg, -6.0));
+        let tan30 = (30f64).to_radians().tan();
+        let x = 4096.0 + 4096.0 * (yaw - 6.0).to_radians().tan() / tan30;
+        let y = 4096.0 - 4096.0 * (pitch + 6.0).to_radians().tan() / (tan30 * 9.0 / 16.0);
+        let (bx, by) = box_centre(&sim);
+        assert!((f64::from(bx) - x).abs() <= 1.0, "{bx} {x}");
+        assert!((f64::from(by) - y).abs() <= 1.0, "{by} {y}");
+
+        // The heading rises and the box comes back to the centre, both monotonically.
+        let mut prev = (sim.state().heading_deg, bx, by);
+        for ms in (110..=1000).step_by(10) {
+            if let Some(pb) = sim.poll(t(ms)) {
+                assert!(pb.tracking);
+            }
+            let (bx, by) = box_centre(&sim);
+            let heading = sim.state().heading_deg;
+            assert!(heading >= prev.0 && bx <= prev.1 && by <= prev.2);
+            assert!(bx >= 4096 && by >= 4096);
+            prev = (heading, bx, by);
+        }
+        let s = sim.state();
+        assert!((f64::from(s.heading_deg) - yaw).abs() < 1e-3);
+        assert!((f64::from(s.pitch_deg) - pitch).abs() < 1e-3);
+        assert_eq!(box_centre(&sim), (4096, 4096));
+        assert_eq!(s.tracking_box.unwrap().width16(), 4); // the size is kept
+        let pb = sim.postback();
+        assert!(pb.tracking);
+        assert_eq!((pb.heading, pb.pitch), (1610, -922));
+
+        // Left of and above the centre by as much: back to where it started.
+        track(&mut sim, 2048, 2048, t(1000));
+        let s = sim.state();
+        assert!(close(s.target_yaw_deg.unwrap(), 0.0));
+        assert!(close(s.target_pitch_deg.unwrap(), 0.0));
+        sim.poll(t(2000));
+        assert!(close(sim.state().motor_yaw_deg, 0.0));
+        assert_eq!(box_centre(&sim), (4096, 4096));
+    }
+
+    #[test]
+    fn zoom_narrows_the_field_of_view_so_the_same_box_is_a_smaller_angle() {
+        let (h1, v1) = field_of_view_deg(1.0);
+        assert!(close(h1, 60.0));
+        let v1_expected = 2.0
+            * ((30f64).to_radians().tan() * 9.0 / 16.0)
+                .atan()
+                .to_degrees();
+        assert!((f64::from(v1) - v1_expected).abs() < 1e-3); // 35.98°
+        let (h2, _) = field_of_view_deg(2.0);
+        let h2_expected = 2.0 * ((30f64).to_radians().tan() / 2.0).atan().to_degrees();
+        assert!((f64::from(h2) - h2_expected).abs() < 1e-3); // 32.20°
+        assert_eq!(field_of_view_deg(0.5), field_of_view_deg(1.0));
+
+        let target_yaw = |zoom: f32| {
+            let mut sim = Simulator::new(SimConfig::default(), t(0));
+            send(
+                &mut sim,
+                GimbalCommand::ZoomRatio(ZoomRatio::new(zoom).unwrap()),
+                t(0),
+            );
+            track(&mut sim, 6144, 4096, t(0));
+            f64::from(sim.state().target_yaw_deg.unwrap())
+        };
+        let at_1 = target_yaw(1.0);
+        let at_2 = target_yaw(2.0);
+        let at_10 = target_yaw(10.0);
+        assert!((at_1 - expected_offset(6144.0, 4096.0, 1.0).0).abs() < 1e-3);
+        assert!((at_2 - expected_offset(6144.0, 4096.0, 2.0).0).abs() < 1e-3);
+        assert!((at_2 - 8.213).abs() < 1e-3, "{at_2}"); // atan(0.5·tan 30° / 2)
+        assert!((at_10 - expected_offset(6144.0, 4096.0, 10.0).0).abs() < 1e-3);
+        assert!(at_1 > at_2 && at_2 > at_10);
+
+        // Zooming while tracking moves the box away from the centre; out of the image,
+        // the target is lost and the gimbal holds.
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        track(&mut sim, 6144, 4096, t(0));
+        send(&mut sim, GimbalCommand::Zoom(Zoom::Double), t(0));
+        assert!(sim.state().tracking);
+        assert_eq!(box_centre(&sim), (8191, 4096)); // offset 0.5 × 2: the right edge
+        sim.poll(t(100));
+        assert!(close(sim.state().motor_yaw_deg, 6.0));
+        send(&mut sim, GimbalCommand::Zoom(Zoom::Double), t(100));
+        let s = sim.state();
+        assert!(!s.tracking);
+        assert_eq!(s.tracking_box, None);
+        assert_eq!(s.targets_lost, 1);
+        assert!(close(s.target_yaw_deg.unwrap(), 6.0));
+        assert!(!sim.postback().tracking);
+        sim.poll(t(1000));
+        assert!(close(sim.state().motor_yaw_deg, 6.0));
+    }
+
+    #[test]
+    fn tracking_is_lost_after_tracking_lost_ms_exactly_across_the_tick_wrap() {
+        let t0 = Instant::from_millis(u32::MAX - 3000);
+        let mut sim = Simulator::new(SimConfig::default(), t0);
+        track(&mut sim, 6144, 4096, t0);
+        let yaw = expected_offset(6144.0, 4096.0, 1.0).0;
+        sim.poll(t0.add_millis(9_999));
+        assert!(sim.state().tracking);
+        assert!(sim.postback().tracking);
+        assert!(t0.add_millis(10_000).as_millis() < 10_000); // past the wrap
+        let pb = sim.poll(t0.add_millis(10_000)).unwrap(); // a postback deadline too
+        assert!(!pb.tracking);
+        let s = sim.state();
+        assert!(!s.tracking);
+        assert_eq!(s.tracking_box, None);
+        assert_eq!(s.targets_lost, 1);
+        assert_eq!(s.mode, ControlMode::Lock);
+        assert!((f64::from(s.target_yaw_deg.unwrap()) - yaw).abs() < 1e-3);
+
+        // In one long step: the gimbal slews until the loss, then holds there.
+        let config = SimConfig {
+            slew_dps: 1.0,
+            tracking_lost_ms: 5_000,
+            ..SimConfig::default()
+        };
+        let mut sim = Simulator::new(config, t0);
+        track(&mut sim, 6144, 4096, t0);
+        sim.poll(t0.add_millis(60_000));
+        assert!(!sim.state().tracking);
+        assert!(close(sim.state().motor_yaw_deg, 5.0));
+        assert_eq!(sim.state().target_yaw_deg, Some(sim.state().motor_yaw_deg));
+
+        // A new start tracking restarts the time; 0 never loses the target.
+        let mut sim = Simulator::new(SimConfig::default(), t0);
+        track(&mut sim, 4096, 4096, t0);
+        track(&mut sim, 4096, 4096, t0.add_millis(5_000));
+        sim.poll(t0.add_millis(14_999));
+        assert!(sim.state().tracking);
+        sim.poll(t0.add_millis(15_000));
+        assert!(!sim.state().tracking);
+        let config = SimConfig {
+            tracking_lost_ms: 0,
+            ..SimConfig::default()
+        };
+        let mut sim = Simulator::new(config, t0);
+        track(&mut sim, 6144, 4096, t0);
+        sim.poll(t0.add_millis(3_600_000));
+        assert!(sim.state().tracking);
+        assert_eq!(box_centre(&sim), (4096, 4096));
+        assert_eq!(sim.state().targets_lost, 0);
+    }
+
+    #[test]
+    fn manual_pointing_ends_tracking_but_a_zero_rate_and_zoom_do_not() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        track(&mut sim, 6144, 4096, t(0));
+        let target = sim.state().target_yaw_deg;
+        send(&mut sim, GimbalCommand::Rate(Rate::ZERO), t(0));
+        send(&mut sim, DualLightCommand::Rate(Rate::ZERO), t(0));
+        send(&mut sim, GimbalCommand::Zoom(Zoom::In), t(0));
+        send(&mut sim, GimbalCommand::Zoom(Zoom::Stop), t(0));
+        send(&mut sim, GimbalCommand::Photo(Photo::Single), t(0));
+        assert!(sim.state().tracking);
+        assert_eq!(sim.state().mode, ControlMode::Lock);
+        assert_eq!(sim.state().target_yaw_deg, target);
+
+        // A non-zero rate: the operator takes over.
+        sim.poll(t(100));
+        send(
+            &mut sim,
+            GimbalCommand::Rate(Rate::new(0.0, 10.0).unwrap()),
+            t(100),
+        );
+        let s = sim.state();
+        assert!(!s.tracking && s.tracking_box.is_none());
+        assert_eq!(s.mode, ControlMode::FullLock);
+        assert_eq!((s.target_yaw_deg, s.target_pitch_deg), (None, None));
+        assert_eq!(s.rate, (0.0, 10.0));
+
+        // An angle command: it acts, the other axis holds where it was.
+        track(&mut sim, 6144, 4096, t(300));
+        assert_eq!(sim.state().rate, (0.0, 0.0));
+        assert_eq!(sim.state().mode, ControlMode::Lock);
+        sim.poll(t(400));
+        let yaw_now = sim.state().motor_yaw_deg;
+        send(
+            &mut sim,
+            GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()),
+            t(400),
+        );
+        assert!(!sim.state().tracking);
+        assert_eq!(sim.state().target_yaw_deg, Some(yaw_now));
+        assert_eq!(sim.state().target_pitch_deg, Some(-30.0));
+
+        // Stop tracking when not tracking changes nothing (the pitch slew goes on).
+        send(&mut sim, GimbalCommand::StopTracking, t(400));
+        assert_eq!(sim.state().target_pitch_deg, Some(-30.0));
+        sim.poll(t(1000));
+        assert!(close(sim.state().pitch_deg, -30.0));
+
+        // Recenter, look down, nose-following and stop tracking all end it, not as a loss.
+        let enders: [Command; 5] = [
+            GimbalCommand::Recenter.into(),
+            GimbalCommand::LookDown.into(),
+            GimbalCommand::NoseFollowing.into(),
+            GimbalCommand::StopTracking.into(),
+            DualLightCommand::StopTracking.into(),
+        ];
+        for c in enders {
+            track(&mut sim, 100, 100, t(1000));
+            send(&mut sim, c, t(1000));
+            assert!(!sim.state().tracking, "{c:?}");
+        }
+        assert_eq!(sim.state().targets_lost, 0);
+    }
+
+    #[test]
+    fn tracking_makes_up_for_a_vehicle_turn() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        attitude(&mut sim, 30.0, t(0));
+        track(&mut sim, 4096, 4096, t(0));
+        assert_eq!(sim.state().target_yaw_deg, Some(0.0));
+        attitude(&mut sim, 40.0, t(0));
+        assert!(close(sim.state().target_yaw_deg.unwrap(), -10.0));
+        for ms in (100..=1000).step_by(100) {
+            attitude(&mut sim, 40.0, t(ms));
+        }
+        sim.poll(t(1000));
+        assert!(close(sim.state().motor_yaw_deg, -10.0));
+        assert!(close(sim.state().heading_deg, 30.0));
+        assert_eq!(box_centre(&sim), (4096, 4096));
+        // A stale attitude moves nothing.
+        sim.poll(t(5000));
+        assert!(!sim.state().north_referenced);
+        assert!(close(sim.state().motor_yaw_deg, -10.0));
+        assert!(sim.state().tracking);
+    }
+
+    #[test]
+    fn focus_moves_at_its_speed_and_stops_at_the_ends_and_on_stop() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        assert_eq!(sim.state().focus, FOCUS_INITIAL);
+        assert!(!sim.state().auto_focus);
+        send(&mut sim, GimbalCommand::Focus(Focus::Auto), t(0));
+        assert!(sim.state().auto_focus);
+        send(&mut sim, GimbalCommand::Focus(Focus::Plus), t(0));
+        assert!(!sim.state().auto_focus);
+        assert_eq!(sim.state().focusing, Some(Focus::Plus));
+        sim.poll(t(500));
+        assert!(close(sim.state().focus, 0.75));
+        sim.poll(t(5000));
+        assert_eq!(sim.state().focus, 1.0); // the far end
+        send(&mut sim, GimbalCommand::Focus(Focus::Minus), t(5000));
+        sim.poll(t(5400));
+        assert!(close(sim.state().focus, 0.8));
+        send(&mut sim, GimbalCommand::Focus(Focus::Stop), t(5400));
+        assert_eq!(sim.state().focusing, None);
+        sim.poll(t(9000));
+        assert!(close(sim.state().focus, 0.8));
+        send(&mut sim, GimbalCommand::Focus(Focus::Minus), t(9000));
+        sim.poll(t(20_000));
+        assert_eq!(sim.state().focus, 0.0); // the near end
+
+        // Auto focus and pointing focus stop the motion and keep the focus where it is.
+        let p = ImagePoint::new(1000, 7000).unwrap();
+        send(&mut sim, GimbalCommand::PointingFocus(p), t(20_000));
+        let s = sim.state();
+        assert!(s.auto_focus);
+        assert_eq!((s.focusing, s.focus_point), (None, Some(p)));
+        send(&mut sim, GimbalCommand::Focus(Focus::Plus), t(20_000));
+        assert_eq!(sim.state().focus_point, None);
+        send(&mut sim, GimbalCommand::Focus(Focus::Auto), t(20_200));
+        let s = sim.state();
+        assert!(s.auto_focus && s.focusing.is_none() && s.focus_point.is_none());
+        assert!(close(s.focus, 0.1));
+        assert_eq!(s.focus_commands, 8);
+    }
+
+    #[test]
+    fn fast_calibration_lasts_two_seconds_across_the_tick_wrap() {
+        let t0 = Instant::from_millis(u32::MAX - 500);
+        let mut sim = Simulator::new(SimConfig::default(), t0);
+        send(&mut sim, GimbalCommand::FastCalibration, t0);
+        assert!(sim.state().calibrating);
+        sim.poll(t0.add_millis(1000));
+        send(
+            &mut sim,
+            GimbalCommand::FastCalibration,
+            t0.add_millis(1000),
+        );
+        sim.poll(t0.add_millis(2999));
+        assert!(sim.state().calibrating);
+        sim.poll(t0.add_millis(3000));
+        assert!(!sim.state().calibrating);
+        assert_eq!(sim.state().calibrations, 2);
+    }
+
     /// Bytes that often decode as control commands, sometimes not.
     fn control_bytes() -> impl Strategy<Value = [u8; 8]> {
         let small = prop_oneof![3 => Just(0u8), 1 => 0u8..8, 1 => any::<u8>()];
@@ -1596,6 +2209,7 @@ mod tests {
             rate_timeout in prop_oneof![Just(200u32), any::<u32>()],
             attitude_timeout in any::<u32>(),
             emit in any::<bool>(),
+            lost in prop_oneof![Just(10_000u32), Just(0), any::<u32>()],
             start in any::<u32>(),
             events in prop::collection::vec(event(), 0..60),
         ) {
@@ -1606,6 +2220,7 @@ mod tests {
                 rate_timeout_ms: rate_timeout,
                 attitude_timeout_ms: attitude_timeout,
                 emit_can_frames: emit,
+                tracking_lost_ms: lost,
             };
             let mut sim: Simulator<7> = Simulator::with_tx_capacity(config, t(start));
             let mut now = t(start);
@@ -1629,6 +2244,9 @@ mod tests {
                 prop_assert!((0.0..360.0).contains(&s.heading_deg));
                 prop_assert!((ZOOM_MIN..=ZOOM_MAX).contains(&s.zoom_ratio));
                 prop_assert!(s.rate.0.is_finite() && s.rate.1.is_finite());
+                prop_assert!((0.0..=1.0).contains(&s.focus));
+                prop_assert_eq!(s.tracking, s.tracking_box.is_some());
+                prop_assert!(!(s.tracking && s.rate != (0.0, 0.0)));
                 prop_assert!(sim.pending_frames() <= 7);
                 let pb = sim.postback();
                 prop_assert!(pb.heading < 36_000);
