@@ -87,7 +87,10 @@ impl State {
             (false, true) => self.vehicle.yaw(now).map(|v| a.yaw_rad + v),
             (true, false) => self.vehicle.yaw(now).map(|v| a.yaw_rad - v),
         };
-        let pitch = Pitch::new(a.pitch_rad.to_degrees());
+        // Rounded to the wire's 0.1° before the range check: an autopilot's −100°, through
+        // its trigonometry and ours, arrives a few ulps beyond −100 (finite here, and any
+        // |value| ≥ 32768 saturates the cast to a value `from_deci` refuses).
+        let pitch = Pitch::from_deci(libm::roundf(a.pitch_rad.to_degrees() * 10.0) as i16);
         let heading = heading_rad.map(|h| {
             // (−180°, 180°] to the command's [0°, 360°].
             let d = wrap_pi(h).to_degrees();

@@ -768,3 +768,37 @@ fn unknown_flag_bits_do_not_change_a_setpoint() {
         assert_eq!(queued(b.gimbal_mut()), expected, "{unknown:#x}");
     }
 }
+
+#[test]
+fn a_pitch_is_rounded_to_the_wires_tenth_before_its_range_is_checked() {
+    let mut b = bridge();
+    b.receive(&frame(AP, 0, &autopilot_state(0.0)), t(0));
+    let _ = queued(b.gimbal_mut());
+    // −100.04° is −100.0° on the wire (a setpoint of −100° arrives a few ulps past it);
+    // −100.06° is −100.1°, beyond the gimbal's range, refused.
+    for (i, (pitch, expected)) in [(-100.04, Some(-1000)), (-100.06, None), (60.04, Some(600))]
+        .into_iter()
+        .enumerate()
+    {
+        let flags = GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME;
+        let refused = b.stats().refused_setpoints;
+        b.receive(
+            &frame(AP, i as u8, &set_attitude(flags, 10.0 * i as f32, pitch)),
+            t(10),
+        );
+        let pitches: Vec<i16> = queued(b.gimbal_mut())
+            .into_iter()
+            .filter_map(|c| match c {
+                GimbalCommand::Pitch(p) => Some(p.deci()),
+                _ => None,
+            })
+            .collect();
+        match expected {
+            Some(deci) => assert_eq!(pitches, [deci], "{pitch}"),
+            None => {
+                assert!(pitches.is_empty(), "{pitch}");
+                assert_eq!(b.stats().refused_setpoints, refused + 1);
+            }
+        }
+    }
+}
