@@ -78,6 +78,7 @@ pub mod camera;
 pub mod capture;
 pub mod command;
 pub mod framing;
+pub mod ftp;
 pub mod gimbal;
 mod setpoint;
 pub mod status;
