@@ -114,12 +114,21 @@ fn information_by_request_message_and_by_the_legacy_command() {
             CameraCapFlags::CAPTURE_IMAGE,
             CameraCapFlags::CAPTURE_VIDEO,
             CameraCapFlags::HAS_BASIC_ZOOM,
+            CameraCapFlags::HAS_BASIC_FOCUS,
             CameraCapFlags::HAS_VIDEO_STREAM,
+            CameraCapFlags::HAS_TRACKING_POINT,
+            CameraCapFlags::HAS_TRACKING_RECTANGLE,
         ] {
             assert!(f.contains(flag), "{flag:?}");
         }
-        assert!(!f.contains(CameraCapFlags::HAS_BASIC_FOCUS));
+        // No modes to switch (both capture in either), no geo-tracking status.
+        assert!(!f.contains(CameraCapFlags::HAS_MODES));
+        assert!(!f.contains(CameraCapFlags::HAS_TRACKING_GEO_STATUS));
         assert_eq!(info[0].gimbal_device_id, 154);
+        // The definition, in the one form QGroundControl and MAVSDK both read.
+        let uri = &info[0].cam_definition_uri;
+        assert_eq!(&uri[..18], b"mftp://camera.xml\0");
+        assert_eq!(info[0].cam_definition_version, 1);
     }
     // A gimbal request to the camera: not the camera's, said so.
     let (ack, _) = ask(&mut b, 100, MavCmd::RequestMessage, [283.0, 0.0, 0.0], 20);

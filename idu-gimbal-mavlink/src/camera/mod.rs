@@ -1,7 +1,8 @@
-//! The camera (camera protocol v2): capture, zoom, and the RTSP stream, component 100.
+//! The camera (camera protocol v2), component 100: capture, zoom, focus, click-to-track,
+//! every video stream of the family, and the settings of its camera definition file.
 //!
-//! What the IDU camera offers through MAVLink's basic camera commands, each taken from
-//! `COMMAND_LONG` or `COMMAND_INT` alike:
+//! What the IDU camera offers through MAVLink, each command taken from `COMMAND_LONG` or
+//! `COMMAND_INT` alike:
 //!
 //! - images: `MAV_CMD_IMAGE_START_CAPTURE` as common.xml defines it (param2 the interval,
 //!   param3 the count, 0 until stopped, param4 the single capture's sequence number), run
@@ -9,50 +10,64 @@
 //!   per image when it is taken, with consecutive indexes; the latest are kept for
 //!   re-requests (see [`crate::capture`]). `MAV_CMD_IMAGE_STOP_CAPTURE` stops it;
 //! - video: `MAV_CMD_VIDEO_START_CAPTURE` / `STOP_CAPTURE`;
-//! - zoom (`MAV_CMD_SET_CAMERA_ZOOM`): range (0 to 100 % of the zoom range) → zoom ratio;
-//!   continuous → zoom in, out or stop by the value's sign (common.xml: "a rate ... the
-//!   sign decides the direction"); step (±1 to ±5) → 2× in or out per step; focal length
-//!   and field of view → `UNSUPPORTED`. The zoom range follows the gimbal type in the
-//!   postback (30× on the X30, X30T and 30× dual light, 3.5× on the 3.5× models) unless
-//!   configured; the level reported is the ratio last set, unknown (NaN) after a
-//!   continuous zoom, which the gimbal does not report the end of;
-//! - one video stream (id 1, RTSP, running) whose URI comes from the configuration (built
-//!   with `idu_gimbal::video`): `VIDEO_STREAM_INFORMATION`, and `VIDEO_STREAM_STATUS` (which
-//!   MAVSDK's camera plugin polls);
+//! - zoom and focus (`MAV_CMD_SET_CAMERA_ZOOM`, `MAV_CMD_SET_CAMERA_FOCUS`): see [`lens`].
+//!   The zoom range follows the gimbal type in the postback (30× on the X30, X30T and 30×
+//!   dual light, 3.5× on the 3.5× models) unless configured;
+//! - tracking (`MAV_CMD_CAMERA_TRACK_POINT`, `TRACK_RECTANGLE`, `STOP_TRACKING`) and
+//!   `CAMERA_TRACKING_IMAGE_STATUS`: see [`tracking`]. `MAV_CMD_SET_CAMERA_SOURCE` (param2
+//!   `CAMERA_SOURCE_RGB` or `IR`) picks the image the dual light tracks on;
+//! - every stream of the family (`VIDEO_STREAM_INFORMATION`, `VIDEO_STREAM_STATUS`): see
+//!   [`stream`];
+//! - on a camera with a thermal sensor, the camera definition file (served over MAVLink
+//!   FTP, see [`definition`] and [`crate::ftp`]) and its settings (the extended parameter
+//!   protocol, see [`settings`]);
 //! - `CAMERA_INFORMATION` (vendor and model from the postback's gimbal type, the gimbal
 //!   device's component id as `gimbal_device_id`), `CAMERA_SETTINGS`,
 //!   `CAMERA_CAPTURE_STATUS`, `STORAGE_INFORMATION` (one storage, status `NOT_SUPPORTED`:
 //!   the gimbal does not say).
 //!
-//! The dual-light camera's thermal palettes have no basic MAVLink command and are left out
-//! (no camera definition file is served): use the core's `DualLightCommand::Palette`.
+//! Pointing zoom and pointing focus (0x0F 0x01, 0x14: a point of the image) have no
+//! MAVLink command, and a ground station's click on the video means tracking, so they are
+//! not offered.
+
+pub mod definition;
+pub mod lens;
+pub mod settings;
+pub mod stream;
+pub mod tracking;
 
 use core::fmt;
 
-use idu_gimbal::wire::control::{
-    Command as GimbalCmd, GimbalCommand, Photo, Video, Zoom, ZoomRatio,
-};
+use idu_gimbal::video::{self, Stream, VideoError};
+use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand, Photo, Video};
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::{
-    CameraCapFlags, CameraMode, CameraZoomType, MavCmd, MavResult, StorageStatus, StorageType,
-    StorageUsageFlag, VideoStreamEncoding, VideoStreamStatusFlags, VideoStreamType,
+    CameraCapFlags, CameraMode, CameraSource, MavCmd, MavResult, StorageStatus, StorageType,
+    StorageUsageFlag,
 };
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings,
-    StorageInformation, VideoStreamInformation, VideoStreamStatus,
+    CameraTrackingImageStatus, FileTransferProtocol, ParamExtRequestList, ParamExtRequestRead,
+    ParamExtSet, StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 
 use crate::bridge::{id_of, name, Tx};
 use crate::capture::{Capture, Image, Request};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
+use crate::ftp::{FtpServer, PAYLOAD_LEN};
 use crate::gimbal::GimbalControl;
+use settings::Settings;
+use stream::{VideoStream, MAX_STREAMS};
+use tracking::{Source, Tracking};
 
 /// `MAV_COMP_ID_CAMERA`.
 pub const CAMERA_COMPONENT: u8 = 100;
 /// The longest stream URI `VIDEO_STREAM_INFORMATION` holds.
 pub const URI_CAPACITY: usize = 160;
+/// MAVLink FTP sessions open at once (a ground station and a second client).
+pub const FTP_SESSIONS: usize = 2;
 
 /// A stream URI longer than `VIDEO_STREAM_INFORMATION`'s field: a configuration error,
 /// never a truncation.
@@ -74,6 +89,24 @@ impl fmt::Display for UriTooLong {
     }
 }
 
+/// Why a camera's streams could not be configured.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum StreamError {
+    /// A stream's address could not be built (see [`VideoError`]).
+    Video(VideoError),
+    /// A stream's address is longer than the message holds.
+    UriTooLong(UriTooLong),
+}
+
+impl fmt::Display for StreamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StreamError::Video(e) => write!(f, "{e}"),
+            StreamError::UriTooLong(e) => write!(f, "{e}"),
+        }
+    }
+}
+
 /// The camera component's configuration.
 #[derive(Clone, PartialEq, Debug)]
 pub struct CameraConfig {
@@ -82,30 +115,76 @@ pub struct CameraConfig {
     /// The largest optical zoom ratio; `None` (the default): from the postback's gimbal
     /// type (see [`zoom_max_of`]).
     pub zoom_max: Option<f32>,
-    /// The main stream's resolution (horizontal, vertical), when known: the vendor
-    /// document gives none, so `None` by default (reported as 0, "unknown").
+    /// The streams' resolution (horizontal, vertical), when known: the vendor document
+    /// gives none, so `None` by default (reported as 0, "unknown").
     pub resolution: Option<(u16, u16)>,
-    uri: heapless::String<URI_CAPACITY>,
+    streams: heapless::Vec<VideoStream, MAX_STREAMS>,
+}
+
+/// `uri` in a URI field, or how long it is.
+fn uri_field(uri: &str) -> Result<heapless::String<URI_CAPACITY>, UriTooLong> {
+    heapless::String::try_from(uri).map_err(|_| UriTooLong {
+        len: uri.len(),
+        max: URI_CAPACITY,
+    })
 }
 
 impl CameraConfig {
-    /// A camera whose video stream is at `uri` (e.g. from `idu_gimbal::video::Camera::url`).
+    /// A camera with one video stream, the main one, at `uri` (e.g. from
+    /// `idu_gimbal::video::Camera::url`).
     pub fn new(uri: &str) -> Result<Self, UriTooLong> {
-        let too_long = UriTooLong {
-            len: uri.len(),
-            max: URI_CAPACITY,
-        };
+        let mut streams = heapless::Vec::new();
+        // One stream in a vector of three: it fits.
+        let _ = streams.push(VideoStream {
+            kind: Stream::Main,
+            uri: uri_field(uri)?,
+        });
         Ok(CameraConfig {
             component: CAMERA_COMPONENT,
             zoom_max: None,
             resolution: None,
-            uri: heapless::String::try_from(uri).map_err(|_| too_long)?,
+            streams,
         })
     }
 
-    /// The stream URI.
+    /// A camera with every stream of its family (section 1.3), in the family's order: the
+    /// dual light's infrared stream makes it a camera with a thermal sensor (its settings
+    /// and definition file, the infrared image as a tracking source).
+    pub fn with_streams_of(camera: &video::Camera<'_>) -> Result<Self, StreamError> {
+        let mut streams = heapless::Vec::new();
+        for &kind in camera.family.streams() {
+            let mut uri = heapless::String::<URI_CAPACITY>::new();
+            camera.write_url(kind, &mut uri).map_err(|e| match e {
+                VideoError::DoesNotFit { len } => StreamError::UriTooLong(UriTooLong {
+                    len,
+                    max: URI_CAPACITY,
+                }),
+                e => StreamError::Video(e),
+            })?;
+            // A family has at most MAX_STREAMS streams.
+            let _ = streams.push(VideoStream { kind, uri });
+        }
+        Ok(CameraConfig {
+            component: CAMERA_COMPONENT,
+            zoom_max: None,
+            resolution: None,
+            streams,
+        })
+    }
+
+    /// The main stream's URI.
     pub fn uri(&self) -> &str {
-        &self.uri
+        self.streams.first().map_or("", VideoStream::uri)
+    }
+
+    /// The video streams, ids 1, 2, ... in this order.
+    pub fn streams(&self) -> &[VideoStream] {
+        &self.streams
+    }
+
+    /// Whether the camera has a thermal sensor (an infrared stream).
+    pub fn has_thermal(&self) -> bool {
+        self.streams.iter().any(VideoStream::is_thermal)
     }
 }
 
@@ -128,18 +207,27 @@ pub(crate) enum Reply {
     Settings,
     Storage,
     CaptureStatus,
-    Stream,
-    StreamStatus,
+    TrackingStatus,
     /// This image was taken: its CAMERA_IMAGE_CAPTURED, then the status.
     Captured(Image),
     /// Kept images asked for again, indexes first..=last.
     Images(i32, i32),
 }
 
+/// A message for the camera other than a command, decoded.
+#[derive(Clone, Debug)]
+pub(crate) enum Message {
+    /// A `FILE_TRANSFER_PROTOCOL` request's payload.
+    Ftp([u8; PAYLOAD_LEN]),
+    ParamList,
+    /// `PARAM_EXT_REQUEST_READ`: the name and the index.
+    ParamRead([u8; 16], i16),
+    ParamSet(ParamExtSet),
+}
+
 /// The camera's state.
 #[derive(Clone, Debug)]
 pub(crate) struct Camera {
-    pub(crate) config: CameraConfig,
     /// The gimbal device's component id, for `CAMERA_INFORMATION.gimbal_device_id`.
     gimbal_device_id: u8,
     /// The zoom ratio last set; NaN when unknown (after a continuous zoom).
@@ -148,6 +236,20 @@ pub(crate) struct Camera {
     /// Kept images still to be sent again (first..=last), as the outbox makes room.
     resend: Option<(i32, i32)>,
     recording_since: Option<Instant>,
+    streams: stream::Pending,
+    tracking: Tracking,
+    settings: Settings,
+    ftp: FtpServer<FTP_SESSIONS>,
+    /// Who the burst read in progress is for.
+    ftp_client: (u8, u8),
+}
+
+/// Messages other than commands the camera answers.
+pub(crate) fn handles(id: u32) -> bool {
+    id == id_of::<FileTransferProtocol>()
+        || id == id_of::<ParamExtSet>()
+        || id == id_of::<ParamExtRequestRead>()
+        || id == id_of::<ParamExtRequestList>()
 }
 
 /// Whether a command is the camera's to answer.
@@ -161,9 +263,11 @@ pub(crate) fn owns(cmd: &Command) -> bool {
             id_of::<CameraImageCaptured>(),
             id_of::<VideoStreamInformation>(),
             id_of::<VideoStreamStatus>(),
+            id_of::<CameraTrackingImageStatus>(),
         ]
         .iter()
         .any(|&id| cmd.requests(id)),
+        MavCmd::SetMessageInterval => cmd.params[0] == id_of::<CameraTrackingImageStatus>() as f32,
         MavCmd::RequestCameraInformation
         | MavCmd::RequestCameraSettings
         | MavCmd::RequestStorageInformation
@@ -175,7 +279,12 @@ pub(crate) fn owns(cmd: &Command) -> bool {
         | MavCmd::ImageStopCapture
         | MavCmd::VideoStartCapture
         | MavCmd::VideoStopCapture
-        | MavCmd::SetCameraZoom => true,
+        | MavCmd::SetCameraZoom
+        | MavCmd::SetCameraFocus
+        | MavCmd::CameraTrackPoint
+        | MavCmd::CameraTrackRectangle
+        | MavCmd::CameraStopTracking
+        | MavCmd::SetCameraSource => true,
         _ => false,
     }
 }
@@ -187,37 +296,53 @@ fn whole_i32(v: f32) -> Option<i32> {
 }
 
 impl Camera {
-    pub(crate) fn new(config: CameraConfig, gimbal_device_id: u8) -> Self {
+    pub(crate) fn new(config: &CameraConfig, gimbal_device_id: u8) -> Self {
         Camera {
-            config,
             gimbal_device_id,
             zoom: 1.0,
             capture: Capture::new(),
             resend: None,
             recording_since: None,
+            streams: stream::Pending::default(),
+            tracking: Tracking::default(),
+            settings: Settings::new(config.has_thermal()),
+            ftp: FtpServer::new(definition::files(config.has_thermal())),
+            ftp_client: (0, 0),
         }
     }
 
     /// The zoom range now: configured, or from the gimbal type.
-    fn zoom_max(&self, gimbal_type: Option<GimbalType>) -> Option<f32> {
-        self.config.zoom_max.or(gimbal_type.and_then(zoom_max_of))
+    fn zoom_max(&self, config: &CameraConfig, gimbal_type: Option<GimbalType>) -> Option<f32> {
+        config.zoom_max.or(gimbal_type.and_then(zoom_max_of))
     }
 
     /// Acts on a command it owns: the ACK's result, and what to send after the ACK.
     pub(crate) fn command<G: GimbalControl>(
         &mut self,
+        config: &CameraConfig,
         gimbal: &mut G,
         cmd: &Command,
         now: Instant,
         position: Option<[i32; 4]>,
     ) -> (MavResult, Reply) {
+        let streams = |id| stream::selection(config, id);
         let reply = match cmd.command {
             MavCmd::RequestCameraInformation => Reply::Information,
             MavCmd::RequestCameraSettings => Reply::Settings,
             MavCmd::RequestStorageInformation => Reply::Storage,
             MavCmd::RequestCameraCaptureStatus => Reply::CaptureStatus,
-            MavCmd::RequestVideoStreamInformation => Reply::Stream,
-            MavCmd::RequestVideoStreamStatus => Reply::StreamStatus,
+            // The superseded requests: param1 the stream id, 0 for all.
+            MavCmd::RequestVideoStreamInformation | MavCmd::RequestVideoStreamStatus => {
+                let Some(s) = streams(cmd.params[0]) else {
+                    return (MavResult::Denied, Reply::Nothing);
+                };
+                if cmd.command == MavCmd::RequestVideoStreamInformation {
+                    self.streams.information(s);
+                } else {
+                    self.streams.status(s);
+                }
+                Reply::Nothing
+            }
             MavCmd::RequestMessage if cmd.requests(id_of::<CameraInformation>()) => {
                 Reply::Information
             }
@@ -226,16 +351,31 @@ impl Camera {
             MavCmd::RequestMessage if cmd.requests(id_of::<CameraCaptureStatus>()) => {
                 Reply::CaptureStatus
             }
+            MavCmd::RequestMessage if cmd.requests(id_of::<CameraTrackingImageStatus>()) => {
+                Reply::TrackingStatus
+            }
             MavCmd::RequestMessage if cmd.requests(id_of::<CameraImageCaptured>()) => {
                 return self.images_asked(cmd.params[1], cmd.params[2]);
             }
             // The superseded request (param1 the index), which MAVSDK falls back to.
             MavCmd::RequestCameraImageCapture => return self.images_asked(cmd.params[0], 0.0),
-            MavCmd::RequestMessage if cmd.requests(id_of::<VideoStreamInformation>()) => {
-                Reply::Stream
+            // common.xml: param2 the stream id, 0 for all.
+            MavCmd::RequestMessage => {
+                let Some(s) = streams(cmd.params[1]) else {
+                    return (MavResult::Denied, Reply::Nothing);
+                };
+                if cmd.requests(id_of::<VideoStreamInformation>()) {
+                    self.streams.information(s);
+                } else {
+                    self.streams.status(s);
+                }
+                Reply::Nothing
             }
-            MavCmd::RequestMessage if cmd.requests(id_of::<VideoStreamStatus>()) => {
-                Reply::StreamStatus
+            MavCmd::SetMessageInterval => {
+                return (
+                    self.tracking.set_interval(cmd.params[1], now),
+                    Reply::Nothing,
+                )
             }
             MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now, position),
             MavCmd::ImageStopCapture => {
@@ -256,11 +396,51 @@ impl Camera {
             }
             MavCmd::SetCameraZoom => {
                 let t = gimbal.gimbal_type();
-                return (self.zoom(gimbal, cmd, t), Reply::Settings);
+                return (self.zoom(gimbal, config, cmd.params, t), Reply::Settings);
+            }
+            // common.xml: "Camera must respond with a CAMERA_SETTINGS message (on success)".
+            MavCmd::SetCameraFocus => {
+                let result = lens::focus(gimbal, cmd.params);
+                let reply = if result == MavResult::Accepted {
+                    Reply::Settings
+                } else {
+                    Reply::Nothing
+                };
+                return (result, reply);
+            }
+            MavCmd::CameraTrackPoint => {
+                return (self.tracking.point(gimbal, cmd.params), Reply::Nothing)
+            }
+            MavCmd::CameraTrackRectangle => {
+                return (self.tracking.rectangle(gimbal, cmd.params), Reply::Nothing)
+            }
+            MavCmd::CameraStopTracking => return (self.tracking.stop(gimbal), Reply::Nothing),
+            MavCmd::SetCameraSource => {
+                return (self.set_source(config, cmd.params), Reply::Nothing)
             }
             _ => return (MavResult::Unsupported, Reply::Nothing),
         };
         (MavResult::Accepted, reply)
+    }
+
+    /// `MAV_CMD_SET_CAMERA_SOURCE`: param2 the primary source, the image tracking works
+    /// on. Infrared only on a camera with a thermal sensor; a secondary source (param3,
+    /// picture in picture) is not something the gimbal can be told.
+    fn set_source(&mut self, config: &CameraConfig, params: [f32; 4]) -> MavResult {
+        let [_, primary, secondary, _] = params;
+        if secondary != 0.0 {
+            return MavResult::Denied;
+        }
+        self.tracking.source = if primary == CameraSource::Default as u8 as f32
+            || primary == CameraSource::Rgb as u8 as f32
+        {
+            Source::Visible
+        } else if primary == CameraSource::Ir as u8 as f32 && config.has_thermal() {
+            Source::Infrared
+        } else {
+            return MavResult::Denied;
+        };
+        MavResult::Accepted
     }
 
     /// `MAV_CMD_REQUEST_MESSAGE` for `CAMERA_IMAGE_CAPTURED`: param2 the first index (−1:
@@ -315,108 +495,38 @@ impl Camera {
         (MavResult::Accepted, Reply::Captured(image))
     }
 
-    fn zoom<G: GimbalControl>(
-        &mut self,
-        gimbal: &mut G,
-        cmd: &Command,
-        gimbal_type: Option<GimbalType>,
-    ) -> MavResult {
-        let [kind, v, _, _] = cmd.params;
-        let (commands, ratio): ([Option<GimbalCommand>; 5], f32) =
-            if kind == CameraZoomType::ZoomTypeRange as u8 as f32 {
-                if !(0.0..=100.0).contains(&v) {
-                    return MavResult::Denied;
-                }
-                let Some(max) = self.zoom_max(gimbal_type) else {
-                    // The range is not known yet (no postback) or not at all (a model the
-                    // document gives no zoom for, and none configured).
-                    return if gimbal_type.is_none() {
-                        MavResult::TemporarilyRejected
-                    } else {
-                        MavResult::Unsupported
-                    };
-                };
-                let ratio = 1.0 + v / 100.0 * (max - 1.0);
-                let Ok(r) = ZoomRatio::new(ratio) else {
-                    return MavResult::Denied;
-                };
-                (
-                    [Some(GimbalCommand::ZoomRatio(r)), None, None, None, None],
-                    ratio,
-                )
-            } else if kind == CameraZoomType::ZoomTypeContinuous as u8 as f32 {
-                // A rate: only its sign reaches the gimbal, which zooms at its own speed.
-                let z = if v.is_nan() {
-                    return MavResult::Denied;
-                } else if v > 0.0 {
-                    Zoom::In
-                } else if v < 0.0 {
-                    Zoom::Out
-                } else {
-                    Zoom::Stop
-                };
-                // Where a continuous zoom ends is not reported: the level is unknown.
-                let ratio = if z == Zoom::Stop { self.zoom } else { f32::NAN };
-                (
-                    [Some(GimbalCommand::Zoom(z)), None, None, None, None],
-                    ratio,
-                )
-            } else if kind == CameraZoomType::ZoomTypeStep as u8 as f32 {
-                if !(v.is_finite() && v == libm::truncf(v) && v != 0.0 && libm::fabsf(v) <= 5.0) {
-                    return MavResult::Denied;
-                }
-                let z = if v > 0.0 { Zoom::Double } else { Zoom::Half };
-                // In range and whole: exact.
-                let n = libm::fabsf(v) as usize;
-                let mut c = [None; 5];
-                for slot in c.iter_mut().take(n) {
-                    *slot = Some(GimbalCommand::Zoom(z));
-                }
-                // The gimbal stops at its ends; an unknown level stays unknown (NaN through
-                // the arithmetic: f32::max/min would turn it into a bound).
-                let stepped = self.zoom * libm::powf(2.0, v);
-                let ratio = match self.zoom_max(gimbal_type) {
-                    _ if stepped.is_nan() => f32::NAN,
-                    Some(max) => stepped.max(1.0).min(max),
-                    None => stepped.max(1.0),
-                };
-                (c, ratio)
-            } else {
-                return MavResult::Unsupported;
-            };
-        for c in commands.into_iter().flatten() {
-            if gimbal.send(GimbalCmd::from(c)).is_err() {
-                return MavResult::TemporarilyRejected;
-            }
-        }
-        self.zoom = ratio;
-        MavResult::Accepted
-    }
-
     /// Sends what a command produced (after its ACK).
-    pub(crate) fn reply(&mut self, reply: Reply, now: Instant, tx: &mut Tx<'_>) {
+    pub(crate) fn reply<G: GimbalControl>(
+        &mut self,
+        config: &CameraConfig,
+        gimbal: &G,
+        reply: Reply,
+        now: Instant,
+        tx: &mut Tx<'_>,
+    ) {
         match reply {
             Reply::Nothing => {}
-            Reply::Information => self.send_information(now, tx),
-            Reply::Settings => self.send_settings(now, tx),
-            Reply::Storage => self.send_storage(now, tx),
-            Reply::CaptureStatus => self.send_capture_status(now, tx),
-            Reply::Stream => self.send_stream(tx),
-            Reply::StreamStatus => self.send_stream_status(tx),
+            Reply::Information => self.send_information(config, now, tx),
+            Reply::Settings => self.send_settings(config, now, tx),
+            Reply::Storage => self.send_storage(config, now, tx),
+            Reply::CaptureStatus => self.send_capture_status(config, now, tx),
+            Reply::TrackingStatus => self.tracking.send_status(gimbal, config.component, now, tx),
             Reply::Captured(image) => {
-                self.send_captured(&image, tx);
-                self.send_capture_status(now, tx);
+                self.send_captured(config, &image, tx);
+                self.send_capture_status(config, now, tx);
             }
             Reply::Images(first, last) => {
                 self.resend = Some((first, last));
-                self.resend_images(tx);
+                self.resend_images(config, tx);
             }
         }
+        // What a request for streams left waiting, as far as there is room.
+        self.streams.send(config, tx);
     }
 
     /// Kept images asked for again, as many as the outbox has room for; the rest at the
     /// next polls.
-    fn resend_images(&mut self, tx: &mut Tx<'_>) {
+    fn resend_images(&mut self, config: &CameraConfig, tx: &mut Tx<'_>) {
         while let Some((first, last)) = self.resend {
             if tx.room() < MAX_FRAME_LEN {
                 return;
@@ -424,7 +534,7 @@ impl Camera {
             let next = self.capture.history(first, last).next().copied();
             match next {
                 Some(image) => {
-                    self.send_captured(&image, tx);
+                    self.send_captured(config, &image, tx);
                     self.resend = (image.index < last).then_some((image.index + 1, last));
                 }
                 None => self.resend = None,
@@ -432,14 +542,39 @@ impl Camera {
         }
     }
 
-    /// Whether [`Camera::poll`] has anything to do at `now`: images due or asked for again.
+    /// Whether [`Camera::poll`] has anything to do at `now`: images due or asked for again,
+    /// streams or parameters still to describe, a burst read, the tracking status.
     pub(crate) fn has_work(&self, now: Instant) -> bool {
-        self.resend.is_some() || self.capture.due(now)
+        self.resend.is_some()
+            || self.capture.due(now)
+            || self.streams.any()
+            || self.settings.pending()
+            || self.ftp.burst_pending()
+            || self.tracking.due(now)
     }
 
-    /// Images as they fall due, and images asked for again.
-    pub(crate) fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant, tx: &mut Tx<'_>) {
-        self.resend_images(tx);
+    /// Images as they fall due, what requests left waiting for room in the outbox, the
+    /// burst read in progress and the tracking status.
+    pub(crate) fn poll<G: GimbalControl>(
+        &mut self,
+        config: &CameraConfig,
+        gimbal: &mut G,
+        now: Instant,
+        tx: &mut Tx<'_>,
+    ) {
+        self.resend_images(config, tx);
+        self.streams.send(config, tx);
+        self.settings.send_pending(config.component, tx);
+        while self.ftp.burst_pending() && tx.room() >= MAX_FRAME_LEN {
+            let mut payload = [0u8; PAYLOAD_LEN];
+            if !self.ftp.burst_next(now, &mut payload) {
+                break;
+            }
+            self.send_ftp(config, payload, tx);
+        }
+        if self.tracking.due(now) && tx.room() >= MAX_FRAME_LEN {
+            self.tracking.send_status(gimbal, config.component, now, tx);
+        }
         // An image whose command the gimbal's queue has no room for is tried at the next
         // poll: late, never lost.
         if self.capture.due(now)
@@ -449,11 +584,48 @@ impl Camera {
                 .is_ok()
         {
             let image = self.capture.taken(now, tx.position);
-            self.send_captured(&image, tx);
+            self.send_captured(config, &image, tx);
         }
     }
 
-    fn send_captured(&self, image: &Image, tx: &mut Tx<'_>) {
+    /// A message other than a command, addressed to the camera ([`handles`]): FTP and the
+    /// extended parameters.
+    pub(crate) fn message<G: GimbalControl>(
+        &mut self,
+        config: &CameraConfig,
+        gimbal: &mut G,
+        message: Message,
+        from: (u8, u8),
+        now: Instant,
+        tx: &mut Tx<'_>,
+    ) {
+        match message {
+            Message::Ftp(request) => {
+                let mut reply = [0u8; PAYLOAD_LEN];
+                if self.ftp.request(&request, now, &mut reply) {
+                    // A burst that follows goes to whoever asked last.
+                    self.ftp_client = from;
+                    self.send_ftp(config, reply, tx);
+                }
+            }
+            Message::ParamList => self.settings.list(),
+            Message::ParamRead(id, index) => self.settings.read(&id, index, config.component, tx),
+            Message::ParamSet(set) => self.settings.set(gimbal, &set, config.component, tx),
+        }
+        self.settings.send_pending(config.component, tx);
+    }
+
+    fn send_ftp(&self, config: &CameraConfig, payload: [u8; PAYLOAD_LEN], tx: &mut Tx<'_>) {
+        let m = FileTransferProtocol {
+            target_network: 0,
+            target_system: self.ftp_client.0,
+            target_component: self.ftp_client.1,
+            payload,
+        };
+        tx.send(config.component, &m);
+    }
+
+    fn send_captured(&self, config: &CameraConfig, image: &Image, tx: &mut Tx<'_>) {
         let [lat, lon, alt, relative_alt] = image.position.unwrap_or([0; 4]);
         let msg = CameraImageCaptured {
             time_boot_ms: image.at.as_millis(),
@@ -468,15 +640,15 @@ impl Camera {
             capture_result: 1,
             file_url: [0; 205],
         };
-        tx.send(self.config.component, &msg);
+        tx.send(config.component, &msg);
     }
 
-    fn send_information(&self, now: Instant, tx: &mut Tx<'_>) {
+    fn send_information(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
         let model = tx
             .gimbal_type
             .and_then(GimbalType::model_name)
             .unwrap_or("IDU gimbal camera");
-        let (resolution_h, resolution_v) = self.config.resolution.unwrap_or((0, 0));
+        let (resolution_h, resolution_v) = config.resolution.unwrap_or((0, 0));
         let info = CameraInformation {
             time_boot_ms: now.as_millis(),
             vendor_name: name("IDU"),
@@ -493,26 +665,29 @@ impl Camera {
                 | CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE
                 | CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE
                 | CameraCapFlags::HAS_BASIC_ZOOM
-                | CameraCapFlags::HAS_VIDEO_STREAM,
-            cam_definition_version: 0,
-            cam_definition_uri: [0; 140],
+                | CameraCapFlags::HAS_BASIC_FOCUS
+                | CameraCapFlags::HAS_VIDEO_STREAM
+                | CameraCapFlags::HAS_TRACKING_POINT
+                | CameraCapFlags::HAS_TRACKING_RECTANGLE,
+            cam_definition_version: definition::VERSION,
+            cam_definition_uri: name(definition::URI),
             // The component id of the gimbal this camera is on (common.xml); ArduPilot's
             // AP_Camera_MAVLinkCamV2 reads it to pair the camera with its mount.
             gimbal_device_id: self.gimbal_device_id,
             camera_device_id: 0,
         };
-        tx.send(self.config.component, &info);
+        tx.send(config.component, &info);
     }
 
     /// The zoom level in % of the range; NaN when the level or the range is unknown.
-    fn zoom_level(&self, gimbal_type: Option<GimbalType>) -> f32 {
-        match self.zoom_max(gimbal_type) {
+    fn zoom_level(&self, config: &CameraConfig, gimbal_type: Option<GimbalType>) -> f32 {
+        match self.zoom_max(config, gimbal_type) {
             Some(max) if max > 1.0 => (self.zoom - 1.0) / (max - 1.0) * 100.0,
             _ => f32::NAN,
         }
     }
 
-    fn send_settings(&self, now: Instant, tx: &mut Tx<'_>) {
+    fn send_settings(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
         let s = CameraSettings {
             time_boot_ms: now.as_millis(),
             mode_id: if self.recording_since.is_some() {
@@ -520,14 +695,14 @@ impl Camera {
             } else {
                 CameraMode::Image
             },
-            zoom_level: self.zoom_level(tx.gimbal_type),
+            zoom_level: self.zoom_level(config, tx.gimbal_type),
             focus_level: f32::NAN,
             camera_device_id: 0,
         };
-        tx.send(self.config.component, &s);
+        tx.send(config.component, &s);
     }
 
-    fn send_storage(&self, now: Instant, tx: &mut Tx<'_>) {
+    fn send_storage(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
         let s = StorageInformation {
             time_boot_ms: now.as_millis(),
             storage_id: 1,
@@ -542,10 +717,10 @@ impl Camera {
             name: [0; 32],
             storage_usage: StorageUsageFlag::SET,
         };
-        tx.send(self.config.component, &s);
+        tx.send(config.component, &s);
     }
 
-    fn send_capture_status(&self, now: Instant, tx: &mut Tx<'_>) {
+    fn send_capture_status(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
         // common.xml: 0 idle, 3 "interval set and capture in progress".
         let (image_status, image_interval) = match self.capture.interval() {
             Some(ms) => (3, ms as f32 / 1000.0),
@@ -564,46 +739,6 @@ impl Camera {
             image_count: self.capture.count(),
             camera_device_id: 0,
         };
-        tx.send(self.config.component, &s);
-    }
-
-    fn send_stream(&self, tx: &mut Tx<'_>) {
-        let uri = name::<URI_CAPACITY>(self.config.uri());
-        let (resolution_h, resolution_v) = self.config.resolution.unwrap_or((0, 0));
-        let s = VideoStreamInformation {
-            stream_id: 1,
-            count: 1,
-            type_: VideoStreamType::Rtsp,
-            flags: VideoStreamStatusFlags::RUNNING,
-            framerate: 0.0,
-            resolution_h,
-            resolution_v,
-            bitrate: 0,
-            rotation: 0,
-            hfov: 0,
-            name: name("main"),
-            uri,
-            encoding: VideoStreamEncoding::Unknown,
-            camera_device_id: 0,
-        };
-        tx.send(self.config.component, &s);
-    }
-
-    /// The stream's status (MAVSDK's camera plugin asks for it before it reports the
-    /// stream): the same stream, running; what the gimbal does not report is 0 (unknown).
-    fn send_stream_status(&self, tx: &mut Tx<'_>) {
-        let (resolution_h, resolution_v) = self.config.resolution.unwrap_or((0, 0));
-        let s = VideoStreamStatus {
-            stream_id: 1,
-            flags: VideoStreamStatusFlags::RUNNING,
-            framerate: 0.0,
-            resolution_h,
-            resolution_v,
-            bitrate: 0,
-            rotation: 0,
-            hfov: 0,
-            camera_device_id: 0,
-        };
-        tx.send(self.config.component, &s);
+        tx.send(config.component, &s);
     }
 }

@@ -110,3 +110,15 @@ pub fn queued<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<Gimb
     }
     out
 }
+
+/// Every command the link queued, either peripheral, in order.
+pub fn queued_all<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<Command> {
+    let mut out = Vec::new();
+    while let Some(f) = link.next_transmit() {
+        link.transmit_done(None);
+        if f.id == ids::CONTROL {
+            out.push(Command::decode(&f.data).expect("the bridge queues valid commands"));
+        }
+    }
+    out
+}

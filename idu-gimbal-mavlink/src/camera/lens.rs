@@ -1,0 +1,156 @@
+//! The lens: `MAV_CMD_SET_CAMERA_ZOOM` and `MAV_CMD_SET_CAMERA_FOCUS` to the camera core's
+//! zoom (0x12) and focus (0x13).
+//!
+//! **Zoom.** Range (0 to 100 % of the zoom range) → zoom ratio; continuous → zoom in, out
+//! or stop by the value's sign (common.xml: "a rate ... the sign decides the direction");
+//! step (±1 to ±5) → 2× in or out per step; focal length and field of view → `UNSUPPORTED`.
+//! The level reported is the ratio last set, unknown (NaN) after a continuous zoom, which
+//! the gimbal does not report the end of.
+//!
+//! **Focus.** The core has focus +, −, stop and auto, and reports no focus position:
+//! - `FOCUS_TYPE_CONTINUOUS`: the sign of the rate, as common.xml gives it ("negative:
+//!   focus in, positive: focus out towards infinity, 0 to stop"; values beyond ±1
+//!   "clipped"): positive → focus + (taken as farther: the document does not say),
+//!   negative → focus −, 0 → stop;
+//! - `FOCUS_TYPE_AUTO`, `AUTO_SINGLE`, `AUTO_CONTINUOUS` → auto-focus, the core's one
+//!   automatic focus (the document does not say whether it holds focus continuously);
+//! - `FOCUS_TYPE_STEP`, `RANGE` and `METERS` need a focus position the gimbal neither takes
+//!   nor reports: `DENIED`, which common.xml's `MAV_RESULT` gives for "supported but one
+//!   or more parameter values are invalid", the command itself being supported.
+//!
+//! The focus level in `CAMERA_SETTINGS` stays NaN (unknown).
+
+use idu_gimbal::wire::control::{Command as GimbalCmd, Focus, GimbalCommand, Zoom, ZoomRatio};
+use idu_gimbal::wire::postback::GimbalType;
+use mavio::dialects::common::enums::{CameraZoomType, MavResult, SetFocusType};
+
+use crate::gimbal::GimbalControl;
+
+use super::{Camera, CameraConfig};
+
+/// `kind` is the enum value `e` (a command's float param).
+fn is(kind: f32, e: u8) -> bool {
+    kind == f32::from(e)
+}
+
+/// `MAV_CMD_SET_CAMERA_FOCUS`: param1 the focus type, param2 the value.
+pub(crate) fn focus<G: GimbalControl>(gimbal: &mut G, params: [f32; 4]) -> MavResult {
+    let [kind, v, _, _] = params;
+    let f = if is(kind, SetFocusType::FocusTypeContinuous as u8) {
+        // common.xml: "Other values should be clipped to the range": only the sign counts.
+        if v.is_nan() {
+            return MavResult::Denied;
+        } else if v > 0.0 {
+            Focus::Plus
+        } else if v < 0.0 {
+            Focus::Minus
+        } else {
+            Focus::Stop
+        }
+    } else if [
+        SetFocusType::FocusTypeAuto,
+        SetFocusType::FocusTypeAutoSingle,
+        SetFocusType::FocusTypeAutoContinuous,
+    ]
+    .iter()
+    .any(|&t| is(kind, t as u8))
+    {
+        Focus::Auto
+    } else {
+        return MavResult::Denied;
+    };
+    if gimbal
+        .send(GimbalCmd::from(GimbalCommand::Focus(f)))
+        .is_err()
+    {
+        return MavResult::TemporarilyRejected;
+    }
+    MavResult::Accepted
+}
+
+impl Camera {
+    pub(crate) fn zoom<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        config: &CameraConfig,
+        params: [f32; 4],
+        gimbal_type: Option<GimbalType>,
+    ) -> MavResult {
+        let [kind, v, _, _] = params;
+        let (commands, ratio): ([Option<GimbalCommand>; 5], f32) =
+            if kind == CameraZoomType::ZoomTypeRange as u8 as f32 {
+                if !(0.0..=100.0).contains(&v) {
+                    return MavResult::Denied;
+                }
+                let Some(max) = self.zoom_max(config, gimbal_type) else {
+                    // The range is not known yet (no postback) or not at all (a model the
+                    // document gives no zoom for, and none configured).
+                    return if gimbal_type.is_none() {
+                        MavResult::TemporarilyRejected
+                    } else {
+                        MavResult::Unsupported
+                    };
+                };
+                let ratio = 1.0 + v / 100.0 * (max - 1.0);
+                let Ok(r) = ZoomRatio::new(ratio) else {
+                    return MavResult::Denied;
+                };
+                (
+                    [Some(GimbalCommand::ZoomRatio(r)), None, None, None, None],
+                    ratio,
+                )
+            } else if kind == CameraZoomType::ZoomTypeContinuous as u8 as f32 {
+                // A rate: only its sign reaches the gimbal, which zooms at its own speed.
+                let z = if v.is_nan() {
+                    return MavResult::Denied;
+                } else if v > 0.0 {
+                    Zoom::In
+                } else if v < 0.0 {
+                    Zoom::Out
+                } else {
+                    Zoom::Stop
+                };
+                // Where a continuous zoom ends is not reported: the level is unknown.
+                let ratio = if z == Zoom::Stop { self.zoom } else { f32::NAN };
+                (
+                    [Some(GimbalCommand::Zoom(z)), None, None, None, None],
+                    ratio,
+                )
+            } else if kind == CameraZoomType::ZoomTypeStep as u8 as f32 {
+                if !(v.is_finite() && v == libm::truncf(v) && v != 0.0 && libm::fabsf(v) <= 5.0) {
+                    return MavResult::Denied;
+                }
+                let z = if v > 0.0 { Zoom::Double } else { Zoom::Half };
+                // In range and whole: exact.
+                let n = libm::fabsf(v) as usize;
+                let mut c = [None; 5];
+                for slot in c.iter_mut().take(n) {
+                    *slot = Some(GimbalCommand::Zoom(z));
+                }
+                // The gimbal stops at its ends; an unknown level stays unknown (NaN through
+                // the arithmetic: f32::max/min would turn it into a bound).
+                // 2^|v| for |v| ≤ 5: a shift, exact (no powf).
+                let factor = (1u8 << n) as f32;
+                let stepped = if v > 0.0 {
+                    self.zoom * factor
+                } else {
+                    self.zoom / factor
+                };
+                let ratio = match self.zoom_max(config, gimbal_type) {
+                    _ if stepped.is_nan() => f32::NAN,
+                    Some(max) => stepped.max(1.0).min(max),
+                    None => stepped.max(1.0),
+                };
+                (c, ratio)
+            } else {
+                return MavResult::Unsupported;
+            };
+        for c in commands.into_iter().flatten() {
+            if gimbal.send(GimbalCmd::from(c)).is_err() {
+                return MavResult::TemporarilyRejected;
+            }
+        }
+        self.zoom = ratio;
+        MavResult::Accepted
+    }
+}

@@ -1,0 +1,203 @@
+//! Click-to-track: `MAV_CMD_CAMERA_TRACK_POINT`, `MAV_CMD_CAMERA_TRACK_RECTANGLE` and
+//! `MAV_CMD_CAMERA_STOP_TRACKING` to the gimbal's start / stop tracking (0x0F 0x05 / 0x06,
+//! or the dual light's 0x1F 0x05 / 0x07 while the infrared image is the source), and
+//! `CAMERA_TRACKING_IMAGE_STATUS` from the postback's tracking flag.
+//!
+//! **Coordinates.** MAVLink gives the image normalized, 0..1 from the top-left corner; the
+//! document's image is 0..8191 on both axes from the same corner. A box's centre is the
+//! midpoint scaled by 8191 and rounded; its sides are scaled by 8192 (the image's width in
+//! units) and sent divided by 16, rounded, so the largest side the byte carries is
+//! 255 × 16 = 4080 units, 0.498 of the image. A larger box is refused (`DENIED`), never
+//! shrunk: the gimbal would lock onto something smaller than what was drawn. A rectangle's
+//! corners may come in either order. A point (radius r, "1 is full image width") becomes
+//! the box of side 2r, and at least [`POINT_BOX_SIDE`]: the tracker needs an area to
+//! follow, and "0 is one pixel" gives it none.
+//!
+//! **Status.** The postback says only whether the gimbal tracks, not where the target is
+//! in the image, so the status says `ACTIVE` (with the mode last commanded) or `IDLE`
+//! and `target_data` is empty: no position is invented. It is sent when asked
+//! (`MAV_CMD_REQUEST_MESSAGE`) and at the interval set with `MAV_CMD_SET_MESSAGE_INTERVAL`
+//! (none until set), which QGroundControl asks for as soon as the camera has the tracking
+//! capability.
+
+use idu_gimbal::wire::control::{
+    Command as GimbalCmd, DualLightCommand, GimbalCommand, ImagePoint, TrackingBox,
+};
+use idu_gimbal::Instant;
+use mavio::dialects::common::enums::{
+    CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, MavResult,
+};
+use mavio::dialects::common::messages::CameraTrackingImageStatus;
+
+use crate::bridge::Tx;
+use crate::gimbal::GimbalControl;
+
+/// The smallest box a point is tracked with, image units (1/32 of the image).
+pub const POINT_BOX_SIDE: f32 = 256.0;
+/// Image units across the image (0..8191).
+const IMAGE_UNITS: f32 = 8192.0;
+
+/// Which image the tracker works on: the visible camera's (0x0F), or the dual light's
+/// infrared (0x1F), selected with `MAV_CMD_SET_CAMERA_SOURCE`.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub(crate) enum Source {
+    #[default]
+    Visible,
+    Infrared,
+}
+
+/// What was last commanded, and how often to report.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Tracking {
+    /// The mode of the last start, while not stopped.
+    mode: Option<(CameraTrackingMode, Source)>,
+    pub(crate) source: Source,
+    /// The status interval, ms; 0: only on request.
+    interval_ms: u32,
+    next: Option<Instant>,
+}
+
+/// A normalized coordinate in [0, 1], or `None`.
+fn unit(v: f32) -> Option<f32> {
+    (0.0..=1.0).contains(&v).then_some(v)
+}
+
+/// The box of centre (cx, cy) and sides (w, h), all normalized; `None` when out of range.
+fn tracking_box(cx: f32, cy: f32, w: f32, h: f32) -> Option<TrackingBox> {
+    // In [0, 8191] after the range checks above: the casts are exact after rounding.
+    let centre = ImagePoint::new(
+        libm::roundf(cx * 8191.0) as i32,
+        libm::roundf(cy * 8191.0) as i32,
+    )
+    .ok()?;
+    TrackingBox::new(centre, w * IMAGE_UNITS, h * IMAGE_UNITS).ok()
+}
+
+impl Tracking {
+    /// `MAV_CMD_CAMERA_TRACK_POINT`: param1, param2 the point, param3 the radius.
+    pub(crate) fn point<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        params: [f32; 4],
+    ) -> MavResult {
+        let [x, y, r, _] = params;
+        let (Some(x), Some(y), Some(r)) = (unit(x), unit(y), unit(r)) else {
+            return MavResult::Denied;
+        };
+        let side = (2.0 * r).max(POINT_BOX_SIDE / IMAGE_UNITS);
+        let Some(b) = tracking_box(x, y, side, side) else {
+            return MavResult::Denied;
+        };
+        self.start(gimbal, b, CameraTrackingMode::Point)
+    }
+
+    /// `MAV_CMD_CAMERA_TRACK_RECTANGLE`: param1, param2 the top-left corner, param3, param4
+    /// the bottom-right one.
+    pub(crate) fn rectangle<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        params: [f32; 4],
+    ) -> MavResult {
+        let [x1, y1, x2, y2] = params;
+        let (Some(x1), Some(y1), Some(x2), Some(y2)) = (unit(x1), unit(y1), unit(x2), unit(y2))
+        else {
+            return MavResult::Denied;
+        };
+        let b = tracking_box(
+            (x1 + x2) / 2.0,
+            (y1 + y2) / 2.0,
+            libm::fabsf(x2 - x1),
+            libm::fabsf(y2 - y1),
+        );
+        let Some(b) = b else {
+            return MavResult::Denied;
+        };
+        self.start(gimbal, b, CameraTrackingMode::Rectangle)
+    }
+
+    fn start<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        b: TrackingBox,
+        mode: CameraTrackingMode,
+    ) -> MavResult {
+        let command = match self.source {
+            Source::Visible => GimbalCmd::from(GimbalCommand::StartTracking(b)),
+            Source::Infrared => GimbalCmd::from(DualLightCommand::StartTracking(b)),
+        };
+        if gimbal.send(command).is_err() {
+            return MavResult::TemporarilyRejected;
+        }
+        self.mode = Some((mode, self.source));
+        MavResult::Accepted
+    }
+
+    /// `MAV_CMD_CAMERA_STOP_TRACKING`, on the image the tracking was started on.
+    pub(crate) fn stop<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
+        let source = self.mode.map_or(self.source, |(_, s)| s);
+        let command = match source {
+            Source::Visible => GimbalCmd::from(GimbalCommand::StopTracking),
+            Source::Infrared => GimbalCmd::from(DualLightCommand::StopTracking),
+        };
+        if gimbal.send(command).is_err() {
+            return MavResult::TemporarilyRejected;
+        }
+        self.mode = None;
+        MavResult::Accepted
+    }
+
+    /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the status: µs; −1 stops it, 0 is the default
+    /// (none: only on request). Below 1 ms or above a minute is out of range.
+    pub(crate) fn set_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
+        if interval_us == -1.0 || interval_us == 0.0 {
+            self.interval_ms = 0;
+        } else if (1_000.0..=60_000_000.0).contains(&interval_us) {
+            // In range: the cast is exact to the millisecond.
+            self.interval_ms = (interval_us / 1_000.0) as u32;
+        } else {
+            return MavResult::Denied;
+        }
+        self.next = Some(now);
+        MavResult::Accepted
+    }
+
+    /// Whether the status is due at `now`.
+    pub(crate) fn due(&self, now: Instant) -> bool {
+        self.interval_ms > 0 && self.next.is_none_or(|t| now.is_at_or_after(t))
+    }
+
+    /// Sends the status, due or asked for.
+    pub(crate) fn send_status<G: GimbalControl>(
+        &mut self,
+        gimbal: &G,
+        component: u8,
+        now: Instant,
+        tx: &mut Tx<'_>,
+    ) {
+        if self.interval_ms > 0 {
+            self.next = Some(now.add_millis(self.interval_ms));
+        }
+        let tracking = gimbal.latest_postback(now).is_some_and(|(p, _)| p.tracking);
+        let (status, mode) = match (tracking, self.mode) {
+            (true, Some((mode, _))) => (CameraTrackingStatusFlags::Active, mode),
+            // Tracking the bridge did not start (the gimbal's own controls): active, mode
+            // unknown.
+            (true, None) => (CameraTrackingStatusFlags::Active, CameraTrackingMode::None),
+            (false, _) => (CameraTrackingStatusFlags::Idle, CameraTrackingMode::None),
+        };
+        let s = CameraTrackingImageStatus {
+            tracking_status: status,
+            tracking_mode: mode,
+            target_data: CameraTrackingTargetData::empty(),
+            point_x: f32::NAN,
+            point_y: f32::NAN,
+            radius: f32::NAN,
+            rec_top_x: f32::NAN,
+            rec_top_y: f32::NAN,
+            rec_bottom_x: f32::NAN,
+            rec_bottom_y: f32::NAN,
+            camera_device_id: 0,
+        };
+        tx.send(component, &s);
+    }
+}
