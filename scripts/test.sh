@@ -116,6 +116,9 @@ stage_e2e() {
     cargo build --quiet -p gimbalctl
     python3 gimbalctl/tests/mavlink_e2e.py target/debug/gimbalctl
 
+    step "MAVLink camera: FTP, extended parameters, tracking, focus with pymavlink (dual light)"
+    python3 gimbalctl/tests/mavlink_camera.py target/debug/gimbalctl
+
     step "MAVLink camera: MAVSDK's Camera plugin as the ground station against gimbalctl mavlink --sim"
     python3 -c "import mavsdk" 2>/dev/null || pip_install mavsdk==4.1.0
     python3 gimbalctl/tests/mavsdk_camera.py target/debug/gimbalctl

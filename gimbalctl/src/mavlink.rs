@@ -37,7 +37,8 @@ use std::time::{Duration, Instant as StdInstant};
 
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::sim::{SimConfig, Simulator};
-use idu_gimbal::video::{Camera, Family, Stream};
+use idu_gimbal::video::{Camera, Family};
+use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
@@ -47,8 +48,10 @@ use crate::error::Failure;
 use crate::transport::{clock, Job, Mode, SerialSpec, Session, StreamPort, Target};
 
 mod peers;
+mod sim_watch;
 
 use peers::{Change, Peers, PEER_CAPACITY, PEER_TIMEOUT};
+use sim_watch::SimWatch;
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(1);
@@ -103,6 +106,7 @@ trait Pump {
 /// The simulated gimbal on an in-memory CAN link.
 struct SimSide {
     sim: Simulator,
+    watch: SimWatch,
 }
 
 impl Pump for SimSide {
@@ -117,6 +121,9 @@ impl Pump for SimSide {
         let _ = side.sim.poll(now);
         while let Some(f) = side.sim.pop_frame() {
             link.receive(f.id, &f.data, now);
+        }
+        for change in side.watch.changes(side.sim.state()) {
+            eprintln!("gimbalctl mavlink: {change}");
         }
         Ok(())
     }
@@ -149,10 +156,8 @@ enum Port {
 pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let family =
         Family::from_name(opts.camera).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
-    let uri = Camera::new(family)
-        .url(Stream::Main)
+    let camera = CameraConfig::with_streams_of(&Camera::new(family))
         .map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
-    let camera = CameraConfig::new(&uri).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
     let config = BridgeConfig {
         system_id: opts.system_id,
         camera: Some(camera),
@@ -197,8 +202,19 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     match opts.gimbal {
         Gimbal::Sim => {
             let bridge = Bridge::new(Link::new(Config::default()), config);
+            // The simulated gimbal is of the family's type: the dual light's postback says
+            // so, and the camera's model and zoom range follow it.
+            let sim_config = SimConfig {
+                gimbal_type: if family == Family::DualLight {
+                    GimbalType::DualLight30x
+                } else {
+                    SimConfig::default().gimbal_type
+                },
+                ..SimConfig::default()
+            };
             let side = SimSide {
-                sim: Simulator::new(SimConfig::default(), now()),
+                sim: Simulator::new(sim_config, now()),
+                watch: SimWatch::default(),
             };
             announce(&where_, "the simulated gimbal (in-process, CAN)")?;
             serve(bridge, side, port, now, opts.exit_after_ms)

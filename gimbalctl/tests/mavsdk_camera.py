@@ -12,22 +12,41 @@ start and stop, zoom by range; every image must reach MAVSDK's capture_info once
 consecutive indexes, the interval's at its pace. It reads the video stream's URI, which it
 asks for on its own (VIDEO_STREAM_INFORMATION every 20 s, VIDEO_STREAM_STATUS every 5 s).
 
+A second session, `--camera dual-light`, drives what MAVSDK 4.1's Python API offers beyond
+that, and checks each effect on the simulated gimbal (which gimbalctl says on stderr):
+focus (focus_out_start / focus_in_start / focus_stop / focus_auto: MAV_CMD_SET_CAMERA_FOCUS
+continuous and auto; focus_range is refused, the gimbal has no focus position), tracking
+(track_point, track_rectangle, track_stop), and the settings of the camera definition,
+which MAVSDK downloads from the `mftp://` URI over MAVLink FTP and reads with
+PARAM_EXT_REQUEST_READ: the palette set through set_setting reaches the gimbal.
+MAVSDK 4.1 has no API for CAMERA_TRACKING_IMAGE_STATUS, the camera source or calibration;
+mavlink_camera.py tests those with pymavlink.
+
 Ends with a line "N passed, M failed"; exit status 0 only if nothing failed.
 """
 import asyncio
 import os
 import subprocess
 import sys
+import tempfile
+import threading
 import time
+
+# MAVSDK caches camera definitions by model and version in $HOME/.cache/mavsdk/camera
+# (camera_impl.cpp): an empty home of its own, so that every run downloads the definition
+# over MAVLink FTP.
+os.environ["HOME"] = tempfile.mkdtemp(prefix="mavsdk-home-")
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 from mavsdk.asyncio.plugins.camera.camera import CameraAsync
+from mavsdk.plugins.camera import Option, Setting
 from mavsdk.plugins.camera.camera import CameraError
 
 CAMERA = 100
 # `--camera x3` (the default): the vendor document's RTSP form with its default address and
 # credentials (idu_gimbal::video).
-URI = "rtsp://admin:admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype=0"
+def stream_uri(stream_id):
+    return f"rtsp://admin:admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype={stream_id - 1}"
 # MAVSDK asks for VIDEO_STREAM_INFORMATION every 20 s; allow one period and a margin.
 STREAM_TIMEOUT_S = 30.0
 
@@ -139,10 +158,138 @@ async def run(gimbalctl):
             return s if s.settings.uri else None
 
         s = await wait_for("the video stream", stream, STREAM_TIMEOUT_S)
-        check(s is not None and s.settings.uri == URI,
-              f"video stream URI {s.settings.uri if s else None!r}")
+        # MAVSDK keeps the last stream it was told of; the X3 has three, ids 1 to 3, whose
+        # addresses end in subtype=0, 1, 2.
+        check(s is not None and s.settings.uri == stream_uri(s.stream_id),
+              f"video stream {s.stream_id if s else None} at {s.settings.uri if s else None!r}")
         check(s is not None and s.status == s.VideoStreamStatus.IN_PROGRESS,
               "the stream is running")
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+async def dual_light(gimbalctl):
+    sink = socket_port()
+    proc = subprocess.Popen(
+        [gimbalctl, "mavlink", "--sim", "--camera", "dual-light", "--listen", "127.0.0.1:0",
+         "--to", f"127.0.0.1:{sink}", "--exit-after-ms", "90000"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    said = []
+
+    def read_stderr():
+        for line in proc.stderr:
+            print(line, end="", file=sys.stderr, flush=True)
+            said.append(line.strip())
+
+    threading.Thread(target=read_stderr, daemon=True).start()
+    try:
+        line = proc.stdout.readline()
+        port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
+        print(f"mavsdk_camera: dual light on UDP {port}, MAVSDK on {sink}", flush=True)
+        mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
+        await mavsdk.add_any_connection(f"udpin://127.0.0.1:{sink}")
+
+        async def a_system():
+            systems = await mavsdk.get_systems()
+            return systems[0] if systems else None
+
+        system = await wait_for("a system", a_system, 10.0)
+        if system is None:
+            check(False, "MAVSDK sees the dual light's system")
+            return
+        camera = CameraAsync(system)
+
+        async def listed():
+            cameras = (await camera.camera_list()).cameras
+            return [c for c in cameras if c.component_id == CAMERA]
+
+        check(bool(await wait_for("the camera", listed, 10.0)), "the dual light is listed")
+
+        # Every stream, as MAVSDK reports them (it asks for them all at once, and every
+        # 20 s): the third, the infrared stream, flagged thermal, which MAVSDK calls the
+        # infrared spectrum.
+        streams = {}
+
+        async def collect_streams():
+            async for update in camera.subscribe_video_stream_info():
+                info = update.video_stream_info
+                streams[info.stream_id] = (info.settings.uri, info.spectrum.name)
+
+        collector = asyncio.ensure_future(collect_streams())
+
+        async def effect(what, call, line):
+            """`call` succeeds and the simulated gimbal then says `line`."""
+            before = len(said)
+            try:
+                await call
+            except CameraError as e:
+                check(False, f"{what}: {e}")
+                return
+
+            async def heard():
+                return line in said[before:]
+
+            check(bool(await wait_for(line, heard, 3.0)), f"{what}: the gimbal says {line!r}")
+
+        g = "gimbalctl mavlink: simulated gimbal: "
+        await effect("focus_out_start", camera.focus_out_start(CAMERA), g + "focusing +")
+        await effect("focus_stop", camera.focus_stop(CAMERA), g + "focus held")
+        await effect("focus_in_start", camera.focus_in_start(CAMERA), g + "focusing -")
+        await effect("focus_auto", camera.focus_auto(CAMERA), g + "auto-focus")
+        try:
+            await camera.focus_range(CAMERA, 50.0)
+            check(False, "focus_range is refused")
+        except CameraError as e:
+            check(e.result.name == "DENIED", f"focus_range is refused: {e}")
+        # QGroundControl's click: radius 20 px of 1280 = 0.015625, a 256-unit box (16 × 16).
+        await effect("track_point", camera.track_point(CAMERA, 0.5, 0.5, 0.015625),
+                     g + "tracking a 256x256 box at (4096, 4096)")
+        await effect("track_stop", camera.track_stop(CAMERA), g + "tracking stopped")
+        # (0.25, 0.25)-(0.5, 0.5): centre 0.375 × 8191 = 3071.6 → 3072, sides 2048.
+        await effect("track_rectangle",
+                     camera.track_rectangle(CAMERA, 0.25, 0.25, 0.5, 0.5),
+                     g + "tracking a 2048x2048 box at (3072, 3072)")
+        await effect("track_stop", camera.track_stop(CAMERA), g + "tracking stopped")
+
+        # The settings, once MAVSDK has the definition (FTP) and every value (PARAM_EXT).
+        async def options():
+            try:
+                return await camera.get_possible_setting_options(CAMERA)
+            except CameraError:
+                return None
+
+        opts = await wait_for("the definition's settings", options, 20.0) or []
+        ids = {o.setting_id: [x.option_id for x in o.options] for o in opts}
+        check(sorted(ids) == ["CAM_FOCUS", "IR_EZOOM", "IR_PALETTE"], f"settings {sorted(ids)}")
+        check(ids.get("IR_PALETTE") == [str(v) for v in range(15)],
+              f"15 palettes: {ids.get('IR_PALETTE')}")
+        palette = Setting(setting_id="IR_PALETTE", setting_description="",
+                          option=Option(option_id="10", option_description=""), is_range=False)
+        await effect("set_setting IR_PALETTE 10", camera.set_setting(CAMERA, palette),
+                     g + "palette ice-blue")
+
+        async def current():
+            try:
+                got = await camera.get_current_settings(CAMERA)
+            except CameraError:
+                return None
+            return {s.setting_id: s.option.option_id for s in got}
+
+        now = await wait_for("the current settings", current, 5.0) or {}
+        check(now.get("IR_PALETTE") == "10", f"the current palette reads back: {now}")
+
+        async def all_streams():
+            return len(streams) == 3
+
+        await wait_for("three streams", all_streams, STREAM_TIMEOUT_S)
+        collector.cancel()
+        check(streams == {
+            1: (stream_uri(1), "VISIBLE_LIGHT"),
+            2: (stream_uri(2), "VISIBLE_LIGHT"),
+            3: (stream_uri(3), "INFRARED"),
+        }, f"the dual light's streams: {streams}")
     finally:
         proc.kill()
         proc.wait()
@@ -157,6 +304,7 @@ def socket_port():
 
 def main():
     asyncio.run(run(sys.argv[1]))
+    asyncio.run(dual_light(sys.argv[1]))
     print(f"mavsdk_camera: {passed} passed, {failed} failed", flush=True)
     # Leave without running MAVSDK's destructors from the garbage collector at exit.
     os._exit(0 if failed == 0 and passed > 0 else 1)
