@@ -13,7 +13,8 @@
 # static RAM <= 512 B in all (a floor) and <= 256 B beyond the transmit queue's slots (a
 # goal). The serial driver is held to the same flash and RAM budgets (it has none of its
 # own). The MAVLink bridge (footprint_bridge: a Bridge with a camera over footprint_driver's
-# driver) is measured against footprint_driver: flash <= 32 KiB and static RAM <= 4 KiB. Exit
+# driver) is measured against footprint_driver: flash <= 40 KiB (the camera definition files
+# included) and static RAM <= 4 KiB. Exit
 # status 1 when one is exceeded.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,7 +30,7 @@ RAM_BEYOND_SLOTS_BUDGET=256
 # and whether the frame ends its text). src/link/queue.rs checks this size in a test.
 TX_SLOTS=136
 # The MAVLink bridge, everything beyond the plain CAN driver.
-BRIDGE_FLASH_BUDGET=32768
+BRIDGE_FLASH_BUDGET=40960
 BRIDGE_RAM_BUDGET=4096
 
 ensure_bench_toolchain

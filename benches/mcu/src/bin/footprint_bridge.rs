@@ -14,11 +14,19 @@ mod footprint;
 fn main() -> ! {
     use footprint::{input, output, RegCan, RegPort};
     use idu_gimbal::driver::SerialPort;
+    use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::{Config, Gimbal, Instant};
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
-    let camera = CameraConfig::new("rtsp://192.168.42.108:554/live").ok();
+    // Either family, chosen at run time, so that everything the camera can be is linked:
+    // both definition files, the thermal settings.
+    let family = if input(5) == 0 {
+        Family::X3
+    } else {
+        Family::DualLight
+    };
+    let camera = CameraConfig::with_streams_of(&Camera::new(family)).ok();
     let Some(bridge) = cortex_m::singleton!(: Bridge<Gimbal<RegCan>> = Bridge::new(
         Gimbal::new(RegCan, Config::default()),
         BridgeConfig { camera, ..BridgeConfig::default() },

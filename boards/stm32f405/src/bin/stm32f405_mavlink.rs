@@ -27,7 +27,7 @@ mod fw {
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
     use idu_gimbal::driver::{Nb, SerialPort};
-    use idu_gimbal::video::{Camera, Family, Stream};
+    use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::{Config, Gimbal, GimbalControl};
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
@@ -58,12 +58,9 @@ mod fw {
             MAVLINK_BAUD
         );
 
-        // The camera's stream, as QGroundControl will play it (set the family and the IP
-        // of your camera here).
-        let camera = Camera::new(Family::X3)
-            .url(Stream::Main)
-            .ok()
-            .and_then(|uri| CameraConfig::new(&uri).ok());
+        // The camera's streams, as QGroundControl will play them (set the family and the IP
+        // of your camera here; `Family::DualLight` adds the thermal stream and settings).
+        let camera = CameraConfig::with_streams_of(&Camera::new(Family::X3)).ok();
         let gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
         let mut bridge = Bridge::new(
             gimbal,

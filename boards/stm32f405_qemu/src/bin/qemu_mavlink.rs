@@ -9,8 +9,11 @@
 //!   gimbal's information asked for every second until it comes, setpoints at 20 Hz.
 //!
 //! Steps: information; an earth-frame setpoint; a setpoint with flags 0 pitching to −100°;
-//! a rate held then dropped (the core's dead-man stops the gimbal); a photo; and, all along,
-//! an attitude status never more than a second old. Time is simulated, 1 ms a loop, so the
+//! a rate held then dropped (the core's dead-man stops the gimbal); a photo; tracking a
+//! rectangle (the gimbal turns toward it, `CAMERA_TRACKING_IMAGE_STATUS` says it tracks)
+//! and stopping it; the thermal palette set through the extended parameters of the dual
+//! light's camera definition; and, all along, an attitude status never more than a second
+//! old. Time is simulated, 1 ms a loop, so the
 //! run is the same on every machine. Exit status (semihosting): 0 only if every step's
 //! effect was seen.
 //!
@@ -29,18 +32,22 @@ mod fw {
     use idu_gimbal::mock::serial::{Pipe, Rx, Tx};
     use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
     use idu_gimbal::sim::{SimConfig, Simulator};
+    use idu_gimbal::video::{Camera, Family};
+    use idu_gimbal::wire::control::Palette;
+    use idu_gimbal::wire::postback::GimbalType;
     use idu_gimbal::{Config, Gimbal, Instant};
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::framing::{Check, FrameReader, MAX_FRAME_LEN};
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
     use mavio::dialects::common::enums::{
-        EstimatorStatusFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavLandedState, MavModeFlag,
-        MavResult, MavState, MavType,
+        CameraTrackingStatusFlags, EstimatorStatusFlags, GimbalDeviceFlags, MavAutopilot, MavCmd,
+        MavLandedState, MavModeFlag, MavParamExtType, MavResult, MavState, MavType, ParamAck,
     };
     use mavio::dialects::common::messages::{
-        AutopilotStateForGimbalDevice, CommandAck, CommandLong, GimbalDeviceAttitudeStatus,
-        GimbalDeviceInformation, GimbalDeviceSetAttitude, Heartbeat,
+        AutopilotStateForGimbalDevice, CameraTrackingImageStatus, CommandAck, CommandLong,
+        GimbalDeviceAttitudeStatus, GimbalDeviceInformation, GimbalDeviceSetAttitude, Heartbeat,
+        ParamExtAck, ParamExtSet,
     };
     use mavio::protocol::{Frame, V2};
     use mavio::Message;
@@ -60,6 +67,10 @@ mod fw {
         status: Option<(f32, f32, bool)>,
         last_status: Option<u32>,
         worst_gap: u32,
+        /// The latest CAMERA_TRACKING_IMAGE_STATUS said the camera tracks.
+        tracking: Option<bool>,
+        /// The latest PARAM_EXT_ACK: its result and value.
+        param_ack: Option<(ParamAck, u8)>,
     }
 
     struct Autopilot<'a> {
@@ -90,6 +101,10 @@ mod fw {
         }
 
         fn command(&mut self, target: u8, command: MavCmd, p: [f32; 3]) {
+            self.command4(target, command, [p[0], p[1], p[2], 0.0]);
+        }
+
+        fn command4(&mut self, target: u8, command: MavCmd, p: [f32; 4]) {
             self.send(&CommandLong {
                 target_system: AP.0,
                 target_component: target,
@@ -98,7 +113,7 @@ mod fw {
                 param1: p[0],
                 param2: p[1],
                 param3: p[2],
-                param4: 0.0,
+                param4: p[3],
                 param5: 0.0,
                 param6: 0.0,
                 param7: 0.0,
@@ -181,6 +196,11 @@ mod fw {
                         if let Some(slot) = slot {
                             *slot = Some(ack.result);
                         }
+                    } else if let Ok(t) = f.decode::<CameraTrackingImageStatus>() {
+                        seen.tracking =
+                            Some(t.tracking_status == CameraTrackingStatusFlags::Active);
+                    } else if let Ok(a) = f.decode::<ParamExtAck>() {
+                        seen.param_ack = Some((a.param_result, a.param_value[0]));
                     } else if f.decode::<GimbalDeviceInformation>().is_ok() {
                         seen.info = true;
                     } else if let Ok(s) = f.decode::<GimbalDeviceAttitudeStatus>() {
@@ -289,7 +309,12 @@ mod fw {
         else {
             qemu::exit(false)
         };
-        let camera = CameraConfig::new("rtsp://192.168.42.108:554/live").ok();
+        // The dual light: its three streams, the thermal settings of its definition.
+        let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
+        let sim_config = SimConfig {
+            gimbal_type: GimbalType::DualLight30x,
+            ..SimConfig::default()
+        };
         let mut w = World {
             ap: Autopilot {
                 line: ap_line,
@@ -305,7 +330,7 @@ mod fw {
                 },
             ),
             bridge_line,
-            sim: Simulator::new(SimConfig::default(), Instant::from_millis(0)),
+            sim: Simulator::new(sim_config, Instant::from_millis(0)),
             sim_can,
             ms: 0,
             failures: 0,
@@ -379,6 +404,58 @@ mod fw {
                 }
             },
             |w| w.sim.state().photos == 1,
+        );
+        // Tracking as QGroundControl asks for it: the status every 500 ms, then a rectangle
+        // right of the centre, (0.6, 0.45)-(0.7, 0.55): the simulated gimbal turns toward
+        // it (its heading grows), and the status says it tracks.
+        w.ap.command(100, MavCmd::SetMessageInterval, [275.0, 500_000.0, 0.0]);
+        let heading = w.sim.state().motor_yaw_deg;
+        w.until(
+            "TRACK_RECTANGLE: the gimbal tracks, turns toward the box, the status says ACTIVE",
+            3_000,
+            |w| {
+                if w.ms.is_multiple_of(1000) {
+                    w.ap.command4(100, MavCmd::CameraTrackRectangle, [0.6, 0.45, 0.7, 0.55]);
+                }
+            },
+            |w| {
+                let s = w.sim.state();
+                s.tracking && s.motor_yaw_deg > heading + 1.0 && w.ap.seen.tracking == Some(true)
+            },
+        );
+        w.until(
+            "STOP_TRACKING: the gimbal stops, the status says IDLE",
+            3_000,
+            |w| {
+                if w.ms.is_multiple_of(1000) {
+                    w.ap.command(100, MavCmd::CameraStopTracking, [0.0; 3]);
+                }
+            },
+            |w| !w.sim.state().tracking && w.ap.seen.tracking == Some(false),
+        );
+        // The palette, a setting of the dual light's camera definition (PARAM_EXT_SET).
+        w.until(
+            "PARAM_EXT_SET IR_PALETTE 2: ACCEPTED, the gimbal's palette is iron red",
+            2_000,
+            |w| {
+                if w.ms.is_multiple_of(1000) {
+                    let mut param_id = [0u8; 16];
+                    param_id[..10].copy_from_slice(b"IR_PALETTE");
+                    let mut param_value = [0u8; 128];
+                    param_value[0] = 2;
+                    w.ap.send(&ParamExtSet {
+                        target_system: AP.0,
+                        target_component: 100,
+                        param_id,
+                        param_value,
+                        param_type: MavParamExtType::Uint8,
+                    });
+                }
+            },
+            |w| {
+                w.ap.seen.param_ack == Some((ParamAck::Accepted, 2))
+                    && w.sim.state().palette == Some(Palette::IronRed)
+            },
         );
         let gap = w.ap.seen.worst_gap;
         if gap < 1_000 && w.ap.seen.last_status.is_some() {
