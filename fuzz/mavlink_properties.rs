@@ -3,6 +3,7 @@
 //! (`#[path]`) so that `cargo test` checks it on every run.
 
 use idu_gimbal::link::{Config, Link};
+use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
@@ -12,7 +13,9 @@ use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 /// bridge never panics, and everything it sends is whole MAVLink 2 frames (an independent
 /// reader skips nothing and is left with nothing pending).
 pub fn mavlink_bridge(data: &[u8]) {
-    let camera = CameraConfig::new("rtsp://192.168.42.108:554/live").ok();
+    // The dual light: every camera message has something to act on (three streams, the
+    // thermal settings, the infrared tracking source).
+    let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
     let mut bridge = Bridge::new(
         Link::<3, 4>::new(Config::default()),
         BridgeConfig {

@@ -146,7 +146,7 @@ enum Top {
         /// MAVLink system id (default: the autopilot's, from its heartbeat)
         #[arg(long, value_name = "1-255", value_parser = clap::value_parser!(u8).range(1..))]
         system_id: Option<u8>,
-        /// Camera family for the stream URI: a2000, x3, argus, dual-light or f10
+        /// Camera family: its streams, and with dual-light the thermal stream and settings (a2000, x3, argus, dual-light or f10)
         #[arg(long, value_name = "FAMILY", default_value = "x3")]
         camera: String,
         /// Exit after MS milliseconds (for scripted tests)

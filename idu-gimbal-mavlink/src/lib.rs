@@ -30,7 +30,13 @@
 //!   `COMMS_ERROR` while the gimbal link is down.
 //! - With the `roi` feature, `MAV_CMD_DO_SET_ROI_LOCATION` / `DO_SET_ROI_NONE` addressed to
 //!   the gimbal component drive the core's point-at.
-//! - The camera (component 100, when configured): see [`camera`] and [`capture`].
+//! - The camera (component 100, when configured): capture (see [`capture`]), zoom and focus,
+//!   click-to-track with `CAMERA_TRACKING_IMAGE_STATUS`, every video stream of the family
+//!   (the infrared one thermal), and a camera definition file served by a read-only MAVLink
+//!   FTP server (see [`ftp`]) whose settings (focus, the thermal palette and zoom) are set
+//!   with the extended parameter protocol: see [`camera`].
+//! - `MAV_CMD_PREFLIGHT_CALIBRATION` (gyroscope) addressed to the gimbal device: the
+//!   gimbal's fast calibration.
 //! - On UDP, [`Bridge::receive_datagram`] reads each datagram on its own.
 //!
 //! # Setpoints

@@ -8,8 +8,10 @@ mod common;
 use common::*;
 
 use idu_gimbal_mavlink::attitude::YawPitch;
-use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd};
-use mavio::dialects::common::messages::GimbalDeviceSetAttitude;
+use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd, MavParamExtType};
+use mavio::dialects::common::messages::{
+    CommandLong, FileTransferProtocol, GimbalDeviceSetAttitude, ParamExtRequestList, ParamExtSet,
+};
 use proptest::prelude::*;
 
 fn setpoint(yaw: f32, pitch: f32) -> Vec<u8> {
@@ -33,6 +35,50 @@ fn setpoint(yaw: f32, pitch: f32) -> Vec<u8> {
     )
 }
 
+/// A camera command with any parameters.
+fn camera_command(cmd: MavCmd, p: [f32; 4]) -> Vec<u8> {
+    frame(
+        GCS,
+        5,
+        &CommandLong {
+            target_system: 0,
+            target_component: 100,
+            command: cmd,
+            confirmation: 0,
+            param1: p[0],
+            param2: p[1],
+            param3: p[2],
+            param4: p[3],
+            param5: 0.0,
+            param6: 0.0,
+            param7: 0.0,
+        },
+    )
+}
+
+/// Any FTP packet to the camera, its opcode among those the server knows, to system 1 (the
+/// bridge's before it hears the autopilot) or the autopilot's.
+fn ftp(opcode: u8, head: [u8; 12], data: Vec<u8>, system: u8) -> Vec<u8> {
+    let mut payload = [0u8; 251];
+    payload[..12].copy_from_slice(&head);
+    payload[3] = opcode;
+    payload[12..12 + data.len()].copy_from_slice(&data);
+    frame(
+        GCS,
+        6,
+        &FileTransferProtocol {
+            target_network: 0,
+            target_system: system,
+            target_component: 100,
+            payload,
+        },
+    )
+}
+
+fn any_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![-2f32..2.0, any::<f32>(), Just(f32::NAN)]
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1000))]
 
@@ -45,6 +91,42 @@ proptest! {
             Just(frame(GCS, 1, &command((0, 0), MavCmd::RequestMessage, 283.0, 0.0))),
             Just(frame(GCS, 2, &command((0, 100), MavCmd::ImageStartCapture, 0.0, 0.0))),
             (-180f32..180.0, -100f32..60.0).prop_map(|(y, p)| setpoint(y, p)),
+            (
+                prop::sample::select(vec![
+                    MavCmd::SetCameraFocus,
+                    MavCmd::CameraTrackPoint,
+                    MavCmd::CameraTrackRectangle,
+                    MavCmd::CameraStopTracking,
+                    MavCmd::SetCameraSource,
+                    MavCmd::SetMessageInterval,
+                    MavCmd::RequestMessage,
+                    MavCmd::RequestVideoStreamInformation,
+                    MavCmd::SetCameraZoom,
+                ]),
+                [any_f32(), any_f32(), any_f32(), any_f32()],
+            )
+                .prop_map(|(cmd, p)| camera_command(cmd, p)),
+            (
+                0u8..17,
+                any::<[u8; 12]>(),
+                proptest::collection::vec(any::<u8>(), 0..239),
+                prop::sample::select(vec![1u8, AP.0]),
+            )
+                .prop_map(|(op, head, data, system)| ftp(op, head, data, system)),
+            (any::<[u8; 16]>(), any::<u8>(), 1u8..12).prop_map(|(id, v, ty)| {
+                let mut param_id = id;
+                param_id[..10].copy_from_slice(b"IR_PALETTE");
+                let mut param_value = [0u8; 128];
+                param_value[0] = v;
+                frame(GCS, 7, &ParamExtSet {
+                    target_system: 0,
+                    target_component: 100,
+                    param_id: if v % 2 == 0 { param_id } else { id },
+                    param_value,
+                    param_type: MavParamExtType::try_from(ty).unwrap_or(MavParamExtType::Uint8),
+                })
+            }),
+            Just(frame(GCS, 8, &ParamExtRequestList { target_system: 0, target_component: 100 })),
             (any::<u16>(), any::<u8>()).prop_map(|(at, bit)| {
                 let mut f = frame(GCS, 4, &command((0, 154), MavCmd::RequestMessage, 285.0, 0.0));
                 let i = usize::from(at) % f.len();
