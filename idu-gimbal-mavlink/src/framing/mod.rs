@@ -16,12 +16,12 @@
 //! table enum. That alone was over the bridge's goal of 60 a byte for the whole bridge.
 //! Instead the reader takes the checksum (CRC-16/MCRF4XX, MAVLink's "X.25") in the same
 //! loop that copies each byte in, and [`ReceivedFrame`] reads the header fields where
-//! MAVLink 2 puts them. Payloads are still decoded by `mavio`'s generated code, and
-//! `CRC_EXTRA` and message ids come from its message specs; frames sent are still built
-//! and serialized by `mavio`. The whole bridge now takes 54.3 instructions a byte.
-//! `tests/framing.rs` holds every field, every checksum verdict and every decoded message
-//! to `mavio`'s own parse of the same bytes ([`ReceivedFrame::to_frame`]), for valid,
-//! damaged and garbage streams split anywhere.
+//! MAVLink 2 puts them. `CRC_EXTRA` and message ids come from `mavio`'s message specs;
+//! payloads are decoded by `mavio`'s generated code, but for the few messages received many
+//! times a second ([`crate::codec`]). `tests/framing.rs` holds every field, every checksum
+//! verdict and every decoded message to `mavio`'s own parse of the same bytes
+//! ([`ReceivedFrame::to_frame`]), for valid, damaged and garbage streams split anywhere,
+//! and every frame the [`Outbox`] writes to `mavio`'s serialization of the same message.
 
 mod frame;
 mod outbox;

@@ -128,14 +128,11 @@ impl FrameReader {
             if let Some(dst) = self.buf.get_mut(self.len..self.len + n) {
                 let (dst_crc, dst_plain) = dst.split_at_mut(covered);
                 let (src_crc, src_plain) = now.split_at(covered);
-                let mut crc = self.crc;
-                for (d, &b) in dst_crc.iter_mut().zip(src_crc) {
+                self.crc = x25::copy_update(self.crc, dst_crc, src_crc);
+                // The checksum and signature bytes: at most 15, too few for a memcpy call
+                // to pay.
+                for (d, &b) in dst_plain.iter_mut().zip(src_plain) {
                     *d = b;
-                    crc = x25::step(crc, b);
-                }
-                self.crc = crc;
-                if !src_plain.is_empty() {
-                    dst_plain.copy_from_slice(src_plain);
                 }
             }
             self.len += n;
@@ -220,6 +217,19 @@ impl FrameReader {
     /// frame (or is empty). Its checksum is taken again; bytes are left over only after a
     /// bad or unsupported frame.
     fn drop_front(&mut self, n: usize) {
+        if n >= self.len {
+            // The common case, a frame that ended what was held: nothing to search.
+            self.len = 0;
+            self.need = HEADER_LEN;
+            self.crc_end = HEADER_LEN;
+            self.crc = x25::INIT;
+            return;
+        }
+        self.drop_front_and_search(n);
+    }
+
+    #[inline(never)]
+    fn drop_front_and_search(&mut self, n: usize) {
         let n = n.min(self.len);
         let rest = self.buf.get(n..self.len).unwrap_or(&[]);
         let skip = rest.iter().position(|&b| b == STX_V2).unwrap_or(rest.len());

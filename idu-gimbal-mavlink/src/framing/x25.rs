@@ -24,9 +24,36 @@ pub fn step(crc: u16, byte: u8) -> u16 {
     (crc >> 8) ^ entry
 }
 
+/// The table entry for `index`'s low byte.
+#[inline(always)]
+fn entry(index: u32) -> u32 {
+    TABLE
+        .get(index as usize & 0xFF)
+        .copied()
+        .map_or(0, u32::from)
+}
+
 /// The CRC continued over `bytes`.
 pub fn update(crc: u16, bytes: &[u8]) -> u16 {
-    bytes.iter().fold(crc, |crc, &b| step(crc, b))
+    // In a u32: entries are below 2^16 and `crc >> 8` below 2^8, so the state never
+    // leaves 16 bits, and the compiler need not truncate it at every byte.
+    let crc = bytes.iter().fold(u32::from(crc), |crc, &b| {
+        (crc >> 8) ^ entry(crc ^ u32::from(b))
+    });
+    crc as u16
+}
+
+/// Copies `src` into `dst` (as many bytes as the shorter has) and continues the CRC over
+/// them, in one pass.
+#[inline(always)]
+pub fn copy_update(crc: u16, dst: &mut [u8], src: &[u8]) -> u16 {
+    let mut crc = u32::from(crc);
+    for (d, &b) in dst.iter_mut().zip(src) {
+        *d = b;
+        crc = (crc >> 8) ^ entry(crc ^ u32::from(b));
+    }
+    // Never above 16 bits (see `update`).
+    crc as u16
 }
 
 #[cfg(test)]
@@ -37,6 +64,18 @@ mod tests {
     fn catalogue_check_value() {
         // CRC-16/MCRF4XX in the CRC catalogue (reveng): check = 0x6F91 over "123456789".
         assert_eq!(update(INIT, b"123456789"), 0x6F91);
+    }
+
+    #[test]
+    fn copy_update_is_update_and_a_copy() {
+        let data: Vec<u8> = (0u8..=255).rev().collect();
+        let mut copy = vec![0u8; data.len()];
+        assert_eq!(copy_update(INIT, &mut copy, &data), update(INIT, &data));
+        assert_eq!(copy, data);
+        assert_eq!(
+            data.iter().fold(INIT, |crc, &b| step(crc, b)),
+            update(INIT, &data)
+        );
     }
 
     #[test]
