@@ -23,6 +23,7 @@ use mavio::Message;
 
 use crate::attitude;
 use crate::camera::{self, Camera, CameraConfig};
+use crate::codec;
 use crate::command::{Command, Xy};
 use crate::framing::{Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
@@ -265,6 +266,31 @@ fn push_counted(
     }
 }
 
+/// [`push_counted`] for message `M`, its `len`-byte payload written in place by its codec
+/// ([`crate::codec`]).
+fn push_encoded<M: MessageSpecStatic>(
+    out: &mut Outbox<OUTBOX_LEN>,
+    system_id: u8,
+    full: &mut u32,
+    component: u8,
+    len: usize,
+    encode: impl FnOnce(&mut [u8]),
+) {
+    if out
+        .push_with(
+            system_id,
+            component,
+            M::message_id(),
+            M::crc_extra(),
+            len,
+            encode,
+        )
+        .is_err()
+    {
+        bump(full);
+    }
+}
+
 /// The `COMMAND_ACK` of `command` with `result`, to its sender `to`.
 fn ack_of(command: MavCmd, result: MavResult, to: (u8, u8)) -> CommandAck {
     CommandAck {
@@ -286,6 +312,23 @@ impl Tx<'_> {
             self.outbox_full,
             component,
             message,
+        );
+    }
+
+    /// Queues message `M` from `component`, its `len`-byte payload written by its codec.
+    pub(crate) fn send_encoded<M: MessageSpecStatic>(
+        &mut self,
+        component: u8,
+        len: usize,
+        encode: impl FnOnce(&mut [u8]),
+    ) {
+        push_encoded::<M>(
+            self.out,
+            self.system_id,
+            self.outbox_full,
+            component,
+            len,
+            encode,
         );
     }
 
@@ -451,6 +494,24 @@ pub fn yaw_limit_deg(t: Option<GimbalType>) -> f32 {
 }
 
 impl State {
+    /// Queues message `M` from `component`, its `len`-byte payload written by its codec
+    /// ([`crate::codec`]); a full outbox is counted.
+    fn send_encoded<M: MessageSpecStatic>(
+        &mut self,
+        component: u8,
+        len: usize,
+        encode: impl FnOnce(&mut [u8]),
+    ) {
+        push_encoded::<M>(
+            &mut self.out,
+            self.system_id,
+            &mut self.stats.outbox_full,
+            component,
+            len,
+            encode,
+        );
+    }
+
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
         push_counted(
             &mut self.out,
@@ -494,9 +555,33 @@ impl State {
     ) -> Check {
         let id = frame.message_id();
         let from = (frame.system_id(), frame.component_id());
-        if id == id_of::<Heartbeat>() {
-            // Decoded for its CRC; only who sent it matters.
-            if decode::<Heartbeat>(frame).is_none() {
+        // The messages received many times a second first, each decoded by its own codec
+        // (crate::codec); the CRC is checked with the message's CRC_EXTRA before anything.
+        if id == id_of::<AutopilotStateForGimbalDevice>() {
+            if !frame.checksum_holds(AutopilotStateForGimbalDevice::crc_extra()) {
+                return Check::Bad;
+            }
+            let Some(state) = codec::autopilot_state::decode(frame.payload()) else {
+                return Check::Bad;
+            };
+            if self.for_gimbal(state.target_system, state.target_component) {
+                self.autopilot_state(gimbal, &state, now);
+            } else {
+                bump(&mut self.stats.not_for_us);
+            }
+        } else if id == id_of::<GimbalDeviceSetAttitude>() {
+            if !frame.checksum_holds(GimbalDeviceSetAttitude::crc_extra()) {
+                return Check::Bad;
+            }
+            let set = codec::set_attitude::decode(frame.payload());
+            if self.for_gimbal(set.target_system, set.target_component) {
+                self.set_attitude(gimbal, &set, now);
+            } else {
+                bump(&mut self.stats.not_for_us);
+            }
+        } else if id == id_of::<Heartbeat>() {
+            // Checked for its CRC; only who sent it matters.
+            if !frame.checksum_holds(Heartbeat::crc_extra()) {
                 return Check::Bad;
             }
             self.heartbeat(from.0, from.1);
@@ -510,28 +595,11 @@ impl State {
                 return Check::Bad;
             };
             self.command(gimbal, from, &Command::from(&cmd), now);
-        } else if id == id_of::<GimbalDeviceSetAttitude>() {
-            let Some(set) = decode::<GimbalDeviceSetAttitude>(frame) else {
-                return Check::Bad;
-            };
-            if self.for_gimbal(set.target_system, set.target_component) {
-                self.set_attitude(gimbal, &set, now);
-            } else {
-                bump(&mut self.stats.not_for_us);
-            }
-        } else if id == id_of::<AutopilotStateForGimbalDevice>() {
-            let Some(state) = decode::<AutopilotStateForGimbalDevice>(frame) else {
-                return Check::Bad;
-            };
-            if self.for_gimbal(state.target_system, state.target_component) {
-                self.autopilot_state(gimbal, &state, now);
-            } else {
-                bump(&mut self.stats.not_for_us);
-            }
         } else if id == id_of::<GlobalPositionInt>() {
-            let Some(pos) = decode::<GlobalPositionInt>(frame) else {
+            if !frame.checksum_holds(GlobalPositionInt::crc_extra()) {
                 return Check::Bad;
-            };
+            }
+            let pos = codec::global_position::decode(frame.payload());
             if from.1 == AUTOPILOT_COMPONENT {
                 self.position(gimbal, &pos, now);
             }
@@ -933,15 +1001,19 @@ impl State {
                 system_status: MavState::Active,
                 mavlink_version: 3,
             };
-            self.send(self.config.gimbal_component, &hb);
+            self.send_encoded::<Heartbeat>(
+                self.config.gimbal_component,
+                codec::heartbeat::LEN,
+                |p| codec::heartbeat::encode(&hb, p),
+            );
             if let Some(camera) = self.camera_component() {
-                self.send(
-                    camera,
-                    &Heartbeat {
-                        type_: MavType::Camera,
-                        ..hb
-                    },
-                );
+                let hb = Heartbeat {
+                    type_: MavType::Camera,
+                    ..hb
+                };
+                self.send_encoded::<Heartbeat>(camera, codec::heartbeat::LEN, |p| {
+                    codec::heartbeat::encode(&hb, p)
+                });
             }
         }
         if self.camera.as_ref().is_some_and(|c| c.has_work(now)) {
@@ -1016,7 +1088,11 @@ impl State {
                 .unwrap_or(f32::NAN),
             gimbal_device_id: 0,
         };
-        self.send(self.config.gimbal_component, &status);
+        self.send_encoded::<GimbalDeviceAttitudeStatus>(
+            self.config.gimbal_component,
+            codec::attitude_status::LEN,
+            |p| codec::attitude_status::encode(&status, p),
+        );
     }
 
     /// Queues a command for the gimbal other than an angle; a full queue is counted.

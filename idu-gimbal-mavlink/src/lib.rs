@@ -82,6 +82,7 @@ pub mod attitude;
 pub mod bridge;
 pub mod camera;
 pub mod capture;
+pub mod codec;
 pub mod command;
 pub mod framing;
 pub mod ftp;

@@ -198,6 +198,10 @@ impl Tracking {
             rec_bottom_y: f32::NAN,
             camera_device_id: 0,
         };
-        tx.send(component, &s);
+        tx.send_encoded::<CameraTrackingImageStatus>(
+            component,
+            crate::codec::tracking_image_status::LEN,
+            |p| crate::codec::tracking_image_status::encode(&s, p),
+        );
     }
 }

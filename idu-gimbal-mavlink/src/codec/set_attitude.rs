@@ -1,0 +1,35 @@
+//! `GIMBAL_DEVICE_SET_ATTITUDE` (284), received: 32 bytes.
+
+use mavio::dialects::common::enums::GimbalDeviceFlags;
+use mavio::dialects::common::messages::GimbalDeviceSetAttitude;
+
+use super::{decode_with, f32_at, u16_at, u8_at};
+
+/// The full payload's length.
+pub const LEN: usize = 32;
+
+mod field {
+    pub const Q: usize = 0;
+    pub const ANGULAR_VELOCITY_X: usize = 16;
+    pub const ANGULAR_VELOCITY_Y: usize = 20;
+    pub const ANGULAR_VELOCITY_Z: usize = 24;
+    pub const FLAGS: usize = 28;
+    pub const TARGET_SYSTEM: usize = 30;
+    pub const TARGET_COMPONENT: usize = 31;
+}
+
+/// The message in `payload` (as received: possibly truncated).
+pub fn decode(payload: &[u8]) -> GimbalDeviceSetAttitude {
+    decode_with::<LEN, _>(payload, |p| {
+        let q = |i: usize| f32_at(p, field::Q + 4 * i);
+        GimbalDeviceSetAttitude {
+            target_system: u8_at(p, field::TARGET_SYSTEM),
+            target_component: u8_at(p, field::TARGET_COMPONENT),
+            flags: GimbalDeviceFlags::from_bits_truncate(u16_at(p, field::FLAGS)),
+            q: [q(0), q(1), q(2), q(3)],
+            angular_velocity_x: f32_at(p, field::ANGULAR_VELOCITY_X),
+            angular_velocity_y: f32_at(p, field::ANGULAR_VELOCITY_Y),
+            angular_velocity_z: f32_at(p, field::ANGULAR_VELOCITY_Z),
+        }
+    })
+}
