@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Deterministic cost benchmarks on an emulated STM32F405: guest instructions counted under
-# QEMU `-icount shift=0` (benches/mcu: qemu_bench, qemu_bench_mavlink), then the flash cost of
-# each CRC variant (nm) and the driver's flash and static RAM (scripts/size-report.sh). Built
-# with the pinned toolchain BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are
-# measured with.
+# QEMU `-icount shift=0` (benches/mcu: qemu_bench, qemu_bench_mavlink, the latter beside the
+# C MAVLink library on the same bytes), then the flash cost of each CRC variant (nm) and the
+# driver's flash and static RAM (scripts/size-report.sh). Built with the pinned toolchain
+# BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
 #
 # Exit status 1 if a budget is exceeded. Installs the bench toolchain, the target,
-# qemu-system-arm and the ARM binutils when missing. QEMU is bounded by QEMU_TIMEOUT seconds
+# qemu-system-arm, the ARM binutils and, for the C MAVLink library, gcc-arm-none-eabi,
+# newlib and a pinned pymavlink (its mavgen) when missing. QEMU is bounded by QEMU_TIMEOUT seconds
 # (default 120).
 #
 #   scripts/bench.sh                 this tree's numbers
@@ -72,6 +73,7 @@ ensure_target
 ensure_bench_toolchain
 ensure_qemu
 ensure_binutils
+ensure_mavlink_c
 
 echo "bench toolchain: $(rustc "+$BENCH_TOOLCHAIN" --version)"
 status=0
