@@ -53,11 +53,14 @@
 //!
 //! # Choice of MAVLink crate
 //!
-//! Message (de)serialization, CRC_EXTRA and the framing of what is sent are `mavio`'s (0.5,
-//! `dlct-common`), and only the messages handled are decoded, each through its own type.
-//! Received frames are found and checksummed by [`framing::FrameReader`] in one pass over
-//! their bytes, for speed (see [`framing`] for the measurements and the tests that hold
-//! it to `mavio`'s parse). The `mavlink` crate (0.21) was
+//! The message types, ids and `CRC_EXTRA`s are `mavio`'s (0.5, `dlct-common`), and so is
+//! the (de)serialization of every message but the few on the hot paths, which have codecs
+//! of their own held to `mavio`'s by proptests (see [`codec`]); only the messages handled
+//! are decoded, each through its own type. Received frames are found and checksummed by
+//! [`framing::FrameReader`] in one pass over their bytes, and frames sent are written in
+//! place by [`framing::Outbox`], for speed (see [`framing`] and [`codec`] for the
+//! measurements, beside the C MAVLink library's, and the tests that hold them to `mavio`).
+//! The `mavlink` crate (0.21) was
 //! the first choice, but with `default-features = false` and the features `embedded`,
 //! `dialect-common` and `mav2-message-extensions` it does not build for a no_std target:
 //! that last feature is written `mavlink-bindgen/mav2-message-extensions`, which turns the
