@@ -175,3 +175,68 @@ impl<const N: usize> Outbox<N> {
         self.start == self.end
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame of message 1 with a `len`-byte payload of `fill` (non-zero: not trimmed).
+    fn push(out: &mut Outbox<64>, len: usize, fill: u8) -> Result<(), OutboxError> {
+        out.push_with(1, 1, 1, 0, len, |p| p.fill(fill))
+    }
+
+    #[test]
+    fn a_frame_that_does_not_fit_is_refused_whole() {
+        let mut out = Outbox::<64>::new();
+        // 12 + 40 = 52 bytes, then 12 + 1 = 13 do not fit in the 12 left.
+        push(&mut out, 40, 7).unwrap();
+        assert_eq!(push(&mut out, 1, 7), Err(OutboxError::Full));
+        assert_eq!(out.len(), 52);
+        // Exactly the room left fits.
+        let mut small = Outbox::<64>::new();
+        push(&mut small, 40, 7).unwrap();
+        small.written(1);
+        assert_eq!(push(&mut small, 1, 7), Ok(()));
+        assert_eq!(small.len(), 51 + 13);
+    }
+
+    #[test]
+    fn what_waits_moves_to_the_front_when_the_end_is_full() {
+        let mut out = Outbox::<64>::new();
+        push(&mut out, 40, 7).unwrap();
+        let first = out.bytes().to_vec();
+        // The transport takes 30 bytes: 22 wait at 30..52; a 25-byte frame does not fit
+        // after them (12 left) but fits in all (42 free).
+        out.written(30);
+        push(&mut out, 13, 9).unwrap();
+        assert_eq!(out.len(), 22 + 25);
+        let bytes = out.bytes();
+        assert_eq!(&bytes[..22], &first[30..]);
+        assert_eq!(bytes[22], STX_V2);
+        assert_eq!(usize::from(bytes[23]), 13);
+        assert!(bytes[32..45].iter().all(|&b| b == 9));
+    }
+
+    #[test]
+    fn written_past_what_waits_empties_it_and_nothing_is_trimmed_to_nothing() {
+        let mut out = Outbox::<64>::new();
+        // An all-zero payload keeps one byte (MAVLink 2).
+        out.push_with(1, 1, 1, 0, 9, |_| {}).unwrap();
+        assert_eq!(out.len(), 13);
+        out.written(100);
+        assert!(out.is_empty());
+        assert!(out.bytes().is_empty());
+        // Payloads of 0 or over 255 bytes are not MAVLink.
+        assert_eq!(
+            out.push_with(1, 1, 1, 0, 0, |_| {}),
+            Err(OutboxError::Encode)
+        );
+        let mut big = Outbox::<600>::new();
+        assert_eq!(
+            big.push_with(1, 1, 1, 0, 256, |_| {}),
+            Err(OutboxError::Encode)
+        );
+        assert_eq!(big.push_with(1, 1, 1, 0, 255, |p| p.fill(1)), Ok(()));
+        assert_eq!(big.len(), 267);
+    }
+}
