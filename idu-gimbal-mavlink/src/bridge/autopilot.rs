@@ -1,0 +1,228 @@
+//! What the bridge needs of the autopilot: the streams it asks for with
+//! `MAV_CMD_SET_MESSAGE_INTERVAL` until they come, and the vehicle they describe (its
+//! attitude pushed to the gimbal, its heading and yaw rate for the yaw frames, its
+//! position).
+
+use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
+use idu_gimbal::Instant;
+use mavio::dialects::common::enums::MavCmd;
+use mavio::dialects::common::messages::{
+    AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt,
+};
+
+use super::{bump, push_counted, State, AUTOPILOT_COMPONENT};
+use crate::attitude;
+use crate::gimbal::GimbalControl;
+
+/// How often to ask the autopilot again for a stream that does not come.
+const STREAM_RETRY_MS: u32 = 5_000;
+
+/// How often the streams are looked at, ms: an ask is at most this late.
+const STREAM_CHECK_MS: u32 = 100;
+
+/// A stream not heard for this long is asked for again (an autopilot that rebooted has
+/// forgotten the interval it was asked for).
+const STREAM_LOST_MS: u32 = 5_000;
+
+/// A stream the bridge asks the autopilot for with `MAV_CMD_SET_MESSAGE_INTERVAL`.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) struct Wanted {
+    /// The message id.
+    id: u32,
+    /// The interval asked for, µs.
+    interval_us: u32,
+    /// Asked for once per autopilot, whether it comes or not (a stream that comes anyway,
+    /// but may come too slowly); otherwise until it comes.
+    once: bool,
+}
+
+/// `GLOBAL_POSITION_INT` at 5 Hz: the vehicle position for the gimbal, point-at and the
+/// captures. Neither autopilot sends it to a gimbal port unasked.
+const POSITION_STREAM: Wanted = Wanted {
+    id: 33,
+    interval_us: 200_000,
+    once: false,
+};
+
+/// `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` at 20 Hz: the vehicle attitude pushed to the
+/// gimbal and the yaw that relates the setpoint and status frames. ArduPilot sends it to
+/// a MAVLink gimbal by itself; PX4 streams it only on a port in mode Gimbal (its
+/// `configure_streams`), so on any other port it must be asked for.
+const AUTOPILOT_STATE_STREAM: Wanted = Wanted {
+    id: 286,
+    interval_us: 50_000,
+    once: false,
+};
+
+/// `GIMBAL_DEVICE_SET_ATTITUDE` at 20 Hz, asked once: PX4 re-sends its latest setpoint at
+/// the stream's rate, 5 Hz on a port in mode Normal (`configure_streams`), too slow for a
+/// smooth rate or ROI; ArduPilot sends its setpoints at 50 Hz unasked and refuses the
+/// request, which costs one command.
+const SETPOINT_STREAM: Wanted = Wanted {
+    id: 284,
+    interval_us: 50_000,
+    once: true,
+};
+
+/// A stream asked of the autopilot: when it was last asked for and last heard.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct StreamState {
+    asked: Option<Instant>,
+    heard: Option<Instant>,
+}
+
+impl StreamState {
+    /// Whether to ask (again) at `now`: not heard lately, and not asked lately; a stream
+    /// asked for once, when never asked.
+    fn due(&self, wanted: &Wanted, now: Instant) -> bool {
+        if wanted.once {
+            return self.asked.is_none();
+        }
+        let lost = self
+            .heard
+            .is_none_or(|t| now.millis_since(t) >= STREAM_LOST_MS);
+        lost && self
+            .asked
+            .is_none_or(|t| now.millis_since(t) >= STREAM_RETRY_MS)
+    }
+}
+
+/// The vehicle, as the autopilot last described it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Vehicle {
+    /// Yaw (radians, NED: from north) and when it was measured.
+    pub(crate) yaw: Option<(f32, Instant)>,
+    /// Yaw rate (rad/s, about NED's down axis), when the autopilot gave one.
+    pub(crate) yaw_rate: Option<(f32, Instant)>,
+    /// From GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative alt (mm).
+    pub(crate) position: Option<[i32; 4]>,
+}
+
+/// A vehicle yaw older than this cannot convert a setpoint's yaw frame or be reported as
+/// `delta_yaw` (as the core's vehicle data staleness, 1 s).
+pub(crate) const VEHICLE_YAW_STALE_MS: u32 = 1_000;
+
+impl Vehicle {
+    /// The vehicle's yaw from north, radians, when fresh.
+    pub(crate) fn yaw(&self, now: Instant) -> Option<f32> {
+        fresh(self.yaw, now)
+    }
+
+    /// The vehicle's yaw rate, rad/s, when fresh.
+    pub(crate) fn yaw_rate(&self, now: Instant) -> Option<f32> {
+        fresh(self.yaw_rate, now)
+    }
+}
+
+fn fresh(v: Option<(f32, Instant)>, now: Instant) -> Option<f32> {
+    v.filter(|&(_, at)| now.millis_since(at) <= VEHICLE_YAW_STALE_MS)
+        .map(|(v, _)| v)
+}
+
+impl State {
+    /// A heartbeat: the autopilot's (component 1) gives the system id (unless configured)
+    /// and, when it is a new one, asks it for the streams at once.
+    pub(super) fn heartbeat(&mut self, system: u8, component: u8) {
+        if component != AUTOPILOT_COMPONENT {
+            return;
+        }
+        if self.autopilot != Some((system, component)) {
+            // A new autopilot: ask it for the streams at once.
+            self.position_stream.asked = None;
+            self.autopilot_state_stream.asked = None;
+            self.setpoint_stream.asked = None;
+            self.next_stream_check = None;
+        }
+        self.autopilot = Some((system, component));
+        if self.config.system_id.is_none() {
+            self.system_id = system;
+        }
+    }
+
+    pub(super) fn autopilot_state<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        state: &AutopilotStateForGimbalDevice,
+        now: Instant,
+    ) {
+        self.autopilot_state_stream.heard = Some(now);
+        // The vehicle's attitude: 3-2-1 Euler is right here (a vehicle does not pitch past
+        // ±90° in flight, and the frame carries roll).
+        let [w, x, y, z] = state.q;
+        if !state.q.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        let roll = libm::atan2f(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y));
+        let pitch = attitude::asin((2.0 * (w * y - z * x)).clamp(-1.0, 1.0));
+        let yaw = libm::atan2f(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+        self.vehicle.yaw = Some((yaw, now));
+        // common.xml: "Z component of angular velocity in NED (North, East, Down). NaN if
+        // unknown".
+        self.vehicle.yaw_rate = state
+            .angular_velocity_z
+            .is_finite()
+            .then_some((state.angular_velocity_z, now));
+        // The wire's heading is in [−180°, 180°).
+        let heading = yaw.to_degrees().min(179.99);
+        if let Ok(a) = Attitude::new(pitch.to_degrees(), roll.to_degrees(), heading) {
+            gimbal.set_attitude(a, now);
+            bump(&mut self.stats.vehicle_updates);
+        }
+    }
+
+    pub(super) fn position<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        pos: &GlobalPositionInt,
+        now: Instant,
+    ) {
+        self.position_stream.heard = Some(now);
+        self.vehicle.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
+        if let Ok(g) = Gps::from_e7(pos.lat, pos.lon) {
+            gimbal.set_gps(g, now);
+            bump(&mut self.stats.vehicle_updates);
+        }
+        // Millimetres above mean sea level to centimetres, rounded toward zero.
+        gimbal.set_altitude(Altitude::from_cm(pos.alt / 10), now);
+    }
+
+    /// Asks the autopilot again for each stream that has not come, or has stopped: looked
+    /// at every [`STREAM_CHECK_MS`].
+    pub(super) fn ask_for_streams(&mut self, now: Instant) {
+        let check_streams = self.next_stream_check.is_none_or(|t| now.is_at_or_after(t));
+        let (Some(ap), true) = (self.autopilot, check_streams) else {
+            return;
+        };
+        self.next_stream_check = Some(now.add_millis(STREAM_CHECK_MS));
+        for (wanted, stream) in [
+            (AUTOPILOT_STATE_STREAM, &mut self.autopilot_state_stream),
+            (POSITION_STREAM, &mut self.position_stream),
+            (SETPOINT_STREAM, &mut self.setpoint_stream),
+        ] {
+            if !stream.due(&wanted, now) {
+                continue;
+            }
+            stream.asked = Some(now);
+            let ask = CommandLong {
+                target_system: ap.0,
+                target_component: ap.1,
+                command: MavCmd::SetMessageInterval,
+                confirmation: 0,
+                param1: wanted.id as f32,
+                param2: wanted.interval_us as f32,
+                param3: 0.0,
+                param4: 0.0,
+                param5: 0.0,
+                param6: 0.0,
+                param7: 0.0,
+            };
+            push_counted(
+                &mut self.out,
+                self.system_id,
+                &mut self.stats.outbox_full,
+                self.config.gimbal_component,
+                &ask,
+            );
+        }
+    }
+}

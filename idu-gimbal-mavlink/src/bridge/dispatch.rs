@@ -1,0 +1,363 @@
+//! What comes in: each frame to what handles its message, after its checksum; each command
+//! to the component that owns it, with exactly one `COMMAND_ACK` for every command addressed
+//! to one of the bridge's components.
+
+#[cfg(feature = "roi")]
+use idu_gimbal::geo::Position;
+use idu_gimbal::wire::control::GimbalCommand;
+use idu_gimbal::Instant;
+#[cfg(feature = "roi")]
+use mavio::dialects::common::enums::MavFrame;
+use mavio::dialects::common::enums::{MavCmd, MavResult};
+use mavio::dialects::common::messages::{
+    AutopilotStateForGimbalDevice, CommandInt, CommandLong, FileTransferProtocol,
+    GimbalDeviceAttitudeStatus, GimbalDeviceInformation, GimbalDeviceSetAttitude,
+    GlobalPositionInt, Heartbeat, ParamExtRequestList, ParamExtRequestRead, ParamExtSet,
+};
+use mavio::mavspec::rust::spec::MessageSpecStatic;
+
+use super::{ack_of, bump, id_of, State, AUTOPILOT_COMPONENT};
+use crate::camera;
+use crate::codec;
+use crate::command::{Command, Xy};
+use crate::framing::{Check, ReceivedFrame};
+use crate::gimbal::GimbalControl;
+#[cfg(feature = "roi")]
+use crate::status::Pose;
+
+/// Decodes `frame` as `M` when its CRC holds with `M`'s `CRC_EXTRA`.
+fn decode<M>(frame: &ReceivedFrame<'_>) -> Option<M>
+where
+    M: MessageSpecStatic + for<'p> TryFrom<&'p mavio::protocol::Payload>,
+{
+    frame.decode::<M>().ok()
+}
+
+impl State {
+    // Out of line: decoding needs a large stack frame (mavio's 255-byte payload and the
+    // message), which would otherwise be set up on every `receive` call, a frame or not.
+    #[inline(never)]
+    pub(super) fn dispatch<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        frame: &ReceivedFrame<'_>,
+        now: Instant,
+    ) -> Check {
+        let id = frame.message_id();
+        let from = (frame.system_id(), frame.component_id());
+        // The messages received many times a second first, each decoded by its own codec
+        // (crate::codec); the CRC is checked with the message's CRC_EXTRA before anything.
+        if id == id_of::<AutopilotStateForGimbalDevice>() {
+            if !frame.checksum_holds(AutopilotStateForGimbalDevice::crc_extra()) {
+                return Check::Bad;
+            }
+            let Some(state) = codec::autopilot_state::decode(frame.payload()) else {
+                return Check::Bad;
+            };
+            if self.for_gimbal(state.target_system, state.target_component) {
+                self.autopilot_state(gimbal, &state, now);
+            } else {
+                bump(&mut self.stats.not_for_us);
+            }
+        } else if id == id_of::<GimbalDeviceSetAttitude>() {
+            if !frame.checksum_holds(GimbalDeviceSetAttitude::crc_extra()) {
+                return Check::Bad;
+            }
+            let set = codec::set_attitude::decode(frame.payload());
+            if self.for_gimbal(set.target_system, set.target_component) {
+                self.set_attitude(gimbal, &set, now);
+            } else {
+                bump(&mut self.stats.not_for_us);
+            }
+        } else if id == id_of::<Heartbeat>() {
+            // Checked for its CRC; only who sent it matters.
+            if !frame.checksum_holds(Heartbeat::crc_extra()) {
+                return Check::Bad;
+            }
+            self.heartbeat(from.0, from.1);
+        } else if id == id_of::<CommandLong>() {
+            let Some(cmd) = decode::<CommandLong>(frame) else {
+                return Check::Bad;
+            };
+            self.command(gimbal, from, &Command::from(&cmd), now);
+        } else if id == id_of::<CommandInt>() {
+            let Some(cmd) = decode::<CommandInt>(frame) else {
+                return Check::Bad;
+            };
+            self.command(gimbal, from, &Command::from(&cmd), now);
+        } else if id == id_of::<GlobalPositionInt>() {
+            if !frame.checksum_holds(GlobalPositionInt::crc_extra()) {
+                return Check::Bad;
+            }
+            let pos = codec::global_position::decode(frame.payload());
+            if from.1 == AUTOPILOT_COMPONENT {
+                self.position(gimbal, &pos, now);
+            }
+        } else if camera::handles(id) {
+            return self.camera_message(gimbal, frame, from, now);
+        } else {
+            return Check::Unhandled;
+        }
+        Check::Handled
+    }
+
+    /// FTP and the extended parameters, for the camera; unhandled without one. Out of line:
+    /// rare messages, kept from adding to the common path's frame (receive cost per byte).
+    #[inline(never)]
+    pub(super) fn camera_message<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        frame: &ReceivedFrame<'_>,
+        from: (u8, u8),
+        now: Instant,
+    ) -> Check {
+        let Some(me) = self.camera_component() else {
+            return Check::Unhandled;
+        };
+        let id = frame.message_id();
+        // Each is decoded (CRC and payload checked) before its target is looked at.
+        let (message, target, broadcast_ok) = if id == id_of::<FileTransferProtocol>() {
+            let Some(m) = decode::<FileTransferProtocol>(frame) else {
+                return Check::Bad;
+            };
+            // FTP is a conversation with one server: never broadcast.
+            let target = (m.target_system, m.target_component);
+            (camera::Message::Ftp(m.payload), target, false)
+        } else if id == id_of::<ParamExtSet>() {
+            let Some(m) = decode::<ParamExtSet>(frame) else {
+                return Check::Bad;
+            };
+            let target = (m.target_system, m.target_component);
+            (camera::Message::ParamSet(m), target, false)
+        } else if id == id_of::<ParamExtRequestRead>() {
+            let Some(m) = decode::<ParamExtRequestRead>(frame) else {
+                return Check::Bad;
+            };
+            let target = (m.target_system, m.target_component);
+            (
+                camera::Message::ParamRead(m.param_id, m.param_index),
+                target,
+                true,
+            )
+        } else {
+            let Some(m) = decode::<ParamExtRequestList>(frame) else {
+                return Check::Bad;
+            };
+            // A list request to every component is answered by each that has parameters.
+            (
+                camera::Message::ParamList,
+                (m.target_system, m.target_component),
+                true,
+            )
+        };
+        let for_camera = (target.0 == self.system_id || target.0 == 0 && broadcast_ok)
+            && (target.1 == me || target.1 == 0 && broadcast_ok);
+        if !for_camera {
+            bump(&mut self.stats.not_for_us);
+            return Check::Handled;
+        }
+        self.with_camera(gimbal, |camera, config, gimbal, tx| {
+            camera.message(config, gimbal, message, from, now, tx)
+        });
+        Check::Handled
+    }
+
+    pub(super) fn ack(&mut self, me: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
+        bump(&mut self.stats.acks);
+        self.send(me, &ack_of(command, result, to));
+    }
+
+    pub(super) fn command<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        from: (u8, u8),
+        cmd: &Command,
+        now: Instant,
+    ) {
+        if !self.for_us(cmd.target.0, cmd.target.1) {
+            bump(&mut self.stats.not_for_us);
+            return;
+        }
+        let gimbal_id = self.config.gimbal_component;
+        let camera_id = self.camera_component();
+        let camera_owns = camera_id.is_some() && camera::owns(cmd);
+        let gimbal_owns = self.gimbal_owns(cmd);
+        // Broadcast: the owner answers, or nobody (another component may own it).
+        // Addressed: the addressee answers, UNSUPPORTED if it does not own the command.
+        let (me, owner) = match cmd.target.1 {
+            0 if gimbal_owns => (gimbal_id, true),
+            0 if camera_owns => (camera_id.unwrap_or(gimbal_id), true),
+            0 => {
+                bump(&mut self.stats.not_for_us);
+                return;
+            }
+            c if c == gimbal_id => (gimbal_id, gimbal_owns || self.gimbal_owns_addressed(cmd)),
+            c => (c, camera_owns),
+        };
+        if !owner {
+            self.ack(me, from, cmd.command, MavResult::Unsupported);
+            return;
+        }
+        if me == gimbal_id {
+            let result = self.gimbal_command(gimbal, cmd, now);
+            self.ack(me, from, cmd.command, result);
+            // The information follows the ACK.
+            if result == MavResult::Accepted && cmd.command == MavCmd::RequestMessage {
+                if cmd.requests(id_of::<GimbalDeviceInformation>()) {
+                    self.information(gimbal, now);
+                } else {
+                    self.status(gimbal, now);
+                }
+            }
+        } else {
+            let position = self.vehicle.position;
+            let acked = self.with_camera(gimbal, |camera, config, gimbal, tx| {
+                let (result, reply) = camera.command(config, gimbal, cmd, now, position);
+                // The ACK first, then what the command produced.
+                tx.send(me, &ack_of(cmd.command, result, from));
+                camera.reply(config, gimbal, reply, now, tx);
+            });
+            if acked.is_some() {
+                bump(&mut self.stats.acks);
+            }
+        }
+    }
+
+    /// Commands the gimbal device answers, broadcast or addressed.
+    pub(super) fn gimbal_owns(&self, cmd: &Command) -> bool {
+        match cmd.command {
+            MavCmd::RequestMessage => {
+                cmd.requests(id_of::<GimbalDeviceInformation>())
+                    || cmd.requests(id_of::<GimbalDeviceAttitudeStatus>())
+            }
+            MavCmd::SetMessageInterval => {
+                cmd.params[0] == id_of::<GimbalDeviceAttitudeStatus>() as f32
+            }
+            _ => false,
+        }
+    }
+
+    /// Commands the gimbal device acts on only when addressed to it: a region of interest
+    /// broadcast is the autopilot's (its gimbal manager's) to act on, and it hands the
+    /// device only what it decides.
+    pub(super) fn gimbal_owns_addressed(&self, cmd: &Command) -> bool {
+        matches!(
+            cmd.command,
+            MavCmd::DoSetRoiLocation | MavCmd::DoSetRoiNone | MavCmd::PreflightCalibration
+        )
+    }
+
+    /// A gimbal command's result (the gimbal owns it).
+    #[cfg_attr(not(feature = "roi"), allow(unused_variables))]
+    pub(super) fn gimbal_command<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        cmd: &Command,
+        now: Instant,
+    ) -> MavResult {
+        match cmd.command {
+            MavCmd::SetMessageInterval => self.set_status_interval(cmd.params[1], now),
+            MavCmd::RequestMessage => MavResult::Accepted,
+            MavCmd::PreflightCalibration => self.calibrate(gimbal, cmd),
+            #[cfg(feature = "roi")]
+            MavCmd::DoSetRoiLocation => self.roi_location(gimbal, cmd),
+            #[cfg(feature = "roi")]
+            MavCmd::DoSetRoiNone => {
+                if !self.addresses_this_gimbal(cmd.params[0]) {
+                    return MavResult::Denied;
+                }
+                gimbal.stop_pointing();
+                MavResult::Accepted
+            }
+            _ => MavResult::Unsupported,
+        }
+    }
+
+    /// `MAV_CMD_PREFLIGHT_CALIBRATION` addressed to the gimbal device: param1 (gyroscope)
+    /// 1 and nothing else asked is the gimbal's fast calibration (0x0F 0xF0). common.xml
+    /// has no gimbal calibration of its own; the gyroscope's is the one a gimbal's
+    /// quick calibration is (its IMU's zero). The gimbal does not report the calibration
+    /// running, so `CALIBRATION_RUNNING` is never set in the status.
+    pub(super) fn calibrate<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        cmd: &Command,
+    ) -> MavResult {
+        let [gyro, p2, p3, p4] = cmd.params;
+        let (p5, p6) = match cmd.xy {
+            Xy::Float(a, b) => (a, b),
+            Xy::Int(a, b) => (a as f32, b as f32),
+        };
+        // Unset parameters are 0, or NaN from MAVSDK.
+        let unset = |v: f32| v == 0.0 || v.is_nan();
+        if gyro != 1.0 || ![p2, p3, p4, p5, p6, cmd.z].into_iter().all(unset) {
+            return MavResult::Denied;
+        }
+        if self.command_gimbal_raw(gimbal, GimbalCommand::FastCalibration) {
+            MavResult::Accepted
+        } else {
+            MavResult::TemporarilyRejected
+        }
+    }
+
+    #[cfg(feature = "roi")]
+    /// Whether a ROI command's param1 (common.xml: "component ID of gimbal device to
+    /// address (or 1-6 for non-MAVLink gimbal), 0 for all gimbal device components")
+    /// names this gimbal.
+    pub(super) fn addresses_this_gimbal(&self, param1: f32) -> bool {
+        param1 == 0.0 || param1 == f32::from(self.config.gimbal_component)
+    }
+
+    #[cfg(feature = "roi")]
+    /// `MAV_CMD_DO_SET_ROI_LOCATION`: the core's point-at, at the location's height above
+    /// mean sea level (the height the vehicle's altitude is pushed in). A height relative
+    /// to home needs home's, from GLOBAL_POSITION_INT (alt − relative_alt); a height above
+    /// terrain cannot be known here and is refused.
+    pub(super) fn roi_location<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        cmd: &Command,
+    ) -> MavResult {
+        if !self.addresses_this_gimbal(cmd.params[0]) {
+            return MavResult::Denied;
+        }
+        let Some((lat, lon)) = cmd.xy.lat_lon_deg() else {
+            return MavResult::Denied;
+        };
+        let amsl_m = match cmd.frame {
+            MavFrame::Global | MavFrame::GlobalInt => f64::from(cmd.z),
+            MavFrame::GlobalRelativeAlt | MavFrame::GlobalRelativeAltInt => {
+                let Some([_, _, alt_mm, rel_mm]) = self.vehicle.position else {
+                    // Home's height comes with the position: not yet.
+                    return MavResult::TemporarilyRejected;
+                };
+                f64::from(cmd.z) + f64::from(alt_mm - rel_mm) / 1000.0
+            }
+            _ => return MavResult::Denied,
+        };
+        let Ok(target) = Position::new(lat, lon, amsl_m) else {
+            return MavResult::Denied;
+        };
+        gimbal.point_at(target);
+        self.pose = Pose::Other;
+        self.commanded = (None, None);
+        MavResult::Accepted
+    }
+
+    /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status: µs; −1 stops it, 0 restores
+    /// the configured default. Below 1 ms or above a minute is out of range.
+    pub(super) fn set_status_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
+        if interval_us == -1.0 {
+            self.status_ms = 0;
+        } else if interval_us == 0.0 {
+            self.status_ms = self.config.attitude_status_ms;
+        } else if (1_000.0..=60_000_000.0).contains(&interval_us) {
+            // In range: the cast is exact to the millisecond.
+            self.status_ms = (interval_us / 1_000.0) as u32;
+        } else {
+            return MavResult::Denied;
+        }
+        self.next_status = Some(now);
+        MavResult::Accepted
+    }
+}
