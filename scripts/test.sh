@@ -11,10 +11,12 @@
 #   firmware  the QEMU sessions (the core's demo, the MAVLink bridge's, embassy's), the
 #             STM32F405 release builds, the board crates, the MCU benchmarks' build and lints
 #             (benches/mcu)
-#   e2e       real third-party clients against gimbalctl: pymavlink as PX4 and ArduPilot,
-#             MAVSDK's camera plugin; the host simulation session
-#   bench     instruction counts under QEMU -icount and flash/RAM sizes, with the pinned
-#             bench toolchain; exits 1 over a budget
+#   e2e       real third-party clients against gimbalctl: pymavlink as PX4 and ArduPilot and
+#             as a ground station of the camera (FTP, parameters, tracking), MAVSDK's camera
+#             plugin; the host simulation session
+#   bench     instruction counts under QEMU -icount (the MAVLink bridge beside the C MAVLink
+#             library on the same bytes) and flash/RAM sizes, with the pinned bench
+#             toolchain; exits 1 over a budget
 #
 # Each stage installs what it needs when it is missing, and says what before installing it.
 set -euo pipefail
