@@ -42,7 +42,6 @@ mod fw {
     use idu_gimbal::link::{Config, Link};
     use idu_gimbal::Instant;
     use idu_gimbal_mavlink::attitude::YawPitch;
-    use idu_gimbal_mavlink::codec;
     use idu_gimbal_mavlink::framing::{Check, MAX_FRAME_LEN};
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
     use mavio::dialects::common::enums::{
@@ -528,6 +527,7 @@ mod fw {
         mut ms: u32,
     ) -> bool {
         use idu_firmware_support::report::Comparison;
+        use idu_gimbal_mavlink::codec;
         use idu_gimbal_mavlink::framing::{FrameReader, Outbox};
         use mavio::dialects::common::enums::{
             CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData,
