@@ -417,3 +417,34 @@ fn the_definition_is_read_as_mavsdk_reads_it_and_as_pymavlink_bursts_it() {
         assert_eq!(got, file);
     }
 }
+
+#[test]
+fn a_burst_goes_on_to_its_client_while_another_is_answered() {
+    let mut b = bridge(Family::DualLight);
+    let other: (u8, u8) = (GCS.0, GCS.1 + 1);
+    b.receive(&frame(GCS, 0, &ftp(1, 0, OPEN, 0, b"/camera.xml")), t(10));
+    let _ = sent(&mut b);
+    // The burst starts (its first packet answers the request)...
+    let mut m = ftp(2, 0, BURST, 0, &[]);
+    m.payload[4] = 80;
+    b.receive(&frame(GCS, 1, &m), t(10));
+    // ... and another client asks something before the rest is sent.
+    b.receive(&frame(other, 0, &ftp(7, 0, 0, 0, &[])), t(10));
+    let mut frames = sent(&mut b);
+    for ms in 11..40 {
+        b.poll(t(ms));
+        frames.extend(sent(&mut b));
+    }
+    let replies: Vec<FileTransferProtocol> = of(&frames);
+    let to_other: Vec<_> = replies
+        .iter()
+        .filter(|r| (r.target_system, r.target_component) == other)
+        .collect();
+    assert_eq!(to_other.len(), 1);
+    assert_eq!(to_other[0].payload[5], 0, "the None request's ACK");
+    let burst: Vec<_> = replies.iter().filter(|r| r.payload[5] == BURST).collect();
+    assert_eq!(burst.len(), definition::DUAL_LIGHT.len().div_ceil(80));
+    assert!(burst
+        .iter()
+        .all(|r| (r.target_system, r.target_component) == GCS));
+}

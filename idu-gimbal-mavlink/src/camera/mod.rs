@@ -56,7 +56,7 @@ use crate::bridge::{id_of, name, Tx};
 use crate::capture::{Capture, Image, Request};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
-use crate::ftp::{FtpServer, PAYLOAD_LEN};
+use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
 use crate::gimbal::GimbalControl;
 use settings::Settings;
 use stream::{VideoStream, MAX_STREAMS};
@@ -241,7 +241,7 @@ pub(crate) struct Camera {
     settings: Settings,
     ftp: FtpServer<FTP_SESSIONS>,
     /// Who the burst read in progress is for.
-    ftp_client: (u8, u8),
+    burst_client: (u8, u8),
 }
 
 /// Messages other than commands the camera answers.
@@ -307,7 +307,7 @@ impl Camera {
             tracking: Tracking::default(),
             settings: Settings::new(config.has_thermal()),
             ftp: FtpServer::new(definition::files(config.has_thermal())),
-            ftp_client: (0, 0),
+            burst_client: (0, 0),
         }
     }
 
@@ -570,7 +570,7 @@ impl Camera {
             if !self.ftp.burst_next(now, &mut payload) {
                 break;
             }
-            self.send_ftp(config, payload, tx);
+            self.send_ftp(config, payload, self.burst_client, tx);
         }
         if self.tracking.due(now) && tx.room() >= MAX_FRAME_LEN {
             self.tracking.send_status(gimbal, config.component, now, tx);
@@ -603,9 +603,12 @@ impl Camera {
             Message::Ftp(request) => {
                 let mut reply = [0u8; PAYLOAD_LEN];
                 if self.ftp.request(&request, now, &mut reply) {
-                    // A burst that follows goes to whoever asked last.
-                    self.ftp_client = from;
-                    self.send_ftp(config, reply, tx);
+                    // The burst's packets go to whoever asked for it, even with another
+                    // client's requests answered between them.
+                    if request.get(3) == Some(&BURST_READ_FILE) {
+                        self.burst_client = from;
+                    }
+                    self.send_ftp(config, reply, from, tx);
                 }
             }
             Message::ParamList => self.settings.list(),
@@ -615,11 +618,17 @@ impl Camera {
         self.settings.send_pending(config.component, tx);
     }
 
-    fn send_ftp(&self, config: &CameraConfig, payload: [u8; PAYLOAD_LEN], tx: &mut Tx<'_>) {
+    fn send_ftp(
+        &self,
+        config: &CameraConfig,
+        payload: [u8; PAYLOAD_LEN],
+        to: (u8, u8),
+        tx: &mut Tx<'_>,
+    ) {
         let m = FileTransferProtocol {
             target_network: 0,
-            target_system: self.ftp_client.0,
-            target_component: self.ftp_client.1,
+            target_system: to.0,
+            target_component: to.1,
             payload,
         };
         tx.send(config.component, &m);

@@ -103,7 +103,7 @@ const READ_FILE: u8 = 5;
 const CREATE_FILE: u8 = 6;
 const RENAME: u8 = 13;
 const CALC_FILE_CRC32: u8 = 14;
-const BURST_READ_FILE: u8 = 15;
+pub(crate) const BURST_READ_FILE: u8 = 15;
 const ACK: u8 = 128;
 const NAK: u8 = 129;
 
