@@ -878,10 +878,11 @@ def calibration(gcs, bridge):
                "PREFLIGHT_CALIBRATION gyro (p1 1) to the gimbal")
     start = bridge.wait_line(mark, lambda l: l == SAID + "calibrating")
     # The simulated gimbal's fast calibration lasts 2 s (sim.rs CALIBRATION_MS); the lines are
-    # timed as this script reads them, a few ms after they are written: 1.8 to 2.5 s.
+    # timed as this script's reader thread reads them, a few ms after they are written on an
+    # idle machine, up to a few hundred on a loaded one (either line): 1.5 to 3 s.
     done = bridge.wait_line(mark, lambda l: l == SAID + "calibration done", timeout=4.0)
     took = done[0] - start[0] if start and done else None
-    check(start is not None and took is not None and 1.8 <= took <= 2.5,
+    check(start is not None and took is not None and 1.5 <= took <= 3.0,
           f"calibrating, then calibration done {took if took is None else round(took, 2)} s later")
     mark = bridge.mark()
     gcs.expect(GIMBAL, mav.MAV_CMD_PREFLIGHT_CALIBRATION, [0, 0, 0, 0, 1, 0, 0], mav.MAV_RESULT_DENIED,
