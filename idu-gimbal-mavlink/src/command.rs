@@ -82,3 +82,31 @@ impl Command {
         self.command == MavCmd::RequestMessage && self.params[0] == id as f32
     }
 }
+
+/// What `MAV_CMD_SET_MESSAGE_INTERVAL` asks of a message sent on a period (param2, µs;
+/// common.xml: "-1: disable. 0: request default rate").
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Interval {
+    /// −1: stop sending it.
+    Stop,
+    /// 0: the message's default.
+    Default,
+    /// Every this many milliseconds.
+    Every(u32),
+}
+
+impl Interval {
+    /// The interval `us` asks for; `None` below 1 ms or above a minute (or NaN).
+    pub(crate) fn from_us(us: f32) -> Option<Self> {
+        if us == -1.0 {
+            Some(Interval::Stop)
+        } else if us == 0.0 {
+            Some(Interval::Default)
+        } else if (1_000.0..=60_000_000.0).contains(&us) {
+            // In range: the cast is exact to the millisecond.
+            Some(Interval::Every((us / 1_000.0) as u32))
+        } else {
+            None
+        }
+    }
+}

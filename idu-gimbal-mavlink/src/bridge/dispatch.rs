@@ -19,7 +19,7 @@ use mavio::mavspec::rust::spec::MessageSpecStatic;
 use super::{ack_of, bump, id_of, State, AUTOPILOT_COMPONENT};
 use crate::camera;
 use crate::codec;
-use crate::command::{Command, Xy};
+use crate::command::{Command, Interval, Xy};
 use crate::framing::{Check, ReceivedFrame};
 use crate::gimbal::GimbalControl;
 #[cfg(feature = "roi")]
@@ -347,16 +347,12 @@ impl State {
     /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status: µs; −1 stops it, 0 restores
     /// the configured default. Below 1 ms or above a minute is out of range.
     pub(super) fn set_status_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
-        if interval_us == -1.0 {
-            self.status_ms = 0;
-        } else if interval_us == 0.0 {
-            self.status_ms = self.config.attitude_status_ms;
-        } else if (1_000.0..=60_000_000.0).contains(&interval_us) {
-            // In range: the cast is exact to the millisecond.
-            self.status_ms = (interval_us / 1_000.0) as u32;
-        } else {
-            return MavResult::Denied;
-        }
+        self.status_ms = match Interval::from_us(interval_us) {
+            Some(Interval::Stop) => 0,
+            Some(Interval::Default) => self.config.attitude_status_ms,
+            Some(Interval::Every(ms)) => ms,
+            None => return MavResult::Denied,
+        };
         self.next_status = Some(now);
         MavResult::Accepted
     }

@@ -474,18 +474,17 @@ impl State {
         sent
     }
 
-    /// Queues a command for the gimbal; a full queue is counted.
+    /// Queues a setpoint's command for the gimbal, counted in `angle_commands`; a full queue
+    /// is counted.
     pub(crate) fn command_gimbal<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
         c: GimbalCommand,
     ) -> bool {
-        if gimbal.send(GimbalCmd::from(c)).is_ok() {
+        let sent = self.command_gimbal_raw(gimbal, c);
+        if sent {
             bump(&mut self.stats.angle_commands);
-            true
-        } else {
-            bump(&mut self.stats.queue_full);
-            false
         }
+        sent
     }
 }

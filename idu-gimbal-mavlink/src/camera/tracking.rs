@@ -30,6 +30,7 @@ use mavio::dialects::common::enums::{
 use mavio::dialects::common::messages::CameraTrackingImageStatus;
 
 use crate::bridge::Tx;
+use crate::command::Interval;
 use crate::gimbal::GimbalControl;
 
 /// The smallest box a point is tracked with, image units (1/32 of the image).
@@ -149,14 +150,11 @@ impl Tracking {
     /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the status: µs; −1 stops it, 0 is the default
     /// (none: only on request). Below 1 ms or above a minute is out of range.
     pub(crate) fn set_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
-        if interval_us == -1.0 || interval_us == 0.0 {
-            self.interval_ms = 0;
-        } else if (1_000.0..=60_000_000.0).contains(&interval_us) {
-            // In range: the cast is exact to the millisecond.
-            self.interval_ms = (interval_us / 1_000.0) as u32;
-        } else {
-            return MavResult::Denied;
-        }
+        self.interval_ms = match Interval::from_us(interval_us) {
+            Some(Interval::Stop | Interval::Default) => 0,
+            Some(Interval::Every(ms)) => ms,
+            None => return MavResult::Denied,
+        };
         self.next = Some(now);
         MavResult::Accepted
     }
