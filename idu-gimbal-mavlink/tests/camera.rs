@@ -24,23 +24,15 @@ use mavio::protocol::{Frame, V2};
 const URI: &str = "rtsp://admin:admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype=0";
 
 fn bridge() -> Bridge<Link> {
-    let camera = CameraConfig::new(
-        VideoCamera::new(Family::DualLight)
-            .url(Stream::Main)
-            .unwrap()
-            .as_str(),
+    camera_bridge(
+        CameraConfig::new(
+            VideoCamera::new(Family::DualLight)
+                .url(Stream::Main)
+                .unwrap()
+                .as_str(),
+        )
+        .unwrap(),
     )
-    .unwrap();
-    let mut b = Bridge::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            camera: Some(camera),
-            ..BridgeConfig::default()
-        },
-    );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
-    let _ = sent(&mut b);
-    b
 }
 
 /// The ACK (from `component`) and the other frames a command produced.

@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::{Config, Link};
+use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::control::{
     Command, DualLightCommand, Focus, GimbalCommand, ImagePoint, TrackingBox,
@@ -13,30 +13,18 @@ use idu_gimbal::wire::control::{
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{
     CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, MavCmd, MavResult,
 };
-use mavio::dialects::common::messages::{
-    CameraSettings, CameraTrackingImageStatus, CommandAck, CommandLong,
-};
+use mavio::dialects::common::messages::{CameraSettings, CameraTrackingImageStatus, CommandAck};
 use mavio::protocol::{Frame, V2};
 
 const CAMERA: u8 = 100;
 const GIMBAL: u8 = 154;
 
 fn bridge(family: Family) -> Bridge<Link> {
-    let camera = CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap();
-    let mut b = Bridge::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            camera: Some(camera),
-            ..BridgeConfig::default()
-        },
-    );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
-    let _ = sent(&mut b);
-    b
+    camera_bridge(CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap())
 }
 
 /// Sends `cmd` to `to` with params 1 to 7; the ACK's result, the frames after it and the
@@ -48,20 +36,7 @@ fn ask(
     p: [f32; 7],
     ms: u32,
 ) -> (MavResult, Vec<Frame<V2>>, Vec<Command>) {
-    let c = CommandLong {
-        target_system: AP.0,
-        target_component: to,
-        command: cmd,
-        confirmation: 0,
-        param1: p[0],
-        param2: p[1],
-        param3: p[2],
-        param4: p[3],
-        param5: p[4],
-        param6: p[5],
-        param7: p[6],
-    };
-    b.receive(&frame(GCS, 0, &c), t(ms));
+    b.receive(&frame(GCS, 0, &command7((AP.0, to), cmd, p)), t(ms));
     let frames = sent(b);
     let acks: Vec<CommandAck> = of(&frames);
     assert_eq!(acks.len(), 1, "{cmd:?}: one ACK");

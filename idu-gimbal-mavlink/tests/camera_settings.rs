@@ -5,13 +5,13 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::{Config, Link};
+use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
 use idu_gimbal::wire::control::{
     Command, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, Palette,
 };
 use idu_gimbal_mavlink::camera::{definition, CameraConfig};
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{
     MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
 };
@@ -24,17 +24,7 @@ use mavio::protocol::{Frame, V2};
 const CAMERA: u8 = 100;
 
 fn bridge(family: Family) -> Bridge<Link> {
-    let camera = CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap();
-    let mut b = Bridge::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            camera: Some(camera),
-            ..BridgeConfig::default()
-        },
-    );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
-    let _ = sent(&mut b);
-    b
+    camera_bridge(CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap())
 }
 
 fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32) -> (MavResult, Vec<Frame<V2>>) {

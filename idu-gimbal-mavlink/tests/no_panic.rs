@@ -10,7 +10,7 @@ use common::*;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd, MavParamExtType};
 use mavio::dialects::common::messages::{
-    CommandLong, FileTransferProtocol, GimbalDeviceSetAttitude, ParamExtRequestList, ParamExtSet,
+    FileTransferProtocol, GimbalDeviceSetAttitude, ParamExtRequestList, ParamExtSet,
 };
 use proptest::prelude::*;
 
@@ -40,19 +40,7 @@ fn camera_command(cmd: MavCmd, p: [f32; 4]) -> Vec<u8> {
     frame(
         GCS,
         5,
-        &CommandLong {
-            target_system: 0,
-            target_component: 100,
-            command: cmd,
-            confirmation: 0,
-            param1: p[0],
-            param2: p[1],
-            param3: p[2],
-            param4: p[3],
-            param5: 0.0,
-            param6: 0.0,
-            param7: 0.0,
-        },
+        &command7((0, 100), cmd, [p[0], p[1], p[2], p[3], 0.0, 0.0, 0.0]),
     )
 }
 

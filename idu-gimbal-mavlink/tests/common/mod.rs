@@ -2,12 +2,13 @@
 //! parsed back, the core link's queue read out.
 #![allow(dead_code)] // each test file uses some
 
-use idu_gimbal::link::Link;
+use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand};
 use idu_gimbal::wire::ids;
 use idu_gimbal::Instant;
+use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
-use idu_gimbal_mavlink::{Bridge, GimbalControl};
+use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
 use mavio::dialects::common::messages::{CommandLong, Heartbeat};
 use mavio::mavspec::rust::spec::MessageSpecStatic;
@@ -82,19 +83,39 @@ pub fn heartbeat() -> Heartbeat {
 }
 
 pub fn command(target: (u8, u8), command: MavCmd, p1: f32, p2: f32) -> CommandLong {
+    command7(target, command, [p1, p2, 0.0, 0.0, 0.0, 0.0, 0.0])
+}
+
+/// `COMMAND_LONG` to `target` with params 1 to 7.
+pub fn command7(target: (u8, u8), command: MavCmd, p: [f32; 7]) -> CommandLong {
     CommandLong {
         target_system: target.0,
         target_component: target.1,
         command,
         confirmation: 0,
-        param1: p1,
-        param2: p2,
-        param3: 0.0,
-        param4: 0.0,
-        param5: 0.0,
-        param6: 0.0,
-        param7: 0.0,
+        param1: p[0],
+        param2: p[1],
+        param3: p[2],
+        param4: p[3],
+        param5: p[4],
+        param6: p[5],
+        param7: p[6],
     }
+}
+
+/// A bridge on the core's CAN link with `camera`, that has heard the autopilot's heartbeat
+/// (so its system id is the autopilot's), its output so far drained.
+pub fn camera_bridge(camera: CameraConfig) -> Bridge<Link> {
+    let mut b = Bridge::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            camera: Some(camera),
+            ..BridgeConfig::default()
+        },
+    );
+    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    let _ = sent(&mut b);
+    b
 }
 
 /// The commands the link queued, in order.
