@@ -76,41 +76,63 @@ async def wait_for(what, poll, timeout):
     return None
 
 
-async def run(gimbalctl):
-    # gimbalctl sends to every peer it has heard from; MAVSDK listens on a port of its own,
-    # given to gimbalctl with --to, and answers from it.
-    sink = socket_port()
+def start_bridge(gimbalctl, sink, *args):
+    """`gimbalctl mavlink --sim ARGS`, sending to MAVSDK's port `sink` (gimbalctl sends to
+    every peer it has heard from; MAVSDK listens on a port of its own, given with --to, and
+    answers from it): the process, its UDP port (its first stdout line) and the lines of its
+    stderr as they come (the simulated gimbal says there what its camera does)."""
     proc = subprocess.Popen(
-        [gimbalctl, "mavlink", "--sim", "--listen", "127.0.0.1:0", "--to",
+        [gimbalctl, "mavlink", "--sim", *args, "--listen", "127.0.0.1:0", "--to",
          f"127.0.0.1:{sink}", "--exit-after-ms", "90000"],
-        stdout=subprocess.PIPE, stderr=sys.stderr, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
+    said = []
+
+    def read_stderr():
+        for line in proc.stderr:
+            print(line, end="", file=sys.stderr, flush=True)
+            said.append(line.strip())
+
+    threading.Thread(target=read_stderr, daemon=True).start()
+    line = proc.stdout.readline()
+    port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
+    return proc, port, said
+
+
+async def find_camera(sink, who):
+    """MAVSDK as a ground station on `sink`: the Mavsdk instance (kept alive by the caller),
+    the camera plugin of the system it finds, and the camera component 100 as MAVSDK lists
+    it; None where not found."""
+    mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
+    await mavsdk.add_any_connection(f"udpin://127.0.0.1:{sink}")
+
+    async def a_system():
+        systems = await mavsdk.get_systems()
+        return systems[0] if systems else None
+
+    system = await wait_for("a system", a_system, 10.0)
+    check(system is not None, f"MAVSDK sees {who}'s system")
+    if system is None:
+        return mavsdk, None, None
+    camera = CameraAsync(system)
+
+    async def listed():
+        cameras = (await camera.camera_list()).cameras
+        return [c for c in cameras if c.component_id == CAMERA]
+
+    found = await wait_for("the camera", listed, 10.0)
+    check(bool(found), f"{who}'s camera (component 100) is listed")
+    return mavsdk, camera, found[0] if found else None
+
+
+async def run(gimbalctl):
+    sink = socket_port()
+    proc, port, _ = start_bridge(gimbalctl, sink)
     try:
-        line = proc.stdout.readline()
-        port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
         print(f"mavsdk_camera: gimbalctl mavlink on UDP {port}, MAVSDK on {sink}", flush=True)
-        mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
-        await mavsdk.add_any_connection(f"udpin://127.0.0.1:{sink}")
-
-        async def a_system():
-            systems = await mavsdk.get_systems()
-            return systems[0] if systems else None
-
-        system = await wait_for("a system", a_system, 10.0)
-        check(system is not None, "MAVSDK sees the bridge's system")
-        if system is None:
+        _mavsdk, camera, info = await find_camera(sink, "the bridge")
+        if info is None:
             return
-        camera = CameraAsync(system)
-
-        async def listed():
-            cameras = (await camera.camera_list()).cameras
-            return [c for c in cameras if c.component_id == CAMERA]
-
-        found = await wait_for("the camera", listed, 10.0)
-        check(bool(found), "the camera (component 100) is listed")
-        if not found:
-            return
-        info = found[0]
         check(info.vendor_name == "IDU", f"vendor name {info.vendor_name!r}")
 
         async def succeeds(what, call):
@@ -171,41 +193,12 @@ async def run(gimbalctl):
 
 async def dual_light(gimbalctl):
     sink = socket_port()
-    proc = subprocess.Popen(
-        [gimbalctl, "mavlink", "--sim", "--camera", "dual-light", "--listen", "127.0.0.1:0",
-         "--to", f"127.0.0.1:{sink}", "--exit-after-ms", "90000"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
-    said = []
-
-    def read_stderr():
-        for line in proc.stderr:
-            print(line, end="", file=sys.stderr, flush=True)
-            said.append(line.strip())
-
-    threading.Thread(target=read_stderr, daemon=True).start()
+    proc, port, said = start_bridge(gimbalctl, sink, "--camera", "dual-light")
     try:
-        line = proc.stdout.readline()
-        port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
         print(f"mavsdk_camera: dual light on UDP {port}, MAVSDK on {sink}", flush=True)
-        mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
-        await mavsdk.add_any_connection(f"udpin://127.0.0.1:{sink}")
-
-        async def a_system():
-            systems = await mavsdk.get_systems()
-            return systems[0] if systems else None
-
-        system = await wait_for("a system", a_system, 10.0)
-        if system is None:
-            check(False, "MAVSDK sees the dual light's system")
+        _mavsdk, camera, info = await find_camera(sink, "the dual light")
+        if info is None:
             return
-        camera = CameraAsync(system)
-
-        async def listed():
-            cameras = (await camera.camera_list()).cameras
-            return [c for c in cameras if c.component_id == CAMERA]
-
-        check(bool(await wait_for("the camera", listed, 10.0)), "the dual light is listed")
 
         # Every stream, as MAVSDK reports them (it asks for them all at once, and every
         # 20 s): the third, the infrared stream, flagged thermal, which MAVSDK calls the
