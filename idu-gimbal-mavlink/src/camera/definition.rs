@@ -5,13 +5,15 @@
 //!
 //! That URI form is the one both clients read alike: MAVSDK strips `mftp://` and opens the
 //! rest (`camera.xml`), and loads the file from where its FTP client stored it only when
-//! the path has no directory (`camera_impl.cpp`, `check_camera_definition_with_lock`);
-//! QGroundControl keeps one `/` (`/camera.xml`, `FTPManager::_parseURI`). The FTP server
-//! takes a path with or without its leading `/`.
+//! the path has no directory (`camera_impl.cpp`:1429-1477, at mavlink/MAVSDK 158e339);
+//! QGroundControl keeps one `/` (`/camera.xml`, `FTPManager.cc`:1181-1212, at
+//! HTRamsey/qgroundcontrol c15cc32). The FTP server takes a path with or without its
+//! leading `/`.
 //!
-//! Both clients cache a definition by vendor, model and `cam_definition_version`, so the
-//! version is raised with every change of a file ([`VERSION`] is checked against the
-//! files' `<definition version>` by a test).
+//! Both clients cache a definition by vendor, model and `cam_definition_version`
+//! (`VehicleCameraControl.cc`:105-111; `camera_impl.cpp`:1321-1333), so the version is
+//! raised with every change of a file (`tests/mavlink_camera.py` checks [`VERSION`] against
+//! the files' `<definition version>`).
 //!
 //! The files' parameters are [`settings::PARAMETERS`](super::settings::PARAMETERS): every
 //! camera has focus (QGroundControl has no focus control but the definition's settings),

@@ -19,6 +19,13 @@
 //!   or more parameter values are invalid", the command itself being supported.
 //!
 //! The focus level in `CAMERA_SETTINGS` stays NaN (unknown).
+//!
+//! What sends it: MAVSDK's `focus_in_start`, `focus_out_start` and `focus_stop` (continuous
+//! −1, +1, 0), `focus_auto`, `focus_auto_single` and `focus_auto_continuous` (types 4 to 6),
+//! `focus_range` (type 2; `camera_impl.cpp`:264-310 at mavlink/MAVSDK 158e339, and the 4.1
+//! library); ArduPilot's `AP_Camera_MAVLinkCamV2::set_focus` (continuous, range or auto, only
+//! with `HAS_BASIC_FOCUS`). QGroundControl sends no focus command from any screen (its
+//! `setFocusLevel` is unused), hence the `CAM_FOCUS` setting ([`super::settings`]).
 
 use idu_gimbal::wire::control::{Command as GimbalCmd, Focus, GimbalCommand, Zoom, ZoomRatio};
 use idu_gimbal::wire::postback::GimbalType;

@@ -14,7 +14,11 @@
 //! | `IR_EZOOM` (dual light) | 0 stop, 1 zoom in, 2 zoom out | 0x1F 0x12 (3, 1, 2) |
 //!
 //! Values travel as the parameter protocol's byte-wise encoding: the value's bytes,
-//! little-endian, at the start of the 128-byte `param_value`, the rest zero.
+//! little-endian, at the start of the 128-byte `param_value`, the rest zero, as both clients
+//! encode and decode them (`QGCCameraIO.cc`:136-211, 257-305 at HTRamsey/qgroundcontrol
+//! c15cc32; `param_value.cpp`:196-262, 527-560 at mavlink/MAVSDK 158e339). QGroundControl
+//! reads them all with `PARAM_EXT_REQUEST_LIST` (`VehicleCameraControl.cc`:1188-1211),
+//! MAVSDK one by one with `PARAM_EXT_REQUEST_READ` by name (`camera_impl.cpp`:2169-2235).
 //!
 //! A set with an unknown name, another type or a value outside the parameter's options is
 //! answered `PARAM_ACK_VALUE_UNSUPPORTED` with the value kept; a set the gimbal's queue has

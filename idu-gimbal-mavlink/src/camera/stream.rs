@@ -5,6 +5,15 @@
 //! or all of them (id 0), as common.xml defines `MAV_CMD_REQUEST_MESSAGE`'s param2 for
 //! them and the superseded `MAV_CMD_REQUEST_VIDEO_STREAM_*` their param1. All streams of a
 //! family may not fit the outbox at once; those left are sent as it drains.
+//!
+//! The infrared stream is the third stream of the one camera component, not a camera of its
+//! own: QGroundControl asks for every stream at once (`REQUEST_MESSAGE` 269, param2 0,
+//! `VehicleCameraControl.cc`:1819-1840), keeps a `THERMAL` stream out of its stream selector
+//! and plays it as its thermal view (:1640-1648, 1803-1817; HTRamsey/qgroundcontrol c15cc32),
+//! where a second camera component would be listed as another camera; and its
+//! `VIDEO_STREAM_STATUS` handling overwrites the stream's flags (`QGCVideoStreamInfo.cc`:28-72),
+//! so the status carries `THERMAL` too. MAVSDK reports the stream as the infrared spectrum
+//! (`tests/mavsdk_camera.py`).
 
 use idu_gimbal::video::Stream;
 use mavio::dialects::common::enums::{

@@ -17,8 +17,20 @@
 //! in the image, so the status says `ACTIVE` (with the mode last commanded) or `IDLE`
 //! and `target_data` is empty: no position is invented. It is sent when asked
 //! (`MAV_CMD_REQUEST_MESSAGE`) and at the interval set with `MAV_CMD_SET_MESSAGE_INTERVAL`
-//! (none until set), which QGroundControl asks for as soon as the camera has the tracking
-//! capability.
+//! (none until set).
+//!
+//! What the clients send and read (QGroundControl at HTRamsey/qgroundcontrol c15cc32, which
+//! tracks master; MAVSDK at mavlink/MAVSDK 158e339, the 4.1 wheel's source):
+//! - QGroundControl shows its tracking button for either capability flag
+//!   (`VehicleCameraControl.cc`:130-138); a click sends `TRACK_POINT` with a radius of 20
+//!   pixels of the video's width, a drag `TRACK_RECTANGLE` with its corners sorted
+//!   (`FlyViewVideo.qml`:101, 141-180), each followed by `SET_MESSAGE_INTERVAL` for this
+//!   status at 500,000 µs, and stop by −1 (`VehicleCameraControl.cc`:2334-2408). It draws
+//!   the box only while `tracking_status` is `ACTIVE` alone (`VehicleCameraControl.h`:133).
+//! - MAVSDK's `track_point`, `track_rectangle` and `track_stop` send the same commands with
+//!   their unset params NaN (`camera_impl.cpp`:224-262); it never asks for the status.
+//! - ArduPilot's `AP_Camera_MAVLinkCamV2` forwards no tracking to a MAVLink camera (it has no
+//!   `set_tracking`): the ground station addresses the camera, and ArduPilot routes it.
 
 use idu_gimbal::wire::control::{
     Command as GimbalCmd, DualLightCommand, GimbalCommand, ImagePoint, TrackingBox,
