@@ -22,6 +22,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# The suite builds each thing once, so it keeps no incremental caches, and its builds carry
+# line tables only (a failing test's backtrace still names file and line; code generation
+# is the same): full DWARF for every dependency of the host, MSRV, board and bench builds
+# filled about 8 GB of target/, more than a CI machine's disk had free. The environment
+# overrides either.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
+export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-line-tables-only}"
+export CARGO_PROFILE_RELEASE_DEBUG="${CARGO_PROFILE_RELEASE_DEBUG:-line-tables-only}"
+
 step() { printf '\n=== %s\n' "$*"; }
 
 as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
