@@ -23,6 +23,9 @@ fn main() {
         .include("c")
         // -O2 whatever the Rust profile's opt-level, as the C library's users build it.
         .opt_level(2)
+        // No debug info whatever the Rust profile's: with it cc adds -fno-omit-frame-pointer,
+        // which changes the code measured (about 5 instructions a message).
+        .debug(false)
         .flag("-mcpu=cortex-m4")
         .flag("-mthumb")
         .flag("-mfloat-abi=hard")

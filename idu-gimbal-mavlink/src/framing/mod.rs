@@ -14,7 +14,7 @@
 //! 270-byte body and a 255-byte payload and moves the ~300-byte frame, and 21.8 for the
 //! checksum, which serializes the header again and looks each byte up through `crc-any`'s
 //! table enum. That alone was over the bridge's goal of 60 a byte for the whole bridge,
-//! and more than the C MAVLink library's parse and decode take (47.6, `BENCHMARKS.md`).
+//! and more than the C MAVLink library's parse and decode take (47.4, `BENCHMARKS.md`).
 //! Instead the reader takes the checksum (CRC-16/MCRF4XX, MAVLink's "X.25") in the same
 //! loop that copies each byte in, and [`ReceivedFrame`] reads the header fields where
 //! MAVLink 2 puts them. `CRC_EXTRA` and message ids come from `mavio`'s message specs;
