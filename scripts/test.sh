@@ -160,4 +160,7 @@ for s in "${stages[@]}"; do
 done
 for s in "${stages[@]}"; do
     "stage_$s"
+    # What the stage left on disk, so that a run short of space shows where it went.
+    printf '\n%s stage done: target/ %s, %s free\n' "$s" \
+        "$(du -sh target 2>/dev/null | cut -f1)" "$(df -h --output=avail . | tail -n 1 | tr -d ' ')"
 done
