@@ -50,7 +50,7 @@ ID_SETPOINT = 284
 # move here; the status is expected every 100 ms.
 STEP_TIMEOUT = 10.0
 STATUS_MAX_GAP = 1.0  # ArduPilot's health threshold
-ANGLE_TOL = 2.0  # the tolerance; the wire's resolution is 0.1 degree
+ANGLE_TOL = 2.0  # the tolerance asked of the bridge; the wire's resolution is 0.1 degree
 
 
 def axis_quaternion(yaw_deg, pitch_deg):
