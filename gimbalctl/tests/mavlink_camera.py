@@ -61,6 +61,8 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 from pymavlink.mavftp import MAVFTP, FtpError  # noqa: E402
 
+from checks import Checks  # noqa: E402
+
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 GIMBAL, CAMERA = 154, 100
@@ -84,19 +86,8 @@ POSTBACK_TIMEOUT = 1.5
 # QGroundControl's per-parameter timer (QGCCameraIO.cc:377-384).
 PARAM_TIMEOUT = 3.5
 
-passed = 0
-failed = 0
-
-
-def check(ok, what):
-    global passed, failed
-    if ok:
-        passed += 1
-        print(f"  ok   {what}", flush=True)
-    else:
-        failed += 1
-        print(f"  FAIL {what}", flush=True)
-    return ok
+CHECKS = Checks()
+check = CHECKS.check
 
 
 def result_name(ack):
@@ -1001,8 +992,7 @@ def main():
     start = time.monotonic()
     run(sys.argv[1])
     print(f"mavlink_camera: ran {time.monotonic() - start:.1f} s", flush=True)
-    print(f"mavlink_camera: {passed} passed, {failed} failed", flush=True)
-    return 0 if failed == 0 and passed > 0 else 1
+    return CHECKS.summary("mavlink_camera")
 
 
 if __name__ == "__main__":

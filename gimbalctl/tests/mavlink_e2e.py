@@ -40,6 +40,8 @@ os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
+from checks import Checks  # noqa: E402
+
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 GIMBAL, CAMERA = 154, 100
@@ -87,20 +89,6 @@ def euler_yaw(q):
     """ArduPilot's reading of a quaternion's yaw (Quaternion::to_euler, 3-2-1), degrees."""
     w, x, y, z = q
     return math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-
-
-class Results:
-    def __init__(self):
-        self.passed = 0
-        self.failed = 0
-
-    def check(self, ok, what):
-        print(("  ok   " if ok else "  FAIL ") + what, flush=True)
-        if ok:
-            self.passed += 1
-        else:
-            self.failed += 1
-        return ok
 
 
 class Gcs:
@@ -561,12 +549,11 @@ def serial_session(gimbalctl, results):
 
 def main():
     gimbalctl = sys.argv[1]
-    results = Results()
+    results = Checks()
     session(gimbalctl, "px4-normal", px4_normal, results)
     session(gimbalctl, "ardupilot", ardupilot, results)
     serial_session(gimbalctl, results)
-    print(f"mavlink_e2e: {results.passed} passed, {results.failed} failed")
-    return 0 if results.failed == 0 else 1
+    return results.summary("mavlink_e2e")
 
 
 if __name__ == "__main__":

@@ -42,6 +42,8 @@ from mavsdk.asyncio.plugins.camera.camera import CameraAsync
 from mavsdk.plugins.camera import Option, Setting
 from mavsdk.plugins.camera.camera import CameraError
 
+from checks import Checks
+
 CAMERA = 100
 # `--camera x3` (the default): the vendor document's RTSP form with its default address and
 # credentials (idu_gimbal::video).
@@ -50,18 +52,8 @@ def stream_uri(stream_id):
 # MAVSDK asks for VIDEO_STREAM_INFORMATION every 20 s; allow one period and a margin.
 STREAM_TIMEOUT_S = 30.0
 
-passed = 0
-failed = 0
-
-
-def check(ok, what):
-    global passed, failed
-    if ok:
-        passed += 1
-        print(f"  ok   {what}", flush=True)
-    else:
-        failed += 1
-        print(f"  FAIL {what}", flush=True)
+CHECKS = Checks()
+check = CHECKS.check
 
 
 async def wait_for(what, poll, timeout):
@@ -298,9 +290,9 @@ def socket_port():
 def main():
     asyncio.run(run(sys.argv[1]))
     asyncio.run(dual_light(sys.argv[1]))
-    print(f"mavsdk_camera: {passed} passed, {failed} failed", flush=True)
+    status = CHECKS.summary("mavsdk_camera")
     # Leave without running MAVSDK's destructors from the garbage collector at exit.
-    os._exit(0 if failed == 0 and passed > 0 else 1)
+    os._exit(status)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,26 @@
+"""The tally the end-to-end clients keep (mavlink_e2e.py, mavlink_camera.py,
+mavsdk_camera.py): each check printed as it is made, "ok" or "FAIL", then a last line
+"NAME: N passed, M failed". Imported from the clients' own directory, which Python puts
+first on the path when it runs one of them."""
+
+
+class Checks:
+    def __init__(self):
+        self.passed = 0
+        self.failed = 0
+
+    def check(self, ok, what):
+        """Counts and prints one check; returns `ok`, so that a caller can stop after a
+        failure."""
+        print(("  ok   " if ok else "  FAIL ") + what, flush=True)
+        if ok:
+            self.passed += 1
+        else:
+            self.failed += 1
+        return ok
+
+    def summary(self, name):
+        """Prints the last line; returns the exit status: 0 only when checks ran and none
+        failed."""
+        print(f"{name}: {self.passed} passed, {self.failed} failed", flush=True)
+        return 0 if self.failed == 0 and self.passed > 0 else 1
