@@ -260,6 +260,16 @@ impl Heading {
     pub const MAX_DEG: f32 = 360.0;
     /// The largest heading on the wire, deci-degrees.
     pub const MAX_DECI: u16 = 3600;
+    /// North (or the nose), 0°.
+    pub const NORTH: Heading = Heading(0);
+
+    /// The heading of any angle in 0.01°, wrapped into [0°, 360°) and rounded to the
+    /// command's 0.1° (359.96° rounds to 360.0°, which is north). Total: every angle has
+    /// one.
+    pub const fn from_centideg_wrapped(cdeg: i32) -> Heading {
+        // rem_euclid: [0, 35999]; rounded to tenths: [0, 3600], the command's range.
+        Heading(((cdeg.rem_euclid(36_000) + 5) / 10) as u16)
+    }
 
     /// A heading in degrees in [0, 360], rounded to the nearest 0.1°.
     pub fn new(degrees: f32) -> Result<Self, RangeError> {
@@ -298,6 +308,8 @@ impl Pitch {
     pub const MIN_DECI: i16 = -1000;
     /// The highest pitch on the wire, deci-degrees.
     pub const MAX_DECI: i16 = 600;
+    /// Level, 0°.
+    pub const LEVEL: Pitch = Pitch(0);
 
     /// A pitch in degrees in [−100, 60], rounded to the nearest 0.1°.
     pub fn new(degrees: f32) -> Result<Self, RangeError> {

@@ -171,6 +171,16 @@ impl GimbalType {
             GimbalType::Unknown(_) => None,
         }
     }
+
+    /// The yaw motor's travel either side of the nose, in 0.01°: the postback's
+    /// `Motor_psi` scope, ±170.00°, or ±325.00° on the 3.5× models (section 2.2). An
+    /// unknown model is taken to have the common ±170.00°.
+    pub const fn motor_yaw_limit_cdeg(self) -> i16 {
+        match self {
+            GimbalType::Zoom3_5x | GimbalType::DualLight3_5x => 32_500,
+            _ => 17_000,
+        }
+    }
 }
 
 enum_with_unknown! {
