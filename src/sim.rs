@@ -70,9 +70,25 @@
 //! cannot leave it short). Any angle command stops rate motion and ends tracking.
 //! - Heading (`0x08` type 1): while the attitude is fresh (an attitude frame arrived within
 //!   `attitude_timeout_ms`) the heading is north-referenced and the motor target is
-//!   heading − vehicle heading, computed once when the command arrives (a vehicle that
-//!   turns afterwards turns the camera with it); otherwise it is relative to the nose. The
-//!   target is normalised to [−180°, 180°) and clamped to ±170°. Mode: lock (3).
+//!   heading − vehicle heading; otherwise it is relative to the nose. The target is
+//!   normalised to [−180°, 180°) and clamped to ±170°. Mode: lock (3).
+//!
+//! **Lock while the vehicle turns.** The document does not say what a gimbal in lock (or
+//! full lock) holds when the vehicle turns under it, so both are modelled
+//! ([`SimConfig::lock_holds`]):
+//! - [`LockHolds::North`] (the default): while north-referenced, in lock or full lock, and
+//!   neither tracking nor moving at a rate, the gimbal holds its north heading: the motor
+//!   target is recomputed from each attitude frame as that heading − the vehicle's. The
+//!   heading held is the one commanded, or, after anything else set the yaw (re-centre, a
+//!   rate, tracking, the attitude arriving), vehicle heading + motor target at that moment.
+//!   The default because the document names the modes by what the yaw does: heading
+//!   follow (2) follows the vehicle, so lock and full lock do not, and it reports the
+//!   postback's heading "(geomagnetism)", from north.
+//! - [`LockHolds::Motor`]: the motor target is computed once, when the command arrives; a
+//!   vehicle that turns afterwards turns the camera with it.
+//!
+//! Nose-referenced (no fresh attitude) both hold the motor angle: the simulated gimbal
+//! knows of the vehicle's turns only from the attitude frames.
 //! - Pitch (type 2): clamped to [−110°, 60°]. Mode: lock (3).
 //! - Recenter: targets pitch 0°, yaw 0°. Look down: targets pitch −90°, yaw unchanged.
 //!   Neither changes the mode, except that full lock (rate control) becomes lock.
@@ -211,6 +227,18 @@ pub fn field_of_view_deg(zoom_ratio: f32) -> (f32, f32) {
     )
 }
 
+/// What a gimbal in lock or full lock holds while the vehicle turns under it (see the
+/// [module docs](self#model-and-decisions)).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LockHolds {
+    /// Its north heading, from the pushed attitude (the default).
+    #[default]
+    North,
+    /// Its motor angle: it turns with the vehicle.
+    Motor,
+}
+
 /// How the simulated gimbal behaves.
 #[derive(Clone, Copy, PartialEq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -230,6 +258,11 @@ pub struct SimConfig {
     pub emit_can_frames: bool,
     /// A tracked target is lost this long after start tracking, ms (10 000; 0: never).
     pub tracking_lost_ms: u32,
+    /// What lock and full lock hold while the vehicle turns ([`LockHolds::North`]).
+    pub lock_holds: LockHolds,
+    /// How long [`Simulator::reboot`] keeps the gimbal starting up, ms (3000): no
+    /// postbacks, frames ignored.
+    pub boot_ms: u32,
 }
 
 impl Default for SimConfig {
@@ -242,6 +275,8 @@ impl Default for SimConfig {
             attitude_timeout_ms: 1000,
             emit_can_frames: true,
             tracking_lost_ms: 10_000,
+            lock_holds: LockHolds::North,
+            boot_ms: 3000,
         }
     }
 }
@@ -379,6 +414,10 @@ pub struct SimStats {
     pub postbacks: u32,
     /// Postbacks dropped because the TX queue lacked room for all four frames.
     pub tx_overflows: u32,
+    /// Restarts ([`Simulator::reboot`]).
+    pub reboots: u32,
+    /// Frames received while starting up after a reboot, ignored.
+    pub while_booting: u32,
 }
 
 /// Why [`Simulator::receive`] rejected a frame (the frame changed nothing).
@@ -439,6 +478,10 @@ pub struct Simulator<const TX: usize = 16> {
     tracking_left_ms: u32,
     /// Time left of the fast calibration, ms, while `state.calibrating`.
     calibration_left_ms: u32,
+    /// The north heading held in lock ([`LockHolds::North`]), degrees in [0, 360).
+    held_north: Option<f32>,
+    /// Time left of a restart, ms: no postbacks, frames ignored.
+    booting_left_ms: u32,
     text: TextAssembler<TEXT_CAPACITY>,
     tx: Deque<Frame, TX>,
 }
@@ -467,6 +510,8 @@ impl<const TX: usize> Simulator<TX> {
             track_target: None,
             tracking_left_ms: 0,
             calibration_left_ms: 0,
+            held_north: None,
+            booting_left_ms: 0,
             text: TextAssembler::new(),
             tx: Deque::new(),
         };
@@ -483,6 +528,10 @@ impl<const TX: usize> Simulator<TX> {
     /// frames on other IDs are counted as ignored. The model is advanced to `now` first.
     pub fn receive(&mut self, id: u32, data: &[u8], now: Instant) -> Result<(), SimError> {
         self.advance(now);
+        if self.booting_left_ms > 0 {
+            self.stats.while_booting = self.stats.while_booting.wrapping_add(1);
+            return Ok(());
+        }
         let result = match id {
             ids::CONTROL => match Command::decode(data) {
                 Ok(command) => {
@@ -553,7 +602,7 @@ impl<const TX: usize> Simulator<TX> {
         }
         let late = now.millis_since(self.next_postback);
         self.next_postback = now.add_millis(period - late % period);
-        if self.silent {
+        if self.silent || self.booting_left_ms > 0 {
             return None;
         }
         let status = self.postback();
@@ -602,6 +651,43 @@ impl<const TX: usize> Simulator<TX> {
         self.silent
     }
 
+    /// Restarts the gimbal at `now`, as a power cycle does: for
+    /// [`SimConfig::boot_ms`] it sends no postbacks and ignores every frame (counted in
+    /// [`SimStats::while_booting`]); it comes back at rest (level, motor centred, 1×,
+    /// heading follow) having forgotten the vehicle's data, with its frames not yet sent
+    /// dropped. The postback grid and the counters run on.
+    pub fn reboot(&mut self, now: Instant) {
+        self.advance(now);
+        let stats = SimStats {
+            reboots: self.stats.reboots.wrapping_add(1),
+            ..self.stats
+        };
+        *self = Simulator {
+            config: self.config,
+            state: SimState::initial(),
+            stats,
+            last: self.last,
+            next_postback: self.next_postback,
+            silent: self.silent,
+            rate_left_ms: 0,
+            attitude_age_ms: None,
+            photo_left_ms: 0,
+            track_target: None,
+            tracking_left_ms: 0,
+            calibration_left_ms: 0,
+            held_north: None,
+            booting_left_ms: self.config.boot_ms,
+            text: TextAssembler::new(),
+            tx: Deque::new(),
+        };
+        self.refresh();
+    }
+
+    /// Whether the gimbal is starting up after [`Simulator::reboot`].
+    pub fn is_booting(&self) -> bool {
+        self.booting_left_ms > 0
+    }
+
     /// The current state as a postback (without advancing time or sending anything).
     pub fn postback(&self) -> Postback {
         let s = &self.state;
@@ -640,6 +726,7 @@ impl<const TX: usize> Simulator<TX> {
         self.integrate_focus(dt);
         self.run_photo_timers(dt);
         self.run_calibration(dt);
+        self.booting_left_ms = self.booting_left_ms.saturating_sub(dt);
         self.attitude_age_ms = self.attitude_age_ms.map(|a| a.saturating_add(dt));
         self.refresh();
     }
@@ -748,7 +835,33 @@ impl<const TX: usize> Simulator<TX> {
     /// the angle targets and the box (losing a target now out of the image).
     fn refresh(&mut self) {
         self.refresh_heading();
+        self.hold_north();
         self.follow_target();
+    }
+
+    /// [`LockHolds::North`]: in lock or full lock, north-referenced, neither tracking nor
+    /// at a rate, the yaw target keeps the north heading held (taken from where the yaw is
+    /// aimed when the hold begins).
+    fn hold_north(&mut self) {
+        let s = &self.state;
+        let vehicle = match (self.config.lock_holds, s.north_referenced, s.vehicle) {
+            (LockHolds::North, true, Some(v))
+                if matches!(s.mode, ControlMode::Lock | ControlMode::FullLock)
+                    && !s.tracking
+                    && self.rate_left_ms == 0 =>
+            {
+                v.heading_deg()
+            }
+            _ => {
+                self.held_north = None;
+                return;
+            }
+        };
+        let aimed = s.target_yaw_deg.unwrap_or(s.motor_yaw_deg);
+        let held = *self
+            .held_north
+            .get_or_insert_with(|| wrap_360(vehicle + aimed));
+        self.state.target_yaw_deg = Some(clamp_yaw(wrap_180(held - vehicle)));
     }
 
     fn refresh_heading(&mut self) {
@@ -812,12 +925,14 @@ impl<const TX: usize> Simulator<TX> {
             GimbalCommand::NoseFollowing => {
                 self.end_tracking();
                 self.stop_rate();
+                self.held_north = None;
                 self.state.mode = ControlMode::HeadingFollow;
                 self.state.target_yaw_deg = Some(0.0);
             }
             GimbalCommand::Recenter => {
                 self.end_tracking();
                 self.stop_rate_keep_mode();
+                self.held_north = None;
                 self.state.target_pitch_deg = Some(0.0);
                 self.state.target_yaw_deg = Some(0.0);
             }
@@ -839,6 +954,8 @@ impl<const TX: usize> Simulator<TX> {
                 };
                 self.state.target_yaw_deg = Some(clamp_yaw(wrap_180(h.degrees() - reference)));
                 self.state.mode = ControlMode::Lock;
+                // Held as commanded, even where the motor stops at its limit.
+                self.held_north = self.state.north_referenced.then(|| wrap_360(h.degrees()));
             }
             GimbalCommand::Pitch(p) => {
                 self.end_tracking();
@@ -963,6 +1080,7 @@ impl<const TX: usize> Simulator<TX> {
     fn end_tracking(&mut self) {
         let s = &mut self.state;
         if self.track_target.take().is_some() {
+            self.held_north = None;
             s.target_pitch_deg = Some(s.pitch_deg);
             s.target_yaw_deg = Some(s.motor_yaw_deg);
         }
@@ -1332,6 +1450,171 @@ mod tests {
         assert_eq!(sim.state().target_yaw_deg, Some(170.0));
         sim.poll(t(5100));
         assert!(sim.state().heading_deg >= 0.0 && sim.state().heading_deg < 360.0);
+    }
+
+    /// A vehicle turning from `from` to `to` degrees at 30°/s, an attitude frame every
+    /// 100 ms, the simulator polled as it goes; then 3 s at `to` (time to slew 180°).
+    fn turn<const TX: usize>(sim: &mut Simulator<TX>, from: f32, to: f32, start: u32) -> u32 {
+        let mut ms = start;
+        let mut heading = from;
+        while heading != to {
+            ms += 100;
+            heading = approach(heading, to, 3.0);
+            attitude(sim, heading, t(ms));
+            sim.poll(t(ms));
+        }
+        for _ in 0..30 {
+            ms += 100;
+            attitude(sim, to, t(ms));
+            sim.poll(t(ms));
+        }
+        ms
+    }
+
+    #[test]
+    fn lock_holds_the_north_heading_or_the_motor_angle_as_the_vehicle_turns() {
+        for (holds, motor, heading) in [
+            // Heading 100 from north with the vehicle at 30: motor 70. The vehicle turns to
+            // 120: holding north, the motor goes to -20; holding the motor, the camera
+            // turns with the vehicle to 190.
+            (LockHolds::North, -20.0, 100.0),
+            (LockHolds::Motor, 70.0, 190.0),
+        ] {
+            let mut sim = Simulator::new(
+                SimConfig {
+                    lock_holds: holds,
+                    ..SimConfig::default()
+                },
+                t(0),
+            );
+            attitude(&mut sim, 30.0, t(0));
+            send(
+                &mut sim,
+                GimbalCommand::Heading(Heading::new(100.0).unwrap()),
+                t(0),
+            );
+            let start = turn(&mut sim, 30.0, 30.0, 0);
+            assert_eq!(sim.state().motor_yaw_deg, 70.0, "{holds:?}");
+            let end = turn(&mut sim, 30.0, 120.0, start);
+            let s = sim.state();
+            assert_eq!(
+                (s.motor_yaw_deg, s.heading_deg),
+                (motor, heading),
+                "{holds:?}"
+            );
+            assert_eq!(s.mode, ControlMode::Lock);
+            // Heading follow follows in both: the motor stays where it was put.
+            send(&mut sim, GimbalCommand::NoseFollowing, t(end));
+            turn(&mut sim, 120.0, 60.0, end);
+            assert_eq!(sim.state().motor_yaw_deg, 0.0, "{holds:?}");
+        }
+    }
+
+    #[test]
+    fn holding_north_stops_at_the_motor_limit_and_keeps_the_heading_commanded() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        attitude(&mut sim, 0.0, t(0));
+        // North 175 with the vehicle at 0 needs the motor at 175: it stops at 170.
+        send(
+            &mut sim,
+            GimbalCommand::Heading(Heading::new(175.0).unwrap()),
+            t(0),
+        );
+        let end = turn(&mut sim, 0.0, 0.0, 0);
+        assert_eq!(sim.state().motor_yaw_deg, 170.0);
+        // The vehicle turns right to 20: 155 is within reach, and the heading held is the
+        // one commanded, not the limit's 170.
+        let end = turn(&mut sim, 0.0, 20.0, end);
+        assert_eq!(sim.state().motor_yaw_deg, 155.0);
+        turn(&mut sim, 20.0, 0.0, end);
+        assert_eq!(sim.state().motor_yaw_deg, 170.0);
+    }
+
+    #[test]
+    fn a_rate_or_a_recentre_sets_the_north_heading_held_from_where_it_leaves_the_yaw() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        attitude(&mut sim, 40.0, t(0));
+        send(&mut sim, GimbalCommand::Recenter, t(0));
+        send(
+            &mut sim,
+            GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()),
+            t(0),
+        );
+        // Lock, motor 0 with the vehicle at 40: north 40 is held.
+        let end = turn(&mut sim, 40.0, 10.0, 0);
+        assert_eq!(sim.state().motor_yaw_deg, 30.0);
+        // A rate of 10°/s, refreshed every 100 ms for 1 s, honoured 200 ms past the last
+        // (1.1 s in all), then it ends: where it stops (motor 41, north 51) is held.
+        for ms in (end..end + 1000).step_by(100) {
+            send(
+                &mut sim,
+                GimbalCommand::Rate(Rate::new(10.0, 0.0).unwrap()),
+                t(ms),
+            );
+            attitude(&mut sim, 10.0, t(ms));
+            sim.poll(t(ms));
+        }
+        let stopped = end + 1300;
+        attitude(&mut sim, 10.0, t(stopped));
+        sim.poll(t(stopped));
+        assert_eq!(sim.state().mode, ControlMode::FullLock);
+        // f32 steps of 10 × 0.1 s: within 1e-3° of the exact 41.
+        let motor = sim.state().motor_yaw_deg;
+        assert!((motor - 41.0).abs() < 1e-3, "{motor}");
+        turn(&mut sim, 10.0, 0.0, stopped);
+        let motor = sim.state().motor_yaw_deg;
+        assert!((motor - 51.0).abs() < 1e-3, "{motor}");
+    }
+
+    #[test]
+    fn a_reboot_is_silent_for_its_boot_time_ignores_frames_and_comes_back_at_rest() {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        attitude(&mut sim, 30.0, t(0));
+        send(
+            &mut sim,
+            GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()),
+            t(0),
+        );
+        send(&mut sim, GimbalCommand::Zoom(Zoom::In), t(0));
+        assert!(sim.poll(t(1000)).is_some());
+        assert_eq!(sim.state().pitch_deg, -45.0);
+        sim.reboot(t(1100));
+        assert!(sim.is_booting());
+        assert_eq!(sim.pending_frames(), 0, "frames not yet sent are lost");
+        let s = sim.state();
+        assert_eq!(
+            (s.pitch_deg, s.motor_yaw_deg, s.zoom_ratio),
+            (0.0, 0.0, 1.0)
+        );
+        assert_eq!(s.mode, ControlMode::HeadingFollow);
+        assert!(
+            !s.north_referenced && s.vehicle.is_none(),
+            "the vehicle forgotten"
+        );
+        // 3 s of start-up: no postbacks, every frame ignored and counted.
+        send(
+            &mut sim,
+            GimbalCommand::Pitch(Pitch::new(-20.0).unwrap()),
+            t(2000),
+        );
+        attitude(&mut sim, 30.0, t(2000));
+        for ms in (1100..4100).step_by(100) {
+            assert_eq!(sim.poll(t(ms)), None, "at {ms}");
+        }
+        assert_eq!(sim.stats().while_booting, 2);
+        assert_eq!(sim.state().pitch_deg, 0.0);
+        // Back on the same postback grid, and obeying again.
+        assert_eq!(sim.poll(t(4100)), None);
+        assert!(sim.poll(t(4500)).is_some());
+        assert!(!sim.is_booting());
+        send(
+            &mut sim,
+            GimbalCommand::Pitch(Pitch::new(-20.0).unwrap()),
+            t(4500),
+        );
+        sim.poll(t(5000));
+        assert_eq!(sim.state().pitch_deg, -20.0);
+        assert_eq!(sim.stats().reboots, 1);
     }
 
     #[test]
@@ -2210,6 +2493,8 @@ mod tests {
             attitude_timeout in any::<u32>(),
             emit in any::<bool>(),
             lost in prop_oneof![Just(10_000u32), Just(0), any::<u32>()],
+            north in any::<bool>(),
+            boot in prop_oneof![Just(3000u32), any::<u32>()],
             start in any::<u32>(),
             events in prop::collection::vec(event(), 0..60),
         ) {
@@ -2221,6 +2506,8 @@ mod tests {
                 attitude_timeout_ms: attitude_timeout,
                 emit_can_frames: emit,
                 tracking_lost_ms: lost,
+                lock_holds: if north { LockHolds::North } else { LockHolds::Motor },
+                boot_ms: boot,
             };
             let mut sim: Simulator<7> = Simulator::with_tx_capacity(config, t(start));
             let mut now = t(start);
@@ -2229,6 +2516,9 @@ mod tests {
                 let _ = sim.receive(id, &data, now);
                 if i % 3 == 0 {
                     sim.set_silent(i % 9 == 0);
+                }
+                if i % 17 == 16 {
+                    sim.reboot(now);
                 }
                 if let Some(pb) = sim.poll(now) {
                     prop_assert_eq!(pb, sim.postback());

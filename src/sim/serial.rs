@@ -152,4 +152,12 @@ impl<const OUT: usize> SerialSimulator<OUT> {
     pub fn parser(&self) -> &StreamParser {
         &self.parser
     }
+
+    /// Restarts the gimbal ([`Simulator::reboot`]): bytes not yet sent and a frame
+    /// half-received are lost with it.
+    pub fn reboot(&mut self, now: Instant) {
+        self.sim.reboot(now);
+        self.out.clear();
+        self.parser = StreamParser::new();
+    }
 }
