@@ -23,7 +23,7 @@
 //! ```
 
 use crate::geo::Position;
-use crate::link::{Event, Link, QueueFull};
+use crate::link::{Aim, AimError, AimState, Event, Link, QueueFull};
 use crate::time::Instant;
 use crate::wire::control::{Command, Rate};
 use crate::wire::postback::{GimbalType, Postback};
@@ -51,6 +51,20 @@ pub trait GimbalControl {
 
     /// The target being pointed at, if any.
     fn pointing_target(&self) -> Option<Position>;
+
+    /// Holds the gimbal at an orientation in the earth or the vehicle frame, closed loop
+    /// (see [`Link::aim`]).
+    fn aim(&mut self, aim: Aim, now: Instant) -> Result<(), AimError>;
+
+    /// Stops holding an aim; the gimbal keeps its last command.
+    fn stop_aiming(&mut self);
+
+    /// The aim held (by [`GimbalControl::aim`] or a point-at) and how it stands.
+    fn aim_state(&self) -> Option<AimState>;
+
+    /// Whether the gimbal's yaw is held in the earth frame (an earth-frame aim or a
+    /// point-at).
+    fn holds_earth_yaw(&self) -> bool;
 
     /// The vehicle's attitude, measured at `stamp`: pushed to the gimbal where the
     /// transport carries vehicle frames (CAN), kept for point-at otherwise (the UART).
@@ -117,6 +131,22 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
         Link::pointing_target(self)
     }
     #[inline]
+    fn aim(&mut self, aim: Aim, now: Instant) -> Result<(), AimError> {
+        Link::aim(self, aim, now)
+    }
+    #[inline]
+    fn stop_aiming(&mut self) {
+        Link::stop_aiming(self)
+    }
+    #[inline]
+    fn aim_state(&self) -> Option<AimState> {
+        Link::aim_state(self)
+    }
+    #[inline]
+    fn holds_earth_yaw(&self) -> bool {
+        Link::holds_earth_yaw(self)
+    }
+    #[inline]
     fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
         Link::set_attitude(self, attitude, stamp)
     }
@@ -130,7 +160,7 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
     }
     #[inline]
     fn north_referenced(&self, now: Instant) -> bool {
-        self.attitude_is_pushed(now)
+        Link::north_referenced(self, now)
     }
     #[inline]
     fn next_event(&mut self) -> Option<Event> {
@@ -174,6 +204,22 @@ impl<D: Transport> GimbalControl for D {
     #[inline]
     fn pointing_target(&self) -> Option<Position> {
         self.link().pointing_target()
+    }
+    #[inline]
+    fn aim(&mut self, aim: Aim, now: Instant) -> Result<(), AimError> {
+        self.link_mut().aim(aim, now)
+    }
+    #[inline]
+    fn stop_aiming(&mut self) {
+        self.link_mut().stop_aiming()
+    }
+    #[inline]
+    fn aim_state(&self) -> Option<AimState> {
+        self.link().aim_state()
+    }
+    #[inline]
+    fn holds_earth_yaw(&self) -> bool {
+        self.link().holds_earth_yaw()
     }
     #[inline]
     fn set_attitude(&mut self, attitude: Attitude, stamp: Instant) {
@@ -231,8 +277,24 @@ mod tests {
         let now = Instant::from_millis(10);
         let mut can: Link = Link::new(Config::default());
         let mut uart: SerialLink = SerialLink::new(Config::default());
-        assert_eq!(drive(&mut can, now), (true, true));
+        // Queued, not yet sent: the gimbal does not have the attitude.
+        assert_eq!(drive(&mut can, now), (true, false));
         assert_eq!(drive(&mut uart, now), (true, false));
+        can.poll(now);
+        let mut ids = Vec::new();
+        while let Some(f) = can.next_transmit() {
+            ids.push(f.id);
+            can.transmit_done(None);
+        }
+        // The pitch first (control before vehicle), then the attitude: north from here.
+        assert_eq!(ids, [crate::wire::ids::CONTROL, crate::wire::ids::ATTITUDE]);
+        assert!(can.north_referenced(now));
+        uart.poll(now);
+        while !uart.transmit_bytes().is_empty() {
+            let n = uart.transmit_bytes().len();
+            uart.transmit_written(n);
+        }
+        assert!(!uart.north_referenced(now), "never on the UART");
         assert!(!can.is_link_up() && !uart.is_link_up());
     }
 }

@@ -1,13 +1,14 @@
 //! Point-at in closed loop: the vehicle orbits a ground target at 200 m while the driver
-//! keeps the simulated gimbal on it. The simulator's reported heading and pitch must stay
-//! within 1° of the true bearing and elevation (exact WGS84) once settled.
+//! keeps the simulated gimbal on it, whether the gimbal holds its north heading in lock or
+//! its motor angle. The simulator's reported heading and pitch must stay within 1° of the
+//! true bearing and elevation (exact WGS84) once settled.
 #![cfg(feature = "mock")]
 
 use embedded_can::{nb::Can, Frame as _};
 use idu_gimbal::geo::{look_at, Position};
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, MockFrame};
-use idu_gimbal::sim::{SimConfig, Simulator};
+use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::GimbalControl;
 use idu_gimbal::{Gimbal, Instant};
@@ -35,10 +36,14 @@ fn angle_diff(a: f64, b: f64) -> f64 {
     d.min(360.0 - d)
 }
 
-fn fly(config: Config, push_attitude_to_gimbal: bool) -> (usize, f64, f64) {
+fn fly(config: Config, push_attitude_to_gimbal: bool, holds: LockHolds) -> (usize, f64, f64) {
     let bus: Bus<2, 64> = Bus::new(11);
     let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), config);
-    let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
+    let sim_config = SimConfig {
+        lock_holds: holds,
+        ..SimConfig::default()
+    };
+    let mut sim = Simulator::new(sim_config, Instant::from_millis(0));
     let mut sim_can = bus.endpoint(1).unwrap();
     let target = Position::new(TARGET.0, TARGET.1, TARGET.2).unwrap();
     gimbal.point_at(target);
@@ -81,11 +86,16 @@ fn fly(config: Config, push_attitude_to_gimbal: bool) -> (usize, f64, f64) {
 
 #[test]
 fn orbit_at_200_m_north_referenced() {
-    let (checked, worst_heading, worst_pitch) = fly(Config::default(), true);
-    println!("north-referenced: {checked} postbacks, worst heading error {worst_heading:.3}°, pitch {worst_pitch:.3}°");
-    assert!(checked > 400);
-    assert!(worst_heading < 1.0, "heading off by {worst_heading}°");
-    assert!(worst_pitch < 1.0, "pitch off by {worst_pitch}°");
+    for holds in [LockHolds::North, LockHolds::Motor] {
+        let (checked, worst_heading, worst_pitch) = fly(Config::default(), true, holds);
+        println!("north-referenced, lock holds {holds:?}: {checked} postbacks, worst heading error {worst_heading:.3}°, pitch {worst_pitch:.3}°");
+        assert!(checked > 400);
+        assert!(
+            worst_heading < 1.0,
+            "{holds:?}: heading off by {worst_heading}°"
+        );
+        assert!(worst_pitch < 1.0, "{holds:?}: pitch off by {worst_pitch}°");
+    }
 }
 
 #[test]
@@ -98,6 +108,7 @@ fn orbit_at_200_m_nose_referenced() {
             ..Config::default()
         },
         false,
+        LockHolds::North,
     );
     println!("nose-referenced: {checked} postbacks, worst heading error {worst_heading:.3}°, pitch {worst_pitch:.3}°");
     assert!(checked > 400);

@@ -241,6 +241,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                         panel.last_sent = "rate 0 0".into();
                     }
                     Event::TargetUnreachable { .. } => {}
+                    Event::AimNotReached => panel.last_event = "aim not reached".into(),
                 }
                 changed = true;
             }

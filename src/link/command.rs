@@ -1,11 +1,14 @@
 //! Commands and text into the transmit queue.
 
 use super::*;
+use crate::wire::control::DualLightCommand;
 
 impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Queues a command. A pointing command (see [`Command::is_pointing`]) ends a rate hold
-    /// (without a zero-rate command: it is the gimbal's new instruction) or a point-at. A
-    /// full queue hands the command back and ends nothing.
+    /// (without a zero-rate command: it is the gimbal's new instruction), an aim or a
+    /// point-at, except start tracking, to which an aim or a point-at yields until the
+    /// tracker lets go (see [`AimState::yielded_to_tracker`]); stop tracking gives the
+    /// gimbal back to it. A full queue hands the command back and ends nothing.
     pub fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         let command = command.into();
         if self
@@ -16,10 +19,25 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             return Err(QueueFull(command));
         }
-        if command.is_pointing() {
-            self.steering = Steering::Manual;
-            // A zero-rate frame still waiting would arrive after this command and undo it.
-            self.tx.cancel_zero_rate();
+        let tracker = |c: &Command| match c {
+            Command::Gimbal(GimbalCommand::StartTracking(_))
+            | Command::DualLight(DualLightCommand::StartTracking(_)) => Some(true),
+            Command::Gimbal(GimbalCommand::StopTracking)
+            | Command::DualLight(DualLightCommand::StopTracking) => Some(false),
+            _ => None,
+        };
+        match tracker(&command) {
+            // An aim or a point-at yields to the tracker rather than ending: the setpoint
+            // stream that keeps giving the same aim must not take the gimbal back from it.
+            Some(true) if self.yield_to_tracker() => self.tx.cancel_zero_rate(),
+            Some(false) => self.take_back_from_tracker(),
+            _ if command.is_pointing() => {
+                self.steering = Steering::Manual;
+                // A zero-rate frame still waiting would arrive after this command and undo
+                // it.
+                self.tx.cancel_zero_rate();
+            }
+            _ => {}
         }
         Ok(())
     }

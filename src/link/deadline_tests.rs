@@ -206,8 +206,12 @@ enum Op {
     Rate(i16),
     StopRate,
     Pitch,
-    Vehicle { stamp_back: u32 },
-    Gps { stamp_back: u32 },
+    Vehicle {
+        stamp_back: u32,
+    },
+    Gps {
+        stamp_back: u32,
+    },
     Postback,
     BadPostback,
     PostbackFrame(u8),
@@ -215,6 +219,17 @@ enum Op {
     PointAt,
     StopPointing,
     Text,
+    Aim {
+        earth: bool,
+        yaw: u16,
+        pitch: i16,
+    },
+    StopAim,
+    PostbackOf {
+        motor: i16,
+        mode: u8,
+        tracking: bool,
+    },
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -231,6 +246,11 @@ fn op() -> impl Strategy<Value = Op> {
         1 => Just(Op::PointAt),
         1 => Just(Op::StopPointing),
         1 => Just(Op::Text),
+        2 => (any::<bool>(), 0u16..=3600, -1000i16..=600)
+            .prop_map(|(earth, yaw, pitch)| Op::Aim { earth, yaw, pitch }),
+        1 => Just(Op::StopAim),
+        2 => (-17_000i16..=17_000, 0u8..5, any::<bool>())
+            .prop_map(|(motor, mode, tracking)| Op::PostbackOf { motor, mode, tracking }),
     ]
 }
 
@@ -296,6 +316,34 @@ fn apply<const Q: usize, const T: usize>(link: &mut Link<Q, T>, op: &Op, now: In
         Op::StopPointing => link.stop_pointing(),
         Op::Text => {
             let _ = link.send_text(b"HELLO");
+        }
+        Op::Aim { earth, yaw, pitch } => {
+            let h = crate::wire::control::Heading::from_deci(yaw).unwrap();
+            let aim = crate::link::Aim {
+                yaw: if earth {
+                    crate::link::Yaw::Earth(h)
+                } else {
+                    crate::link::Yaw::Vehicle(h)
+                },
+                pitch: Pitch::from_deci(pitch).unwrap(),
+            };
+            let _ = link.aim(aim, now);
+        }
+        Op::StopAim => link.stop_aiming(),
+        Op::PostbackOf {
+            motor,
+            mode,
+            tracking,
+        } => {
+            let p = Postback {
+                motor_heading: motor,
+                mode: crate::wire::postback::ControlMode::from_code(mode),
+                tracking,
+                ..Postback::default()
+            };
+            for d in p.to_can_frames() {
+                link.receive(ids::POSTBACK, &d, now);
+            }
         }
     }
 }

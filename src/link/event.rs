@@ -16,7 +16,8 @@
 ///   more changes than that merge into the net change (down, up, down shows as down).
 /// - [`Event::TargetUnreachable`] carries the latest elevation reported.
 ///
-/// Taken in this order: link transitions, postback, rate hold expired, target unreachable.
+/// Taken in this order: link transitions, postback, rate hold expired, target unreachable,
+/// aim not reached.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
@@ -36,18 +37,26 @@ pub enum Event {
         /// The elevation the target needs, in 0.01°.
         elevation_cdeg: i16,
     },
+    /// An aim held ([`Link::aim`](super::Link::aim), [`Link::point_at`](super::Link::point_at))
+    /// was not reached after [`aim::ATTEMPTS`](super::aim::ATTEMPTS) re-commands; see
+    /// [`Link::aim_state`](super::Link::aim_state).
+    AimNotReached,
 }
 
 // Events waiting, in the order they are taken.
 const POSTBACK: u8 = 1 << 0;
 const RATE_HOLD_EXPIRED: u8 = 1 << 1;
 const TARGET_UNREACHABLE: u8 = 1 << 2;
-const EVENTS: u8 = POSTBACK | RATE_HOLD_EXPIRED | TARGET_UNREACHABLE;
+const AIM_NOT_REACHED: u8 = 1 << 6;
+const EVENTS: u8 = POSTBACK | RATE_HOLD_EXPIRED | TARGET_UNREACHABLE | AIM_NOT_REACHED;
 // The link's state, the state the application was last told, and whether the link left
 // that state and came back since.
 const UP: u8 = 1 << 3;
 const TOLD_UP: u8 = 1 << 4;
 const RETURNED: u8 = 1 << 5;
+// What the steering has not yet seen (`Status::steering`): a postback, the link coming up.
+const FRESH_POSTBACK: u8 = 1 << 0;
+const CAME_UP: u8 = 1 << 1;
 
 /// The link's state and the events waiting (see [`Event`]). Link transitions are not
 /// stored as events: [`Status::take`] derives them from the state the application was last
@@ -55,6 +64,8 @@ const RETURNED: u8 = 1 << 5;
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 pub(crate) struct Status {
     flags: u8,
+    /// For the steering, apart from the application's events (in what was padding).
+    steering: u8,
     elevation_cdeg: i16,
 }
 
@@ -63,8 +74,23 @@ impl Status {
     pub(crate) const fn new() -> Self {
         Status {
             flags: 0,
+            steering: 0,
             elevation_cdeg: 0,
         }
+    }
+
+    /// Whether a postback arrived since the steering last asked.
+    pub(crate) fn take_fresh_postback(&mut self) -> bool {
+        let fresh = self.steering & FRESH_POSTBACK != 0;
+        self.steering &= !FRESH_POSTBACK;
+        fresh
+    }
+
+    /// Whether the link came up since the steering last asked.
+    pub(crate) fn take_came_up(&mut self) -> bool {
+        let came = self.steering & CAME_UP != 0;
+        self.steering &= !CAME_UP;
+        came
     }
 
     /// Whether the link is up.
@@ -82,6 +108,9 @@ impl Status {
             return;
         }
         self.flags ^= UP;
+        if up {
+            self.steering |= CAME_UP;
+        }
         if up == self.told_up() {
             // Back where the application last saw it: it must still see it leave and return.
             self.flags |= RETURNED;
@@ -92,12 +121,16 @@ impl Status {
     /// transitions come from [`Status::set_up`] instead.
     pub(crate) fn raise(&mut self, event: Event) {
         self.flags |= match event {
-            Event::Postback => POSTBACK,
+            Event::Postback => {
+                self.steering |= FRESH_POSTBACK;
+                POSTBACK
+            }
             Event::RateHoldExpired => RATE_HOLD_EXPIRED,
             Event::TargetUnreachable { elevation_cdeg } => {
                 self.elevation_cdeg = elevation_cdeg;
                 TARGET_UNREACHABLE
             }
+            Event::AimNotReached => AIM_NOT_REACHED,
             Event::LinkUp | Event::LinkDown => 0,
         };
     }
@@ -136,7 +169,8 @@ impl Status {
             return Some(if told { Event::LinkDown } else { Event::LinkUp });
         }
         let events = self.flags & EVENTS;
-        // The lowest waiting bit: postback, rate hold expired, target unreachable.
+        // The lowest waiting bit: postback, rate hold expired, target unreachable, aim not
+        // reached.
         let bit = events & events.wrapping_neg();
         self.flags &= !bit;
         match bit {
@@ -145,6 +179,7 @@ impl Status {
             TARGET_UNREACHABLE => Some(Event::TargetUnreachable {
                 elevation_cdeg: self.elevation_cdeg,
             }),
+            AIM_NOT_REACHED => Some(Event::AimNotReached),
             _ => None,
         }
     }

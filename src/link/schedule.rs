@@ -4,7 +4,7 @@ use super::*;
 
 impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Runs the schedules up to `now`: vehicle pushes, the rate hold and its dead-man, link
-    /// health, point-at, and expiry of partial postbacks.
+    /// health, an aim's closed loop or a point-at, and expiry of partial postbacks.
     ///
     /// When nothing is due and nothing changed since the last poll, this returns after one
     /// comparison.
@@ -131,7 +131,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
         self.poll_rate(now, &mut earliest);
         self.poll_vehicle(now, &mut earliest);
-        self.poll_point(now, &mut earliest);
+        self.poll_steering(now, &mut earliest);
         if let Some((_, at)) = self.latest {
             if self.status.is_up() && now.millis_since(at) > u32::from(self.config.link_timeout_ms)
             {

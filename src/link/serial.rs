@@ -383,7 +383,7 @@ mod tests {
             Some(3_000)
         );
         // The gimbal gets no attitude, so it references headings to the nose.
-        assert!(!l.link().attitude_is_pushed(T0));
+        assert!(!l.link().north_referenced(T0));
     }
 
     #[test]

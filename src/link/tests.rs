@@ -471,19 +471,28 @@ mod point_at {
         let target = Position::new(47.001, 8.001, 400.0).unwrap();
         vehicle(&mut link, 0, 47.0, 8.0, 500.0, 10.0);
         link.point_at(target);
-        let log = run(&mut link, 0, 1, 1);
+        let log = run(&mut link, 0, 60, 1);
         let expected = look_at(&Position::new(47.0, 8.0, 500.0).unwrap(), &target).unwrap();
+        let heading = |deg: f64| {
+            Command::from(GimbalCommand::Heading(
+                Heading::new(deg.rem_euclid(360.0) as f32).unwrap(),
+            ))
+        };
+        let pitch = Command::from(GimbalCommand::Pitch(
+            Pitch::new(expected.elevation_deg as f32).unwrap(),
+        ));
         assert_eq!(
-            aims(&log).into_iter().map(|(_, c)| c).collect::<Vec<_>>(),
+            aims(&log),
             [
-                Command::from(GimbalCommand::Heading(
-                    Heading::new(expected.bearing_deg as f32).unwrap()
-                )),
-                Command::from(GimbalCommand::Pitch(
-                    Pitch::new(expected.elevation_deg as f32).unwrap()
-                )),
+                // Before the attitude has reached the gimbal it is nose-referenced: the
+                // bearing less the vehicle's 10°, sent ahead of the attitude frame.
+                (0, heading(expected.bearing_deg - 10.0)),
+                (0, pitch),
+                // The attitude went out at 0: the loop's next look (50 ms) finds the gimbal
+                // north-referenced and sends the bearing itself.
+                (50, heading(expected.bearing_deg)),
+                (50, pitch),
             ],
-            "north-referenced while attitude is pushed"
         );
     }
 
@@ -491,15 +500,17 @@ mod point_at {
     fn dead_band_and_10_hz() {
         let mut link: Link = Link::new(Config::default());
         link.point_at(Position::new(47.001, 8.0, 400.0).unwrap());
-        // A static vehicle: one aim, then nothing for 2 s.
+        // A static vehicle: one aim, nose-referenced until the attitude has reached the
+        // gimbal and north-referenced after, then nothing for 2 s.
         let mut log = Vec::new();
         for t in (0..2000).step_by(10) {
             vehicle(&mut link, t, 47.0, 8.0, 500.0, 0.0);
             log.extend(run(&mut link, t, t + 10, 1));
         }
-        assert_eq!(aims(&log).len(), 2);
-        // A vehicle moving east at 20 m/s: the bearing changes by more than 0.1° per 100 ms,
-        // so the aim is re-sent at 10 Hz, never faster.
+        let times: Vec<u32> = aims(&log).iter().map(|(t, _)| *t).collect();
+        assert_eq!(times, [0, 0, 50, 50]);
+        // A vehicle moving east at 20 m/s: the bearing changes by more than the dead-band
+        // (0.2°) per 100 ms, so the aim is re-sent at 10 Hz, never faster.
         let mut log = Vec::new();
         for t in (2000..4000u32).step_by(10) {
             let east_m = f64::from(t - 2000) * 0.02;
@@ -607,6 +618,20 @@ mod fast_path {
         LatePostback(u32),
         PointAt,
         Text,
+        Aim {
+            earth: bool,
+            yaw: u16,
+            pitch: i16,
+        },
+        StopAim,
+        /// A postback with these angles, mode and tracking flag: judged by an aim held.
+        PostbackOf {
+            motor: i16,
+            pitch: i16,
+            mode: u8,
+            tracking: bool,
+        },
+        Tracking(bool),
     }
 
     fn op() -> impl Strategy<Value = Op> {
@@ -621,6 +646,13 @@ mod fast_path {
             1 => (0u32..3000).prop_map(Op::LatePostback),
             1 => Just(Op::PointAt),
             1 => Just(Op::Text),
+            2 => (any::<bool>(), 0u16..=3600, -1000i16..=600)
+                .prop_map(|(earth, yaw, pitch)| Op::Aim { earth, yaw, pitch }),
+            1 => Just(Op::StopAim),
+            3 => (-17_000i16..=17_000, -11_000i16..=6_000, 0u8..5, any::<bool>()).prop_map(
+                |(motor, pitch, mode, tracking)| Op::PostbackOf { motor, pitch, mode, tracking }
+            ),
+            1 => any::<bool>().prop_map(Op::Tracking),
         ]
     }
 
@@ -658,6 +690,48 @@ mod fast_path {
             Op::PointAt => link.point_at(Position::new(47.001, 8.001, 400.0).unwrap()),
             Op::Text => {
                 let _ = link.send_text(b"HELLO");
+            }
+            Op::Aim { earth, yaw, pitch } => {
+                let h = crate::wire::control::Heading::from_deci(yaw).unwrap();
+                let aim = crate::link::Aim {
+                    yaw: if earth {
+                        crate::link::Yaw::Earth(h)
+                    } else {
+                        crate::link::Yaw::Vehicle(h)
+                    },
+                    pitch: Pitch::from_deci(pitch).unwrap(),
+                };
+                let _ = link.aim(aim, now);
+            }
+            Op::StopAim => link.stop_aiming(),
+            Op::PostbackOf {
+                motor,
+                pitch,
+                mode,
+                tracking,
+            } => {
+                let p = Postback {
+                    motor_heading: motor,
+                    pitch,
+                    mode: crate::wire::postback::ControlMode::from_code(mode),
+                    tracking,
+                    ..Postback::default()
+                };
+                for d in p.to_can_frames() {
+                    link.receive(ids::POSTBACK, &d, now);
+                }
+            }
+            Op::Tracking(start) => {
+                let c = if start {
+                    GimbalCommand::StartTracking(crate::wire::control::TrackingBox::from_raw(
+                        crate::wire::control::ImagePoint::new(100, 100).unwrap(),
+                        1,
+                        1,
+                    ))
+                } else {
+                    GimbalCommand::StopTracking
+                };
+                let _ = link.send(c);
             }
         }
     }

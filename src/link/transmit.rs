@@ -44,7 +44,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 queue::Next::ZeroRate => Some(Frame::new(ids::CONTROL, queue::zero_rate())),
                 // Only a slot holding a value is ever marked (see `requeue`); were one not,
                 // the frames behind it would still come out now.
-                queue::Next::Vehicle(slot) => self.vehicle.value(slot).map(|v| v.to_frame()),
+                queue::Next::Vehicle(slot) => {
+                    if slot == ATTITUDE {
+                        // Known as reached only when the driver takes it.
+                        self.vehicle.due |= vehicle::ATTITUDE_TAKEN;
+                    }
+                    self.vehicle.value(slot).map(|v| v.to_frame())
+                }
                 queue::Next::Text(t) => Some(Frame::new(
                     if t.last { ids::TEXT_END } else { ids::TEXT },
                     t.data,
@@ -67,6 +73,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     #[inline]
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
+        if self.vehicle.due & vehicle::ATTITUDE_TAKEN != 0 {
+            self.attitude_handed_over();
+        }
         if let Some(frame) = displaced {
             self.displaced(frame);
         }
@@ -92,6 +101,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// The driver did not take the frame last taken (it was busy or failed): it goes back
     /// to the front of its class.
     pub fn transmit_refused(&mut self, frame: Frame) {
+        self.vehicle.due &= !vehicle::ATTITUDE_TAKEN;
         if let Requeued::NoRoom | Requeued::Foreign = self.requeue(frame) {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
         }

@@ -16,9 +16,22 @@ pub(super) struct VehicleSources {
     /// Bit `i`: slot `i` holds a value.
     pub(super) has: u8,
     /// Bit `i`: push slot `i` at the next poll, whatever `next` says (new data after none
-    /// or stale data).
+    /// or stale data). Bit [`ATTITUDE_TAKEN`]: the frame just taken for transmission is an
+    /// attitude frame.
     pub(super) due: u8,
+    /// When an attitude frame was last handed to the transport (with [`ATTITUDE_SENT`] in
+    /// `has`): the gimbal has the vehicle's attitude from then on.
+    pub(super) attitude_sent: Instant,
+    /// That frame's heading, 0.01°: the vehicle's heading as the gimbal knows it, which a
+    /// north-referenced heading command is turned into a motor angle with.
+    pub(super) attitude_sent_cdeg: i16,
 }
+
+/// `VehicleSources::due`: the frame last taken for transmission is an attitude frame.
+pub(super) const ATTITUDE_TAKEN: u8 = 1 << 3;
+/// `VehicleSources::has`: an attitude frame was handed to the transport, at
+/// `attitude_sent`.
+pub(super) const ATTITUDE_SENT: u8 = 1 << 3;
 
 impl VehicleSources {
     pub(super) const EMPTY: Self = VehicleSources {
@@ -29,6 +42,8 @@ impl VehicleSources {
         next: [Instant::from_millis(0); 3],
         has: 0,
         due: 0b111,
+        attitude_sent: Instant::from_millis(0),
+        attitude_sent_cdeg: 0,
     };
 
     pub(super) fn has(&self, slot: VehicleSlot) -> bool {
@@ -130,10 +145,41 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             .is_some_and(|stamp| Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms))
     }
 
-    /// Whether attitude is being pushed (its push is enabled and the data fresh), so that
-    /// the gimbal references its heading to north rather than to the nose.
-    pub fn attitude_is_pushed(&self, now: Instant) -> bool {
-        self.config.attitude_period_ms != 0 && self.is_fresh(ATTITUDE, now)
+    /// Whether the gimbal references headings to north now rather than to the nose: its
+    /// attitude push is on, the attitude set is fresh, and an attitude frame has reached
+    /// the transport (handed to the CAN driver, [`Link::transmit_done`]) within
+    /// `vehicle_stale_ms`. Attitude merely queued is not enough: a heading command queued
+    /// beside it goes first (control frames outrank vehicle frames in the queue and on the
+    /// bus), and the gimbal would take it nose-referenced. So a heading computed now is
+    /// computed in the reference the gimbal will apply when it arrives. (Two frames already
+    /// in the CAN controller's mailboxes go out by ID, control first: only a bus too busy
+    /// to send an attitude frame before the next poll can still reorder them, and an aim's
+    /// closed loop then sets the gimbal right at the next postback.)
+    ///
+    /// Always false on the UART, which carries no vehicle frames.
+    pub fn north_referenced(&self, now: Instant) -> bool {
+        self.config.attitude_period_ms != 0
+            && self.vehicle.has & ATTITUDE_SENT != 0
+            && Self::age(self.vehicle.attitude_sent, now) <= u32::from(self.config.vehicle_stale_ms)
+            && self.is_fresh(ATTITUDE, now)
+    }
+
+    /// The frame last taken was handed to the transport, and it was an attitude frame
+    /// (out of line: once per push).
+    #[inline(never)]
+    pub(super) fn attitude_handed_over(&mut self) {
+        self.vehicle.due &= !ATTITUDE_TAKEN;
+        self.vehicle.has |= ATTITUDE_SENT;
+        self.vehicle.attitude_sent = self.last_poll;
+        // The frame just taken was built from the value held now: nothing set it since.
+        self.vehicle.attitude_sent_cdeg = self.vehicle.attitude.heading_centideg();
+    }
+
+    /// The vehicle's heading as the gimbal last received it, 0.01°, while it is
+    /// north-referenced.
+    pub(super) fn gimbal_vehicle_heading(&self, now: Instant) -> Option<i16> {
+        self.north_referenced(now)
+            .then_some(self.vehicle.attitude_sent_cdeg)
     }
 
     /// The latest vehicle attitude set, fresh or not.

@@ -250,6 +250,7 @@ pub fn events<G: idu_gimbal::GimbalControl>(gimbal: &mut G, now: idu_gimbal::Ins
             Event::LinkDown => 2,
             Event::RateHoldExpired => 3,
             Event::TargetUnreachable { elevation_cdeg } => elevation_cdeg as u32,
+            Event::AimNotReached => 4,
         });
     }
     output(u32::from(gimbal.is_link_up()));

@@ -141,6 +141,7 @@ fn log_event(link: &Link, event: Event, now: Instant) {
                 elevation_cdeg
             )
         }
+        Event::AimNotReached => warn!("the gimbal did not reach the aim held"),
     }
 }
 

@@ -136,5 +136,6 @@ pub fn log_event(event: Event, latest: Option<Postback>) {
             "look-at target out of the gimbal's pitch range (needs {=i16} cdeg)",
             elevation_cdeg
         ),
+        Event::AimNotReached => defmt::warn!("the gimbal did not reach the aim held"),
     }
 }

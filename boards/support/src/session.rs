@@ -264,6 +264,9 @@ impl<R: Rig, W: Write> Session<R, W> {
                     let _ = writeln!(self.out, "rate hold released: dead-man sent zero rate");
                 }
                 Event::TargetUnreachable { .. } => {}
+                Event::AimNotReached => {
+                    let _ = writeln!(self.out, "aim not reached");
+                }
             }
         }
         self.rig.run_gimbal(now);
