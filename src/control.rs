@@ -42,6 +42,9 @@ pub trait GimbalControl {
     /// Ends a rate hold with one zero-rate command (see [`Link::stop_rate`]).
     fn stop_rate(&mut self);
 
+    /// Whether a rate hold is active.
+    fn is_rate_holding(&self) -> bool;
+
     /// Keeps the gimbal pointed at a ground target while the vehicle moves (see
     /// [`Link::point_at`]); it needs the vehicle's attitude, GPS and altitude, fresh.
     fn point_at(&mut self, target: Position);
@@ -119,6 +122,10 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
         Link::stop_rate(self)
     }
     #[inline]
+    fn is_rate_holding(&self) -> bool {
+        Link::is_rate_holding(self)
+    }
+    #[inline]
     fn point_at(&mut self, target: Position) {
         Link::point_at(self, target)
     }
@@ -192,6 +199,10 @@ impl<D: Transport> GimbalControl for D {
     #[inline]
     fn stop_rate(&mut self) {
         self.link_mut().stop_rate()
+    }
+    #[inline]
+    fn is_rate_holding(&self) -> bool {
+        self.link().is_rate_holding()
     }
     #[inline]
     fn point_at(&mut self, target: Position) {

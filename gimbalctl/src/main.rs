@@ -149,6 +149,9 @@ enum Top {
         /// Camera family: its streams, and with dual-light the thermal stream and settings (a2000, x3, argus, dual-light or f10)
         #[arg(long, value_name = "FAMILY", default_value = "x3")]
         camera: String,
+        /// With --sim: what the simulated gimbal holds in lock while the vehicle turns, its north heading or its motor angle (the vendor document does not say)
+        #[arg(long, value_name = "WHAT", value_enum, default_value_t = mavlink::SimLock::North)]
+        sim_lock_holds: mavlink::SimLock,
         /// Exit after MS milliseconds (for scripted tests)
         #[arg(long, value_name = "MS")]
         exit_after_ms: Option<u64>,
@@ -251,6 +254,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             autopilot_serial,
             system_id,
             camera,
+            sim_lock_holds,
             exit_after_ms,
         } => {
             let target = if sim {
@@ -275,6 +279,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 },
                 system_id,
                 camera: &camera,
+                sim_lock_holds,
                 exit_after_ms,
             })
         }

@@ -37,7 +37,7 @@ use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant as StdInstant};
 
 use idu_gimbal::link::{Config, Link};
-use idu_gimbal::sim::{SimConfig, Simulator};
+use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
@@ -84,12 +84,22 @@ pub enum Autopilot<'a> {
     Serial(&'a SerialSpec),
 }
 
+/// What the simulated gimbal holds in lock while the vehicle turns (`--sim-lock-holds`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, clap::ValueEnum)]
+pub enum SimLock {
+    /// Its north heading, from the pushed attitude.
+    North,
+    /// Its motor angle: it turns with the vehicle.
+    Motor,
+}
+
 /// What `gimbalctl mavlink` was asked to do.
 pub struct Options<'a> {
     pub gimbal: Gimbal<'a>,
     pub autopilot: Autopilot<'a>,
     pub system_id: Option<u8>,
     pub camera: &'a str,
+    pub sim_lock_holds: SimLock,
     pub exit_after_ms: Option<u64>,
 }
 
@@ -108,6 +118,23 @@ trait Pump {
 struct SimSide {
     sim: Simulator,
     watch: SimWatch,
+    /// Lines typed on stdin (`reboot`), from a thread that reads them.
+    stdin: std::sync::mpsc::Receiver<String>,
+}
+
+/// Reads stdin's lines on a thread of their own (the loop never blocks on them): how a
+/// user or a test drives the simulated gimbal (`reboot`). Ends at stdin's end.
+fn stdin_lines() -> std::sync::mpsc::Receiver<String> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
 }
 
 impl Pump for SimSide {
@@ -125,6 +152,21 @@ impl Pump for SimSide {
         }
         for change in side.watch.changes(side.sim.state()) {
             eprintln!("gimbalctl mavlink: {change}");
+        }
+        while let Ok(line) = side.stdin.try_recv() {
+            match line.trim() {
+                "reboot" => {
+                    side.sim.reboot(now);
+                    eprintln!(
+                        "gimbalctl mavlink: simulated gimbal: rebooting ({} ms without postbacks)",
+                        side.sim.config().boot_ms
+                    );
+                }
+                "" => {}
+                other => {
+                    eprintln!("gimbalctl mavlink: stdin: unknown command {other:?} (known: reboot)")
+                }
+            }
         }
         Ok(())
     }
@@ -211,11 +253,16 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
                 } else {
                     SimConfig::default().gimbal_type
                 },
+                lock_holds: match opts.sim_lock_holds {
+                    SimLock::North => LockHolds::North,
+                    SimLock::Motor => LockHolds::Motor,
+                },
                 ..SimConfig::default()
             };
             let side = SimSide {
                 sim: Simulator::new(sim_config, now()),
                 watch: SimWatch::default(),
+                stdin: stdin_lines(),
             };
             announce(&where_, "the simulated gimbal (in-process, CAN)")?;
             serve(bridge, side, port, now, opts.exit_after_ms)

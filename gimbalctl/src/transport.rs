@@ -222,9 +222,6 @@ pub trait Session: GimbalControl {
     /// Whether anything waits to be written.
     fn has_transmit(&self) -> bool;
 
-    /// Whether the link holds a rate (its dead-man running).
-    fn is_rate_holding(&self) -> bool;
-
     /// Queues a text (CAN only; the serial link refuses it).
     fn send_text(&mut self, text: &[u8]) -> Result<(), String>;
 

@@ -40,6 +40,18 @@ pub enum CaptureError {
     Interval,
 }
 
+/// Where an image is taken from: the vehicle's position and the camera's attitude.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub struct Vantage {
+    /// The vehicle's position: lat, lon (1e-7°), alt and relative alt (mm); `None` without
+    /// one.
+    pub position: Option<[i32; 4]>,
+    /// The camera's yaw from north and pitch from the horizon, 0.01° (the latest postback's
+    /// motor angle and pitch, with the vehicle's heading); `None` without a postback or a
+    /// fresh vehicle heading.
+    pub attitude: Option<(i16, i16)>,
+}
+
 /// One image taken: what `CAMERA_IMAGE_CAPTURED` reports of it.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Image {
@@ -47,9 +59,8 @@ pub struct Image {
     pub index: i32,
     /// When it was commanded.
     pub at: Instant,
-    /// The vehicle position then: lat, lon (1e-7°), alt and relative alt (mm); `None`
-    /// without one.
-    pub position: Option<[i32; 4]>,
+    /// Where it was taken from.
+    pub vantage: Vantage,
 }
 
 /// What a start command asks for, validated.
@@ -193,11 +204,11 @@ impl Capture {
     /// The image due was commanded at `now`: records it and schedules the next. The next
     /// is due one interval after this one was due, so a late poll does not shift the
     /// schedule (unless it is more than an interval late: then one interval from now).
-    pub fn taken(&mut self, now: Instant, position: Option<[i32; 4]>) -> Image {
+    pub fn taken(&mut self, now: Instant, vantage: Vantage) -> Image {
         let image = Image {
             index: self.next_index,
             at: now,
-            position,
+            vantage,
         };
         self.next_index = self.next_index.wrapping_add(1);
         if self.history.is_full() {
@@ -311,7 +322,7 @@ mod tests {
         let mut taken = Vec::new();
         for ms in 1_000..5_000 {
             if c.due(t(ms)) {
-                taken.push((c.taken(t(ms), None).index, ms));
+                taken.push((c.taken(t(ms), Vantage::default()).index, ms));
             }
         }
         assert_eq!(taken, [(0, 1_000), (1, 1_500), (2, 2_000)]);
@@ -329,7 +340,7 @@ mod tests {
         let mut ms = start;
         for _ in 0..600 {
             if c.due(t(ms)) {
-                c.taken(t(ms), None);
+                c.taken(t(ms), Vantage::default());
                 times.push(ms.wrapping_sub(start));
             }
             ms = ms.wrapping_add(7);
@@ -348,7 +359,7 @@ mod tests {
         let mut c = Capture::new();
         let once = Request::from_params(0.0, 1.0, 1.0).unwrap();
         assert_eq!(c.start(once, t(0)), Start::Started);
-        c.taken(t(0), None);
+        c.taken(t(0), Vantage::default());
         assert!(!c.due(t(1)));
         assert_eq!(c.start(once, t(5)), Start::Repeated);
         assert!(!c.due(t(6)));
@@ -356,9 +367,9 @@ mod tests {
         assert_eq!(c.start(next, t(10)), Start::Started);
         // Sequence 0 means "none given": never taken for a repeat.
         let plain = Request::from_params(0.0, 1.0, 0.0).unwrap();
-        c.taken(t(10), None);
+        c.taken(t(10), Vantage::default());
         assert_eq!(c.start(plain, t(20)), Start::Started);
-        c.taken(t(20), None);
+        c.taken(t(20), Vantage::default());
         assert_eq!(c.start(plain, t(30)), Start::Started);
     }
 
@@ -367,13 +378,19 @@ mod tests {
         let mut c = Capture::new();
         for k in 0..20u32 {
             c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), t(k));
-            c.taken(t(k), Some([k as i32, 0, 0, 0]));
+            c.taken(
+                t(k),
+                Vantage {
+                    position: Some([k as i32, 0, 0, 0]),
+                    attitude: None,
+                },
+            );
         }
         assert_eq!(c.oldest_kept(), 4);
         let kept: Vec<i32> = c.history(0, i32::MAX).map(|i| i.index).collect();
         assert_eq!(kept, (4..20).collect::<Vec<_>>());
         let one: Vec<_> = c.history(7, 7).collect();
         assert_eq!(one.len(), 1);
-        assert_eq!(one[0].position, Some([7, 0, 0, 0]));
+        assert_eq!(one[0].vantage.position, Some([7, 0, 0, 0]));
     }
 }

@@ -18,12 +18,21 @@
 //! QGroundControl, which adds the vehicle heading to a vehicle-frame yaw
 //! (`src/Gimbal/GimbalController.cc`).
 //!
-//! Flags: `ROLL_LOCK` and `PITCH_LOCK` always (no roll axis; pitch is held to the
-//! horizon), `YAW_LOCK` while the postback's control mode holds the heading against the
-//! vehicle's turns (lock or full lock, not heading follow), `NEUTRAL` and `RETRACT` while
-//! the pose last commanded is the one they name and nothing has moved the gimbal since.
+//! Flags say what the device holds, as common.xml defines them and as PX4 (which copies
+//! them into `GIMBAL_MANAGER_STATUS`, read by QGroundControl) passes them on:
+//! - `YAW_IN_VEHICLE_FRAME` always: the quaternion's frame.
+//! - `YAW_LOCK` while the yaw is held in the earth frame ("lock yaw angle to absolute
+//!   angle relative to North"): an earth-frame setpoint, a region of interest, or an
+//!   earth-frame rate hold, which the link's closed loop keeps whatever the gimbal does in
+//!   lock; not while it follows the vehicle (a vehicle-frame setpoint, neutral, a
+//!   vehicle-frame rate, nothing commanded). The postback's control mode does not decide
+//!   it: the gimbal reports lock after any angle command, a vehicle-frame one included,
+//!   and the document does not say whether its lock holds north.
+//! - `ROLL_LOCK` and `PITCH_LOCK` always (no roll axis; pitch is held to the horizon).
+//! - `NEUTRAL` and `RETRACT` while the pose last commanded is the one they name and nothing
+//!   has moved the gimbal since.
 
-use idu_gimbal::wire::postback::{ControlMode, Postback};
+use idu_gimbal::wire::postback::Postback;
 use mavio::dialects::common::enums::GimbalDeviceFlags;
 
 use crate::attitude::{wrap_pi, YawPitch};
@@ -39,15 +48,25 @@ pub enum Pose {
     Other,
 }
 
-/// The status flags for the latest postback (`None`: none yet) and the pose.
-pub fn flags(postback: Option<&Postback>, pose: Pose) -> GimbalDeviceFlags {
+/// What the device holds, for the flags.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Held {
+    /// The pose last commanded.
+    pub pose: Pose,
+    /// The yaw is held in the earth frame (an earth-frame aim or rate, a region of
+    /// interest), not following the vehicle.
+    pub earth_yaw: bool,
+}
+
+/// The status flags for what the device holds.
+pub fn flags(held: Held) -> GimbalDeviceFlags {
     let mut f = GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME
         | GimbalDeviceFlags::ROLL_LOCK
         | GimbalDeviceFlags::PITCH_LOCK;
-    if postback.is_some_and(|p| matches!(p.mode, ControlMode::Lock | ControlMode::FullLock)) {
+    if held.earth_yaw {
         f |= GimbalDeviceFlags::YAW_LOCK;
     }
-    match pose {
+    match held.pose {
         Pose::Neutral => f |= GimbalDeviceFlags::NEUTRAL,
         Pose::Retracted => f |= GimbalDeviceFlags::RETRACT,
         Pose::Other => {}
@@ -56,20 +75,31 @@ pub fn flags(postback: Option<&Postback>, pose: Pose) -> GimbalDeviceFlags {
 }
 
 /// The status quaternion of a postback, in the vehicle frame (yaw = the motor angle from
-/// the nose, pitch from the horizon), and the flags.
-pub fn attitude(p: &Postback, pose: Pose) -> ([f32; 4], GimbalDeviceFlags) {
-    let q = YawPitch {
+/// the nose, pitch from the horizon).
+pub fn attitude(p: &Postback) -> [f32; 4] {
+    YawPitch {
         yaw_rad: wrap_pi(p.motor_heading_deg().to_radians()),
         pitch_rad: p.pitch_deg().to_radians(),
     }
-    .to_quaternion();
-    (q, flags(Some(p), pose))
+    .to_quaternion()
+}
+
+/// The camera's attitude in the earth frame (NED): the postback's motor angle turned by the
+/// vehicle's heading, `vehicle_yaw_rad`, and its pitch from the horizon (the gimbal holds
+/// roll level); `q_earth = q_delta_yaw · q_vehicle`, as common.xml relates the status's two
+/// frames.
+pub fn earth_attitude(p: &Postback, vehicle_yaw_rad: f32) -> [f32; 4] {
+    YawPitch {
+        yaw_rad: wrap_pi(p.motor_heading_deg().to_radians() + vehicle_yaw_rad),
+        pitch_rad: p.pitch_deg().to_radians(),
+    }
+    .to_quaternion()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use idu_gimbal::wire::postback::GimbalType;
+    use idu_gimbal::wire::postback::{ControlMode, GimbalType};
 
     fn postback(mode: ControlMode, pitch: i16, heading: u16, motor: i16) -> Postback {
         Postback {
@@ -86,10 +116,7 @@ mod tests {
     fn yaw_is_the_motor_angle_whatever_the_heading() {
         // Heading 100° (north-referenced) with the motor 30° right of the nose: the
         // vehicle points 70°; the status says 30° in the vehicle frame.
-        let (q, f) = attitude(
-            &postback(ControlMode::Lock, -4500, 10_000, 3_000),
-            Pose::Other,
-        );
+        let q = attitude(&postback(ControlMode::Lock, -4500, 10_000, 3_000));
         // By hand: yaw 30°, pitch −45°: w = cos15·cos(−22.5), x = −sin15·sin(−22.5),
         // y = cos15·sin(−22.5), z = sin15·cos(−22.5).
         let (c15, s15) = (0.965_925_8_f32, 0.258_819_04_f32);
@@ -98,24 +125,52 @@ mod tests {
         for (a, b) in q.iter().zip(expected) {
             assert!((a - b).abs() < 1e-6, "{q:?} vs {expected:?}");
         }
-        assert!(f.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME));
-        assert!(!f.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME));
-        assert!(f.contains(GimbalDeviceFlags::YAW_LOCK));
     }
 
     #[test]
-    fn yaw_lock_follows_the_postbacks_mode_and_the_pose_its_flag() {
-        let follow = postback(ControlMode::HeadingFollow, 0, 0, 0);
-        assert!(!flags(Some(&follow), Pose::Other).contains(GimbalDeviceFlags::YAW_LOCK));
-        let full = postback(ControlMode::FullLock, 0, 0, 0);
-        assert!(flags(Some(&full), Pose::Other).contains(GimbalDeviceFlags::YAW_LOCK));
-        let unknown = postback(ControlMode::Unknown(9), 0, 0, 0);
-        assert!(!flags(Some(&unknown), Pose::Other).contains(GimbalDeviceFlags::YAW_LOCK));
-        assert!(flags(None, Pose::Neutral).contains(GimbalDeviceFlags::NEUTRAL));
-        let r = flags(None, Pose::Retracted);
+    fn the_earth_attitude_adds_the_vehicle_heading_to_the_motor() {
+        // Motor 30° right, vehicle at 70°: the camera looks at 100° from north, 45° down.
+        // By hand: yaw 100°, pitch −45°: w = cos50·cos(−22.5), x = −sin50·sin(−22.5),
+        // y = cos50·sin(−22.5), z = sin50·cos(−22.5).
+        let q = earth_attitude(
+            &postback(ControlMode::Lock, -4500, 0, 3_000),
+            70f32.to_radians(),
+        );
+        let (c50, s50) = (0.642_787_6_f32, 0.766_044_4_f32);
+        let (c22, s22) = (0.923_879_5_f32, -0.382_683_43_f32);
+        let expected = [c50 * c22, -s50 * s22, c50 * s22, s50 * c22];
+        for (a, b) in q.iter().zip(expected) {
+            // f32 sine and cosine of the half angles: within 1e-6.
+            assert!((a - b).abs() < 1e-6, "{q:?} vs {expected:?}");
+        }
+        // Across north: motor −30°, vehicle at 10°: 340°, read back as −20°.
+        let q = earth_attitude(
+            &postback(ControlMode::Lock, 0, 0, -3_000),
+            10f32.to_radians(),
+        );
+        let a = YawPitch::from_quaternion(q).unwrap();
+        assert!((a.yaw_rad.to_degrees() + 20.0).abs() < 1e-4, "{a:?}");
+    }
+
+    #[test]
+    fn yaw_lock_says_the_yaw_is_held_in_the_earth_frame_and_the_pose_its_flag() {
+        let held = |pose, earth_yaw| flags(Held { pose, earth_yaw });
+        let follow = held(Pose::Other, false);
+        assert!(!follow.contains(GimbalDeviceFlags::YAW_LOCK));
+        assert!(follow.contains(
+            GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME
+                | GimbalDeviceFlags::ROLL_LOCK
+                | GimbalDeviceFlags::PITCH_LOCK
+        ));
+        assert!(!follow.contains(GimbalDeviceFlags::YAW_IN_EARTH_FRAME));
+        let lock = held(Pose::Other, true);
+        assert!(
+            lock.contains(GimbalDeviceFlags::YAW_LOCK | GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME)
+        );
+        assert!(held(Pose::Neutral, false).contains(GimbalDeviceFlags::NEUTRAL));
+        let r = held(Pose::Retracted, false);
         assert!(r.contains(GimbalDeviceFlags::RETRACT) && !r.contains(GimbalDeviceFlags::NEUTRAL));
-        assert!(!flags(None, Pose::Other)
-            .intersects(GimbalDeviceFlags::NEUTRAL | GimbalDeviceFlags::RETRACT));
+        assert!(!follow.intersects(GimbalDeviceFlags::NEUTRAL | GimbalDeviceFlags::RETRACT));
     }
 
     #[test]
@@ -126,7 +181,7 @@ mod tests {
             (-32_500, 6_000),
             (0, -11_000),
         ] {
-            let (q, _) = attitude(&postback(ControlMode::Lock, pitch, 0, motor), Pose::Other);
+            let q = attitude(&postback(ControlMode::Lock, pitch, 0, motor));
             let a = YawPitch::from_quaternion(q).unwrap();
             // f32 trigonometry: within 1e-5 rad (0.0006°), as in `attitude`'s tests.
             let motor_rad = wrap_pi((f32::from(motor) / 100.0).to_radians());

@@ -283,46 +283,96 @@ fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
 }
 
 #[test]
-fn the_status_flags_say_yaw_lock_neutral_and_retract_when_they_hold() {
+fn the_status_flags_say_what_the_device_holds_not_the_postbacks_mode() {
     use idu_gimbal::wire::postback::ControlMode;
     let mut b = bridge();
+    b.receive(&frame(AP, 0, &autopilot_state(30.0)), t(0));
+    // The gimbal reports lock after any angle command; what it holds is the setpoint's.
     let lock = Postback {
         mode: ControlMode::Lock,
         ..Postback::default()
     };
-    let follow = Postback::default();
-    assert!(status_after(&mut b, &lock, 0)
-        .flags
-        .contains(GimbalDeviceFlags::YAW_LOCK));
-    assert!(!status_after(&mut b, &follow, 10)
-        .flags
-        .contains(GimbalDeviceFlags::YAW_LOCK));
-    b.receive(
-        &frame(AP, 1, &set_attitude(GimbalDeviceFlags::NEUTRAL, 0.0, 0.0)),
-        t(20),
+    let yaw_lock = |s: &GimbalDeviceAttitudeStatus| s.flags.contains(GimbalDeviceFlags::YAW_LOCK);
+    assert!(
+        !yaw_lock(&status_after(&mut b, &lock, 0)),
+        "nothing held yet"
     );
-    let f = status_after(&mut b, &follow, 20).flags;
+    // Flags 0 (ArduPilot's body frame): the yaw follows the vehicle.
+    b.receive(
+        &frame(
+            AP,
+            1,
+            &set_attitude(GimbalDeviceFlags::empty(), 10.0, -10.0),
+        ),
+        t(10),
+    );
+    let s = status_after(&mut b, &lock, 10);
+    assert!(!yaw_lock(&s), "{:?}", s.flags);
+    assert!(s.flags.contains(
+        GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME
+            | GimbalDeviceFlags::ROLL_LOCK
+            | GimbalDeviceFlags::PITCH_LOCK
+    ));
+    // PX4's yaw lock (YAW_LOCK | YAW_IN_EARTH_FRAME): held in the earth frame.
+    let earth = GimbalDeviceFlags::YAW_LOCK | GimbalDeviceFlags::YAW_IN_EARTH_FRAME;
+    b.receive(&frame(AP, 2, &set_attitude(earth, 10.0, -10.0)), t(20));
+    assert!(yaw_lock(&status_after(&mut b, &Postback::default(), 20)));
+    // A vehicle-frame rate follows; an earth-frame one locks while it holds.
+    let mut rate = set_attitude(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 0.0, 0.0);
+    rate.q = [f32::NAN; 4];
+    rate.angular_velocity_y = 0.0;
+    rate.angular_velocity_z = 0.1;
+    b.receive(&frame(AP, 3, &rate), t(30));
+    assert!(!yaw_lock(&status_after(&mut b, &lock, 30)));
+    rate.flags = earth;
+    b.receive(&frame(AP, 4, &autopilot_state(30.0)), t(40));
+    b.receive(&frame(AP, 5, &rate), t(40));
+    assert!(yaw_lock(&status_after(&mut b, &lock, 40)));
+    // The rate stream stops: the core's dead-man ends the hold, nothing is held.
+    b.gimbal_mut().poll(t(400));
+    assert!(!yaw_lock(&status_after(&mut b, &lock, 400)));
+    // Neutral: forward in the vehicle frame, NEUTRAL and no YAW_LOCK.
+    b.receive(
+        &frame(AP, 6, &set_attitude(GimbalDeviceFlags::NEUTRAL, 0.0, 0.0)),
+        t(500),
+    );
+    let f = status_after(&mut b, &lock, 500).flags;
     assert!(f.contains(GimbalDeviceFlags::NEUTRAL) && !f.contains(GimbalDeviceFlags::RETRACT));
+    assert!(!f.contains(GimbalDeviceFlags::YAW_LOCK));
     // ArduPilot's retract: NaN quaternion, zero rates, RETRACT.
     let mut retract = set_attitude(GimbalDeviceFlags::RETRACT, 0.0, 0.0);
     retract.q = [f32::NAN; 4];
     retract.angular_velocity_x = 0.0;
     retract.angular_velocity_y = 0.0;
     retract.angular_velocity_z = 0.0;
-    b.receive(&frame(AP, 2, &retract), t(30));
-    let f = status_after(&mut b, &follow, 30).flags;
+    b.receive(&frame(AP, 7, &retract), t(510));
+    let f = status_after(&mut b, &lock, 510).flags;
     assert!(f.contains(GimbalDeviceFlags::RETRACT) && !f.contains(GimbalDeviceFlags::NEUTRAL));
     // An angle moves it: neither any more.
-    b.receive(
-        &frame(
-            AP,
-            3,
-            &set_attitude(GimbalDeviceFlags::empty(), 10.0, -10.0),
-        ),
-        t(40),
-    );
-    let f = status_after(&mut b, &follow, 40).flags;
+    b.receive(&frame(AP, 8, &set_attitude(earth, 10.0, -10.0)), t(520));
+    let f = status_after(&mut b, &lock, 520).flags;
     assert!(!f.intersects(GimbalDeviceFlags::NEUTRAL | GimbalDeviceFlags::RETRACT));
+}
+
+#[test]
+fn a_yaw_beyond_the_motors_travel_is_reported_at_the_yaw_limit() {
+    let mut b = bridge();
+    b.receive(&frame(AP, 0, &autopilot_state(0.0)), t(0));
+    b.gimbal_mut().poll(t(0));
+    let _ = queued(b.gimbal_mut());
+    let limit = |s: &GimbalDeviceAttitudeStatus| {
+        s.failure_flags
+            .contains(GimbalDeviceErrorFlags::AT_YAW_LIMIT)
+    };
+    let earth = GimbalDeviceFlags::YAW_IN_EARTH_FRAME;
+    // Earth 100 with the vehicle at 0: the motor at 100, within its ±170.
+    b.receive(&frame(AP, 1, &set_attitude(earth, 100.0, 0.0)), t(10));
+    assert!(!limit(&status_after(&mut b, &Postback::default(), 10)));
+    // Earth -175 (185): beyond.
+    b.receive(&frame(AP, 2, &set_attitude(earth, -175.0, 0.0)), t(20));
+    b.gimbal_mut().poll(t(20));
+    assert!(limit(&status_after(&mut b, &Postback::default(), 20)));
+    assert_eq!(b.stats().refused_setpoints, 0, "followed as far as it goes");
 }
 
 #[test]
@@ -406,38 +456,36 @@ fn setpoints_within_the_dead_band_are_not_re_sent() {
         b.gimbal_mut().poll(t(ms));
         queued(b.gimbal_mut())
     };
+    let angles = |q: Vec<GimbalCommand>| -> Vec<GimbalCommand> {
+        q.into_iter()
+            .filter(|c| matches!(c, GimbalCommand::Heading(_) | GimbalCommand::Pitch(_)))
+            .collect()
+    };
     let _ = at(&mut b, 0, None);
     assert_eq!(
-        at(&mut b, 20, Some(set_attitude(earth, 10.0, -20.0))).len(),
+        angles(at(&mut b, 20, Some(set_attitude(earth, 10.0, -20.0)))).len(),
         2
     );
-    // 20 Hz of the same setpoint, and one 0.15° off: nothing new (dead-band 0.2°).
+    // 20 Hz of the same setpoint, and one 0.15° off: nothing new (the link's dead-band,
+    // 0.2°), the vehicle still and no postback: nothing for the closed loop either.
     for i in 0..20 {
-        let q = at(&mut b, 40 + 50 * i, Some(set_attitude(earth, 10.0, -20.0)));
-        assert!(
-            q.iter()
-                .all(|c| !matches!(c, GimbalCommand::Heading(_) | GimbalCommand::Pitch(_))),
-            "{q:?}"
-        );
+        let q = angles(at(
+            &mut b,
+            40 + 50 * i,
+            Some(set_attitude(earth, 10.0, -20.0)),
+        ));
+        assert!(q.is_empty(), "{q:?}");
     }
-    let q = at(&mut b, 1_100, Some(set_attitude(earth, 10.15, -20.15)));
+    let q = angles(at(&mut b, 1_100, Some(set_attitude(earth, 10.15, -20.15))));
+    assert!(q.is_empty(), "{q:?}");
+    // 0.5° in pitch only: the aim again, both axes.
+    let q = angles(at(&mut b, 1_150, Some(set_attitude(earth, 10.0, -20.5))));
     assert!(
-        q.iter()
-            .all(|c| !matches!(c, GimbalCommand::Heading(_) | GimbalCommand::Pitch(_))),
+        matches!(q[..], [GimbalCommand::Heading(h), GimbalCommand::Pitch(p)] if h.deci() == 100 && p.deci() == -205),
         "{q:?}"
     );
-    // 0.5° in pitch only: the pitch alone.
-    let q = at(&mut b, 1_150, Some(set_attitude(earth, 10.0, -20.5)));
-    let angles: Vec<_> = q
-        .into_iter()
-        .filter(|c| matches!(c, GimbalCommand::Heading(_) | GimbalCommand::Pitch(_)))
-        .collect();
-    assert!(
-        matches!(angles[..], [GimbalCommand::Pitch(p)] if p.deci() == -205),
-        "{angles:?}"
-    );
     assert_eq!(b.stats().refused_setpoints, 0);
-    assert_eq!(b.stats().angle_commands, 3);
+    assert_eq!(b.stats().angle_setpoints, 23);
 }
 
 /// Without a fresh vehicle heading, a setpoint whose yaw frame differs from the gimbal's
@@ -510,15 +558,23 @@ fn rate_setpoints_hold_and_stop_with_the_core_dead_man() {
 }
 
 #[test]
-fn neutral_recentres_and_retract_looks_down_once_each() {
+fn neutral_holds_forward_and_retract_looks_down_once_each() {
     let mut b = bridge();
+    b.receive(&frame(AP, 0, &autopilot_state(40.0)), t(0));
+    b.gimbal_mut().poll(t(0));
+    let _ = queued(b.gimbal_mut());
     for i in 0..3 {
         b.receive(
             &frame(AP, i, &set_attitude(GimbalDeviceFlags::NEUTRAL, 0.0, 0.0)),
             t(u32::from(i)),
         );
     }
-    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Recenter]);
+    // Forward and level in the vehicle frame: north-referenced, the vehicle's 40°.
+    let q = queued(b.gimbal_mut());
+    assert!(
+        matches!(q[..], [GimbalCommand::Heading(h), GimbalCommand::Pitch(p)] if h.deci() == 400 && p.deci() == 0),
+        "{q:?}"
+    );
     b.receive(
         &frame(AP, 5, &set_attitude(GimbalDeviceFlags::RETRACT, 0.0, 0.0)),
         t(10),
@@ -684,7 +740,7 @@ fn a_million_garbage_bytes_into_the_bridge() {
     }
     let s = b.stats();
     assert_eq!(
-        s.acks + s.angle_commands + s.rate_setpoints + s.vehicle_updates,
+        s.acks + s.angle_setpoints + s.rate_setpoints + s.vehicle_updates,
         0
     );
     // A 12-byte MAVLink 2 frame with a matching CRC could occur by chance (2^-16 once the

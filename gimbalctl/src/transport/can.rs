@@ -243,10 +243,6 @@ where
         self.gimbal.link().has_transmit()
     }
 
-    fn is_rate_holding(&self) -> bool {
-        self.gimbal.link().is_rate_holding()
-    }
-
     fn send_text(&mut self, text: &[u8]) -> Result<(), String> {
         self.gimbal.send_text(text).map_err(|e| format!("{e:?}"))
     }

@@ -333,10 +333,6 @@ impl Session for StreamSession {
         self.gimbal.link().has_transmit()
     }
 
-    fn is_rate_holding(&self) -> bool {
-        self.gimbal.link().link().is_rate_holding()
-    }
-
     fn send_text(&mut self, _text: &[u8]) -> Result<(), String> {
         Err("the serial link carries no text (CAN only)".into())
     }

@@ -10,18 +10,18 @@ use mavio::dialects::common::messages::{
     GimbalDeviceAttitudeStatus, GimbalDeviceInformation, Heartbeat,
 };
 
-use super::{name, State, PITCH_MAX_DEG, PITCH_MIN_DEG};
+use idu_gimbal::wire::control::Pitch;
+
+use super::{name, State};
 use crate::codec;
 use crate::gimbal::GimbalControl;
 use crate::status;
 
 /// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
-/// ±325.00° on the 3.5× models (the document's Motor_psi scope).
+/// ±325.00° on the 3.5× models (the document's Motor_psi scope,
+/// [`GimbalType::motor_yaw_limit_cdeg`]); ±170° until a postback names the model.
 pub fn yaw_limit_deg(t: Option<GimbalType>) -> f32 {
-    match t {
-        Some(GimbalType::Zoom3_5x | GimbalType::DualLight3_5x) => 325.0,
-        _ => 170.0,
-    }
+    f32::from(t.unwrap_or_default().motor_yaw_limit_cdeg()) / 100.0
 }
 
 impl State {
@@ -80,8 +80,8 @@ impl State {
             // No roll axis: unknown, as the message says to give it.
             roll_min: f32::NAN,
             roll_max: f32::NAN,
-            pitch_min: PITCH_MIN_DEG.to_radians(),
-            pitch_max: PITCH_MAX_DEG.to_radians(),
+            pitch_min: Pitch::MIN_DEG.to_radians(),
+            pitch_max: Pitch::MAX_DEG.to_radians(),
             yaw_min: -yaw_limit,
             yaw_max: yaw_limit,
             gimbal_device_id: 0,
@@ -91,14 +91,21 @@ impl State {
 
     pub(super) fn status<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
         let latest = gimbal.latest_postback(now).map(|(p, _)| p);
-        let vehicle_yaw = self.vehicle.yaw(now);
-        let (q, flags) = match latest {
-            Some(p) => status::attitude(&p, self.pose),
-            None => ([f32::NAN; 4], status::flags(None, self.pose)),
+        // The heading that goes with the postback's motor angle: `q_earth = q_delta_yaw ·
+        // q_vehicle` holds for the moment the gimbal reported.
+        let vehicle_yaw = self.postback_vehicle_yaw(gimbal, now);
+        let held = status::Held {
+            pose: self.pose,
+            earth_yaw: gimbal.holds_earth_yaw() || (self.rate_earth && gimbal.is_rate_holding()),
         };
+        let q = latest.map_or([f32::NAN; 4], |p| status::attitude(&p));
+        let flags = status::flags(held);
         let mut failure = GimbalDeviceErrorFlags::empty();
         if !gimbal.is_link_up() {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
+        }
+        if gimbal.aim_state().is_some_and(|a| a.at_yaw_limit) {
+            failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,

@@ -156,7 +156,7 @@ impl State {
             bump(&mut self.stats.not_for_us);
             return Check::Handled;
         }
-        self.with_camera(gimbal, |camera, config, gimbal, tx| {
+        self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
             camera.message(config, gimbal, message, from, now, tx)
         });
         Check::Handled
@@ -210,9 +210,9 @@ impl State {
                 }
             }
         } else {
-            let position = self.vehicle.position;
-            let acked = self.with_camera(gimbal, |camera, config, gimbal, tx| {
-                let (result, reply) = camera.command(config, gimbal, cmd, now, position);
+            let vantage = self.vantage(gimbal, now);
+            let acked = self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
+                let (result, reply) = camera.command(config, gimbal, cmd, now, vantage);
                 // The ACK first, then what the command produced.
                 tx.send(me, &ack_of(cmd.command, result, from));
                 camera.reply(config, gimbal, reply, now, tx);
@@ -340,7 +340,7 @@ impl State {
         };
         gimbal.point_at(target);
         self.pose = Pose::Other;
-        self.commanded = (None, None);
+        self.rate_earth = false;
         MavResult::Accepted
     }
 

@@ -16,6 +16,7 @@ use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::Message;
 
 use crate::camera::{Camera, CameraConfig};
+use crate::capture::Vantage;
 use crate::framing::{Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
 use crate::status::Pose;
@@ -34,10 +35,6 @@ pub const GIMBAL_COMPONENT: u8 = 154;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
 
-/// The gimbal's pitch range, degrees (the wire's command range).
-pub(crate) const PITCH_MIN_DEG: f32 = -100.0;
-pub(crate) const PITCH_MAX_DEG: f32 = 60.0;
-
 /// How the bridge presents itself and paces what it sends.
 #[derive(Clone, PartialEq, Debug)]
 pub struct BridgeConfig {
@@ -52,9 +49,6 @@ pub struct BridgeConfig {
     /// ArduPilot calls a mount unhealthy when its status is over a second old); 0 stops it.
     /// `MAV_CMD_SET_MESSAGE_INTERVAL` changes it at run time.
     pub attitude_status_ms: u32,
-    /// An angle setpoint re-commands the gimbal only when heading or pitch moved by more
-    /// than this, 0.1° units (default 2: 0.2°, twice the wire's resolution).
-    pub deadband_deci: u16,
     /// The camera component; `None`: the bridge is a gimbal device only.
     pub camera: Option<CameraConfig>,
 }
@@ -66,7 +60,6 @@ impl Default for BridgeConfig {
             gimbal_component: GIMBAL_COMPONENT,
             heartbeat_ms: 1000,
             attitude_status_ms: 100,
-            deadband_deci: 2,
             camera: None,
         }
     }
@@ -81,8 +74,10 @@ pub struct BridgeStats {
     pub not_for_us: u32,
     /// Commands answered (every COMMAND_LONG and COMMAND_INT for us gets exactly one ACK).
     pub acks: u32,
-    /// Angle setpoints turned into heading or pitch commands.
-    pub angle_commands: u32,
+    /// Angle setpoints taken (as the aim the link holds; neutral and retract included). The
+    /// link counts what it sends for them: `LinkStats::aim_recommands`,
+    /// `LinkStats::aim_not_reached`.
+    pub angle_setpoints: u32,
     /// Rate setpoints passed to the core's rate hold.
     pub rate_setpoints: u32,
     /// Setpoints not followed: out of the gimbal's range, NaN without rates, a roll the
@@ -127,8 +122,11 @@ pub(crate) struct State {
     /// whole seconds; looking every [`STREAM_CHECK_MS`] keeps the idle poll short.
     next_stream_check: Option<Instant>,
     pub(crate) vehicle: Vehicle,
-    /// The last angles commanded (heading, pitch), 0.1° units.
-    pub(crate) commanded: (Option<u16>, Option<i16>),
+    /// The rate hold last set has its yaw in the earth frame (for the status's `YAW_LOCK`).
+    pub(crate) rate_earth: bool,
+    /// When the latest postback arrived, and the vehicle's yaw then: the heading its motor
+    /// angle is turned into the earth frame with (see [`State::postback_vehicle_yaw`]).
+    postback_yaw: Option<(Instant, Option<f32>)>,
     /// The last setpoint's neutral/retract flags, to act on a change only.
     pub(crate) last_flags: u16,
     /// The pose last commanded, for the status flags.
@@ -143,8 +141,8 @@ pub(crate) struct Tx<'a> {
     out: &'a mut Outbox<OUTBOX_LEN>,
     system_id: u8,
     outbox_full: &'a mut u32,
-    /// The vehicle position (lat, lon ×1e7, alt and relative alt in mm), for captures.
-    pub(crate) position: Option<[i32; 4]>,
+    /// The vehicle's position and the camera's attitude now, for captures.
+    pub(crate) vantage: Vantage,
     /// The gimbal type from the latest postback.
     pub(crate) gimbal_type: Option<GimbalType>,
 }
@@ -260,7 +258,8 @@ impl<G: GimbalControl> Bridge<G> {
                 setpoint_stream: StreamState::default(),
                 next_stream_check: None,
                 vehicle: Vehicle::default(),
-                commanded: (None, None),
+                rate_earth: false,
+                postback_yaw: None,
                 last_flags: 0,
                 pose: Pose::Other,
                 camera,
@@ -429,15 +428,16 @@ impl State {
     fn with_camera<G: GimbalControl, R>(
         &mut self,
         gimbal: &mut G,
+        now: Instant,
         f: impl FnOnce(&mut Camera, &CameraConfig, &mut G, &mut Tx<'_>) -> R,
     ) -> Option<R> {
+        let vantage = self.vantage(gimbal, now);
         let State {
             camera,
             config,
             out,
             system_id,
             stats,
-            vehicle,
             ..
         } = self;
         let (camera, config) = (camera.as_mut()?, config.camera.as_ref()?);
@@ -445,16 +445,17 @@ impl State {
             out,
             system_id: *system_id,
             outbox_full: &mut stats.outbox_full,
-            position: vehicle.position,
+            vantage,
             gimbal_type: gimbal.gimbal_type(),
         };
         Some(f(camera, config, gimbal, &mut tx))
     }
 
     fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant) {
+        self.note_postback(gimbal, now);
         self.send_heartbeats(now);
         if self.camera.as_ref().is_some_and(|c| c.has_work(now)) {
-            self.with_camera(gimbal, |camera, config, gimbal, tx| {
+            self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
                 camera.poll(config, gimbal, now, tx)
             });
         }
@@ -463,6 +464,55 @@ impl State {
             self.status(gimbal, now);
         }
         self.ask_for_streams(now);
+    }
+
+    /// A postback new since the last poll: the vehicle's yaw now goes with it.
+    fn note_postback<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+        if let Some((_, age)) = gimbal.latest_postback(now) {
+            let at = Instant::from_millis(now.as_millis().wrapping_sub(age));
+            if self.postback_yaw.is_none_or(|(seen, _)| seen != at) {
+                self.postback_yaw = Some((at, self.vehicle.yaw(now)));
+            }
+        }
+    }
+
+    /// The vehicle's yaw (radians from north) when the latest postback arrived, which its
+    /// motor angle is turned into the earth frame with: a motor angle up to 500 ms old
+    /// beside the heading now would be off by the vehicle's turn since (15° at 30°/s).
+    /// The heading now while no postback was noted.
+    pub(crate) fn postback_vehicle_yaw<G: GimbalControl>(
+        &self,
+        gimbal: &G,
+        now: Instant,
+    ) -> Option<f32> {
+        let latest = gimbal
+            .latest_postback(now)
+            .map(|(_, age)| Instant::from_millis(now.as_millis().wrapping_sub(age)));
+        match self.postback_yaw {
+            Some((at, yaw)) if Some(at) == latest => yaw,
+            _ => self.vehicle.yaw(now),
+        }
+    }
+
+    /// Where an image taken now is taken from: the vehicle's position, and the camera's
+    /// attitude from north (the latest postback's motor angle and pitch with the vehicle's
+    /// heading then; none while the gimbal link is down).
+    pub(crate) fn vantage<G: GimbalControl>(&self, gimbal: &G, now: Instant) -> Vantage {
+        let yaw = self.postback_vehicle_yaw(gimbal, now);
+        let attitude = match (gimbal.latest_postback(now), yaw) {
+            (Some((p, _)), Some(yaw)) if gimbal.is_link_up() => {
+                // |yaw| <= π: its 0.01° fit; the sum is wrapped into [-18000, 18000).
+                let yaw_cdeg = libm::roundf(yaw.to_degrees() * 100.0) as i32;
+                let earth =
+                    (i32::from(p.motor_heading) + yaw_cdeg + 18_000).rem_euclid(36_000) - 18_000;
+                Some((earth as i16, p.pitch))
+            }
+            _ => None,
+        };
+        Vantage {
+            position: self.vehicle.position,
+            attitude,
+        }
     }
 
     /// Queues a command for the gimbal other than an angle; a full queue is counted.
@@ -474,8 +524,8 @@ impl State {
         sent
     }
 
-    /// Queues a setpoint's command for the gimbal, counted in `angle_commands`; a full queue
-    /// is counted.
+    /// Queues a setpoint's command for the gimbal, counted in `angle_setpoints`; a full
+    /// queue is counted.
     pub(crate) fn command_gimbal<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
@@ -483,7 +533,7 @@ impl State {
     ) -> bool {
         let sent = self.command_gimbal_raw(gimbal, c);
         if sent {
-            bump(&mut self.stats.angle_commands);
+            bump(&mut self.stats.angle_setpoints);
         }
         sent
     }

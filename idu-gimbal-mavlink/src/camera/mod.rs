@@ -52,8 +52,9 @@ use mavio::dialects::common::messages::{
     ParamExtSet, StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 
+use crate::attitude::YawPitch;
 use crate::bridge::{id_of, name, Tx};
-use crate::capture::{Capture, Image, Request};
+use crate::capture::{Capture, Image, Request, Vantage};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
 use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
@@ -323,7 +324,7 @@ impl Camera {
         gimbal: &mut G,
         cmd: &Command,
         now: Instant,
-        position: Option<[i32; 4]>,
+        vantage: Vantage,
     ) -> (MavResult, Reply) {
         let streams = |id| stream::selection(config, id);
         let reply = match cmd.command {
@@ -377,7 +378,7 @@ impl Camera {
                     Reply::Nothing,
                 )
             }
-            MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now, position),
+            MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now, vantage),
             MavCmd::ImageStopCapture => {
                 self.capture.stop();
                 Reply::CaptureStatus
@@ -473,7 +474,7 @@ impl Camera {
         gimbal: &mut G,
         cmd: &Command,
         now: Instant,
-        position: Option<[i32; 4]>,
+        vantage: Vantage,
     ) -> (MavResult, Reply) {
         let [_, interval, count, sequence] = cmd.params;
         let Ok(request) = Request::from_params(interval, count, sequence) else {
@@ -491,7 +492,7 @@ impl Camera {
             return (MavResult::TemporarilyRejected, Reply::Nothing);
         }
         self.capture.start(request, now);
-        let image = self.capture.taken(now, position);
+        let image = self.capture.taken(now, vantage);
         (MavResult::Accepted, Reply::Captured(image))
     }
 
@@ -583,7 +584,7 @@ impl Camera {
                 .send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single)))
                 .is_ok()
         {
-            let image = self.capture.taken(now, tx.position);
+            let image = self.capture.taken(now, tx.vantage);
             self.send_captured(config, &image, tx);
         }
     }
@@ -635,7 +636,19 @@ impl Camera {
     }
 
     fn send_captured(&self, config: &CameraConfig, image: &Image, tx: &mut Tx<'_>) {
-        let [lat, lon, alt, relative_alt] = image.position.unwrap_or([0; 4]);
+        let [lat, lon, alt, relative_alt] = image.vantage.position.unwrap_or([0; 4]);
+        // The earth frame (NED), as MAVSDK reports it (`attitude_quaternion`, "in NED
+        // earth frame"); NaN only when the attitude was unknown.
+        let q = image
+            .vantage
+            .attitude
+            .map_or([f32::NAN; 4], |(yaw, pitch)| {
+                YawPitch {
+                    yaw_rad: (f32::from(yaw) / 100.0).to_radians(),
+                    pitch_rad: (f32::from(pitch) / 100.0).to_radians(),
+                }
+                .to_quaternion()
+            });
         let msg = CameraImageCaptured {
             time_boot_ms: image.at.as_millis(),
             time_utc: 0,
@@ -644,7 +657,7 @@ impl Camera {
             lon,
             alt,
             relative_alt,
-            q: [f32::NAN; 4],
+            q,
             image_index: image.index,
             capture_result: 1,
             file_url: [0; 205],
