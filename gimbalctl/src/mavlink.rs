@@ -25,8 +25,10 @@
 //!
 //! With `--sim` the gimbal is the library's `Simulator` on an in-memory CAN link (the `Link`
 //! the firmware uses, so the vehicle attitude is pushed and headings are north-referenced as
-//! on a real CAN bus), of the `--camera` family's gimbal type, and what its camera does
-//! (tracking, focus, palette, calibration) goes to stderr ([`sim_watch`]); with `--can` it is the library's `Gimbal<C>` on the bus, and the
+//! on a real CAN bus), of the `--camera` family's gimbal type, holding in lock what
+//! `--sim-lock-holds` says (its north heading, or its motor angle), restarted by a `reboot`
+//! line on stdin, and what its camera does (tracking, focus, palette, calibration) goes to
+//! stderr ([`sim_watch`]); with `--can` it is the library's `Gimbal<C>` on the bus, and the
 //! autopilot's attitude, GPS and altitude are pushed to the gimbal as the firmware does; with
 //! `--tcp` or `--serial` it is the library's `SerialGimbal` (nose-referenced: the serial link
 //! carries no vehicle frames).

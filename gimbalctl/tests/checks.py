@@ -1,7 +1,18 @@
-"""The tally the end-to-end clients keep (mavlink_e2e.py, mavlink_camera.py,
-mavsdk_camera.py): each check printed as it is made, "ok" or "FAIL", then a last line
-"NAME: N passed, M failed". Imported from the clients' own directory, which Python puts
+"""What the end-to-end clients share (mavlink_e2e.py, mavlink_camera.py, mavsdk_camera.py,
+mavlink_aiming.py): the tally they keep (each check printed as it is made, "ok" or "FAIL",
+then a last line "NAME: N passed, M failed"), and the simulated gimbal's behaviour they run
+`gimbalctl mavlink --sim` with. Imported from the clients' own directory, which Python puts
 first on the path when it runs one of them."""
+
+import os
+
+
+def sim_options():
+    """`--sim-lock-holds WHAT` from the environment's GIMBALCTL_SIM_LOCK_HOLDS (`north` or
+    `motor`: what the simulated gimbal holds in lock while the vehicle turns), so that the
+    suite runs each client against both; none (gimbalctl's default) when unset."""
+    what = os.environ.get("GIMBALCTL_SIM_LOCK_HOLDS")
+    return ["--sim-lock-holds", what] if what else []
 
 
 class Checks:

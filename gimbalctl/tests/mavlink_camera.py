@@ -61,7 +61,7 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 from pymavlink.mavftp import MAVFTP, FtpError  # noqa: E402
 
-from checks import Checks  # noqa: E402
+from checks import Checks, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
@@ -118,7 +118,7 @@ def raw_fields(msg):
 class Bridge:
     def __init__(self, gimbalctl, sink_port):
         self.proc = subprocess.Popen(
-            [gimbalctl, "mavlink", "--sim", "--camera", "dual-light", "--listen", "127.0.0.1:0",
+            [gimbalctl, "mavlink", "--sim", *sim_options(), "--camera", "dual-light", "--listen", "127.0.0.1:0",
              "--to", f"127.0.0.1:{sink_port}", "--exit-after-ms", "120000"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         self.said = []  # (monotonic time, line)

@@ -40,7 +40,7 @@ os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
-from checks import Checks  # noqa: E402
+from checks import Checks, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
@@ -498,7 +498,7 @@ def ardupilot(ap):
 
 def session(gimbalctl, persona, run, results):
     proc = subprocess.Popen(
-        [gimbalctl, "mavlink", "--sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "120000"],
+        [gimbalctl, "mavlink", "--sim", *sim_options(), "--listen", "127.0.0.1:0", "--exit-after-ms", "120000"],
         stdout=subprocess.PIPE, stderr=sys.stderr, text=True,
     )
     try:

@@ -42,7 +42,7 @@ from mavsdk.asyncio.plugins.camera.camera import CameraAsync
 from mavsdk.plugins.camera import Option, Setting
 from mavsdk.plugins.camera.camera import CameraError
 
-from checks import Checks
+from checks import Checks, sim_options
 
 CAMERA = 100
 # `--camera x3` (the default): the vendor document's RTSP form with its default address and
@@ -74,7 +74,7 @@ def start_bridge(gimbalctl, sink, *args):
     answers from it): the process, its UDP port (its first stdout line) and the lines of its
     stderr as they come (the simulated gimbal says there what its camera does)."""
     proc = subprocess.Popen(
-        [gimbalctl, "mavlink", "--sim", *args, "--listen", "127.0.0.1:0", "--to",
+        [gimbalctl, "mavlink", "--sim", *sim_options(), *args, "--listen", "127.0.0.1:0", "--to",
          f"127.0.0.1:{sink}", "--exit-after-ms", "90000"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )

@@ -16,10 +16,11 @@ use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use mavio::dialects::common::enums::{GimbalDeviceErrorFlags, MavSeverity};
 use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd};
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CameraImageCaptured, GimbalDeviceAttitudeStatus,
-    GimbalDeviceSetAttitude, GlobalPositionInt,
+    GimbalDeviceSetAttitude, GlobalPositionInt, Statustext,
 };
 
 const BOTH: [LockHolds; 2] = [LockHolds::North, LockHolds::Motor];
@@ -38,6 +39,7 @@ struct Rig {
     position: Option<GlobalPositionInt>,
     status: Option<GimbalDeviceAttitudeStatus>,
     images: Vec<CameraImageCaptured>,
+    texts: Vec<String>,
 }
 
 fn state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
@@ -80,6 +82,13 @@ fn off(a: f32, b: f32) -> f32 {
 
 impl Rig {
     fn new(holds: LockHolds) -> Self {
+        Self::with(SimConfig {
+            lock_holds: holds,
+            ..SimConfig::default()
+        })
+    }
+
+    fn with(sim: SimConfig) -> Self {
         let bridge = Bridge::new(
             Link::new(Config::default()),
             BridgeConfig {
@@ -87,13 +96,7 @@ impl Rig {
                 ..BridgeConfig::default()
             },
         );
-        let sim = Simulator::new(
-            SimConfig {
-                lock_holds: holds,
-                ..SimConfig::default()
-            },
-            Instant::from_millis(0),
-        );
+        let sim = Simulator::new(sim, Instant::from_millis(0));
         Rig {
             bridge,
             sim,
@@ -104,6 +107,7 @@ impl Rig {
             position: None,
             status: None,
             images: Vec::new(),
+            texts: Vec::new(),
         }
     }
 
@@ -145,6 +149,12 @@ impl Rig {
             self.status = Some(s);
         }
         self.images.extend(of::<CameraImageCaptured>(&frames));
+        for t in of::<Statustext>(&frames) {
+            assert_eq!(t.severity, MavSeverity::Warning);
+            let end = t.text.iter().position(|&b| b == 0).unwrap_or(50);
+            self.texts
+                .push(String::from_utf8(t.text[..end].to_vec()).unwrap());
+        }
         self.now += 1;
     }
 
@@ -355,6 +365,41 @@ fn an_image_carries_the_cameras_attitude_in_the_earth_frame() {
     );
     let image = &of::<CameraImageCaptured>(&sent(&mut b))[0];
     assert!(image.q.iter().all(|v| v.is_nan()), "{:?}", image.q);
+}
+
+#[test]
+fn a_setpoint_beyond_the_yaw_travel_or_not_reached_is_reported_once() {
+    let mut rig = Rig::new(LockHolds::North);
+    rig.vehicle_deg = 0.0;
+    rig.run(1000);
+    // North 175 with the vehicle at 0: the motor stops at 170.
+    rig.setpoint = Some((PX4_EARTH, 175.0, 0.0));
+    rig.run(5000);
+    let s = rig.status.clone().unwrap();
+    assert!(s
+        .failure_flags
+        .contains(GimbalDeviceErrorFlags::AT_YAW_LIMIT));
+    assert_eq!(
+        rig.texts,
+        ["Gimbal: setpoint beyond yaw travel, held at limit"]
+    );
+    // Back in reach: the flag clears.
+    rig.setpoint = Some((PX4_EARTH, 90.0, 0.0));
+    rig.run(3000);
+    let s = rig.status.clone().unwrap();
+    assert!(!s
+        .failure_flags
+        .contains(GimbalDeviceErrorFlags::AT_YAW_LIMIT));
+    // A gimbal that takes commands and does not move: not reached, said once.
+    let mut rig = Rig::with(SimConfig {
+        slew_dps: 0.0,
+        ..SimConfig::default()
+    });
+    rig.run(1000);
+    rig.setpoint = Some((GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 90.0, 0.0));
+    rig.run(20_000);
+    assert_eq!(rig.texts, ["Gimbal: setpoint not reached, re-sent 3 times"]);
+    assert_eq!(rig.bridge.gimbal().stats().aim_not_reached, 1);
 }
 
 #[cfg(feature = "roi")]

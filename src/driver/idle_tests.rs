@@ -27,6 +27,10 @@ enum Op {
     Rate(i16),
     StopRate,
     PointAt,
+    /// An aim held closed loop (earth or vehicle frame, yaw in 0.1°).
+    Aim(bool, u16),
+    /// Start (`true`) or stop the gimbal's tracker, which an aim yields to.
+    Tracking(bool),
     /// CAN only (the serial link carries neither).
     Text,
     /// Pushed on CAN; kept for point-at on serial.
@@ -51,6 +55,8 @@ fn op() -> impl Strategy<Value = Op> {
         2 => (-500i16..500).prop_map(Op::Rate),
         1 => Just(Op::StopRate),
         1 => Just(Op::PointAt),
+        2 => (any::<bool>(), 0u16..=3600).prop_map(|(earth, yaw)| Op::Aim(earth, yaw)),
+        1 => any::<bool>().prop_map(Op::Tracking),
         1 => Just(Op::Text),
         2 => (0u32..1500).prop_map(|stamp_back| Op::Vehicle { stamp_back }),
         2 => Just(Op::Postback),
@@ -93,6 +99,31 @@ macro_rules! apply_common {
             }
             Op::PointAt => {
                 $gimbal.point_at(Position::new(47.001, 8.001, 400.0).unwrap());
+                true
+            }
+            Op::Aim(earth, yaw) => {
+                let yaw = crate::wire::control::Heading::from_deci(yaw).unwrap();
+                let aim = crate::link::Aim {
+                    yaw: if earth {
+                        crate::link::Yaw::Earth(yaw)
+                    } else {
+                        crate::link::Yaw::Vehicle(yaw)
+                    },
+                    pitch: Pitch::new(-20.0).unwrap(),
+                };
+                let _ = $gimbal.aim(aim, $now);
+                true
+            }
+            Op::Tracking(start) => {
+                let _ = $gimbal.send(if start {
+                    GimbalCommand::StartTracking(crate::wire::control::TrackingBox::from_raw(
+                        crate::wire::control::ImagePoint::new(4096, 4096).unwrap(),
+                        16,
+                        16,
+                    ))
+                } else {
+                    GimbalCommand::StopTracking
+                });
                 true
             }
             _ => false,

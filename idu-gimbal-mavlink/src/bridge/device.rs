@@ -4,10 +4,11 @@
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::{
-    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavModeFlag, MavState, MavType,
+    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavModeFlag, MavSeverity, MavState,
+    MavType,
 };
 use mavio::dialects::common::messages::{
-    GimbalDeviceAttitudeStatus, GimbalDeviceInformation, Heartbeat,
+    GimbalDeviceAttitudeStatus, GimbalDeviceInformation, Heartbeat, Statustext,
 };
 
 use idu_gimbal::wire::control::Pitch;
@@ -24,7 +25,44 @@ pub fn yaw_limit_deg(t: Option<GimbalType>) -> f32 {
     f32::from(t.unwrap_or_default().motor_yaw_limit_cdeg()) / 100.0
 }
 
+/// Which of an aim's troubles a `STATUSTEXT` has said (see [`State::tell_aim`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+pub(crate) struct AimTold {
+    at_yaw_limit: bool,
+    not_reached: bool,
+}
+
 impl State {
+    /// Says in a `STATUSTEXT` (severity warning, from the gimbal device) when the aim held
+    /// begins to need the yaw beyond the motor's travel, or is not reached: the failure
+    /// flags carry the first (`AT_YAW_LIMIT`), but no flag the second, and ground stations
+    /// show a status text to the pilot (QGroundControl as a message, ArduPilot and PX4
+    /// forward it). Once each time it begins.
+    fn tell_aim<G: GimbalControl>(&mut self, gimbal: &G) {
+        let state = gimbal.aim_state();
+        let now = AimTold {
+            at_yaw_limit: state.is_some_and(|a| a.at_yaw_limit),
+            not_reached: state.is_some_and(|a| a.not_reached),
+        };
+        let was = core::mem::replace(&mut self.aim_told, now);
+        // The text says how many re-commands the link makes.
+        const _: () = assert!(idu_gimbal::link::aim::ATTEMPTS == 3);
+        let text = if now.not_reached && !was.not_reached {
+            "Gimbal: setpoint not reached, re-sent 3 times"
+        } else if now.at_yaw_limit && !was.at_yaw_limit {
+            "Gimbal: setpoint beyond yaw travel, held at limit"
+        } else {
+            return;
+        };
+        let message = Statustext {
+            severity: MavSeverity::Warning,
+            text: name(text),
+            id: 0,
+            chunk_seq: 0,
+        };
+        self.send(self.config.gimbal_component, &message);
+    }
+
     /// The heartbeats, when due: the gimbal device's and, with one, the camera's.
     pub(super) fn send_heartbeats(&mut self, now: Instant) {
         if !self.next_heartbeat.is_none_or(|t| now.is_at_or_after(t)) {
@@ -107,6 +145,7 @@ impl State {
         if gimbal.aim_state().is_some_and(|a| a.at_yaw_limit) {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
+        self.tell_aim(gimbal);
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,
             target_component: 0,

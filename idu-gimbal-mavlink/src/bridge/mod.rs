@@ -127,6 +127,9 @@ pub(crate) struct State {
     /// When the latest postback arrived, and the vehicle's yaw then: the heading its motor
     /// angle is turned into the earth frame with (see [`State::postback_vehicle_yaw`]).
     postback_yaw: Option<(Instant, Option<f32>)>,
+    /// The aim's troubles already said in a `STATUSTEXT` (at the yaw limit, not reached),
+    /// so that each is said once when it begins.
+    pub(crate) aim_told: device::AimTold,
     /// The last setpoint's neutral/retract flags, to act on a change only.
     pub(crate) last_flags: u16,
     /// The pose last commanded, for the status flags.
@@ -260,6 +263,7 @@ impl<G: GimbalControl> Bridge<G> {
                 vehicle: Vehicle::default(),
                 rate_earth: false,
                 postback_yaw: None,
+                aim_told: device::AimTold::default(),
                 last_flags: 0,
                 pose: Pose::Other,
                 camera,

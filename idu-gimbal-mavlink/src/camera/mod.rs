@@ -637,8 +637,9 @@ impl Camera {
 
     fn send_captured(&self, config: &CameraConfig, image: &Image, tx: &mut Tx<'_>) {
         let [lat, lon, alt, relative_alt] = image.vantage.position.unwrap_or([0; 4]);
-        // The earth frame (NED), as MAVSDK reports it (`attitude_quaternion`, "in NED
-        // earth frame"); NaN only when the attitude was unknown.
+        // The earth frame (NED): common.xml names no frame, and the message's producers
+        // give it so (PX4's camera_feedback rotates a vehicle-frame gimbal attitude by the
+        // vehicle's yaw); NaN only when the attitude was unknown.
         let q = image
             .vantage
             .attitude

@@ -253,6 +253,12 @@ mod fw {
     /// each) over 4,096 calls, and the loop overhead measured alike, leave the amortized
     /// figure up to 0.006 off the whole count.
     const GOAL_ENCODE: f32 = 15.01;
+    /// The closed loop's step (`Link::aim`, every `aim_period_ms`) beyond the same poll
+    /// without an aim, and with a postback to judge: measured 146 and 270 on the bench
+    /// toolchain; the budgets leave room for one more branch of logic, not for a second
+    /// pass over the state.
+    const BUDGET_AIM_STEP: f32 = 170.0;
+    const BUDGET_AIM_POSTBACK: f32 = 300.0;
 
     /// Messages per batch in the amortized postback measurements.
     const MESSAGES: u32 = 512;
@@ -287,6 +293,7 @@ mod fw {
         );
 
         bench_driver(&mut m, &mut table);
+        bench_aim(&mut m, &mut table);
         bench_serial(&mut m, &mut table);
         bench_assembler(&mut m, &mut table);
         bench_encode(&mut m, &mut table);
@@ -476,6 +483,93 @@ mod fw {
             "B",
         );
         black_box(Event::LinkUp);
+    }
+
+    /// The closed loop (`Link::aim`): the step the link takes every `aim_period_ms`, with
+    /// and without a postback to judge, each beyond the same poll of a driver holding no
+    /// aim; and an idle poll while an aim is held. The gimbal's postbacks say it is on the
+    /// aim (mode lock, level, motor at the nose), so nothing is sent again: the cost of
+    /// watching, which a held aim pays all the time.
+    fn bench_aim(m: &mut Meter, table: &mut Table) {
+        use idu_gimbal::link::{Aim, Yaw};
+        use idu_gimbal::wire::control::Heading;
+        use idu_gimbal::wire::postback::ControlMode;
+        const N: u32 = 256;
+        let on_aim = Postback {
+            mode: ControlMode::Lock,
+            ..Postback::default()
+        }
+        .to_can_frames();
+        let cycle = || core::array::from_fn(|i| ext_frame(ids::POSTBACK, on_aim[i % 4]));
+        let (held, free) = (Source::new(cycle()), Source::new(cycle()));
+        let mut aiming: Gimbal<_> = Gimbal::new(ReplayCan(&held), Config::default());
+        let mut plain: Gimbal<_> = Gimbal::new(ReplayCan(&free), Config::default());
+        let (Ok(att), Ok(pitch)) = (Attitude::new(0.0, 0.0, 10.0), Pitch::new(0.0)) else {
+            qemu::exit(false)
+        };
+        let aim = Aim {
+            yaw: Yaw::Vehicle(Heading::NORTH),
+            pitch,
+        };
+        let mut t = 1000u32;
+        let step = |t: &mut u32, g: &mut Gimbal<ReplayCan<'_>>, source: &Source, postback: bool| {
+            *t = t.wrapping_add(50);
+            let now = Instant::from_millis(*t);
+            g.set_attitude(att, now);
+            if postback {
+                source.make_available(4);
+            }
+            black_box(g.poll(now).is_ok());
+            while let Some(e) = g.next_event() {
+                black_box(e);
+            }
+        };
+        for _ in 0..40 {
+            step(&mut t, &mut aiming, &held, true);
+            step(&mut t, &mut plain, &free, true);
+        }
+        if aiming.aim(aim, Instant::from_millis(t)).is_err() {
+            qemu::exit(false)
+        }
+        for _ in 0..40 {
+            step(&mut t, &mut aiming, &held, true);
+        }
+        let with_pb = m.per_op(N, |_| step(&mut t, &mut aiming, &held, true));
+        let without_pb = m.per_op(N, |_| step(&mut t, &mut aiming, &held, false));
+        let plain_pb = m.per_op(N, |_| step(&mut t, &mut plain, &free, true));
+        let plain_nopb = m.per_op(N, |_| step(&mut t, &mut plain, &free, false));
+        let now = Instant::from_millis(t);
+        let idle_aiming = m.per_op(N, |_| {
+            black_box(aiming.poll(now).is_ok());
+        });
+        // Watched, on the aim throughout: nothing sent again, nothing given up.
+        let stats = aiming.stats().link;
+        let state = aiming.aim_state();
+        if stats.aim_recommands != 0
+            || stats.aim_not_reached != 0
+            || !state.is_some_and(|s| s.on_target)
+        {
+            println!("aim bench: the aim was not held quietly: {:?} {:?}", stats, state);
+            qemu::exit(false);
+        }
+        table.budget(
+            "closed loop: the aim's step (every 50 ms), beyond the same poll without an aim",
+            without_pb - plain_nopb,
+            "",
+            BUDGET_AIM_STEP,
+        );
+        table.budget(
+            "closed loop: the step judging a postback, beyond receiving it without an aim",
+            with_pb - plain_pb,
+            "",
+            BUDGET_AIM_POSTBACK,
+        );
+        table.budget(
+            "driver: idle poll, an aim held, nothing due",
+            idle_aiming,
+            "",
+            GOAL_DRIVER_IDLE_POLL,
+        );
     }
 
     /// The serial driver (`SerialGimbal::poll`) over the replay port: bytes read, the

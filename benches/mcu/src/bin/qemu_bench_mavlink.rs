@@ -345,7 +345,7 @@ mod fw {
             || runs == 0
             || after.reader.frames - before.reader.frames != runs * FRAMES_A_SECOND
             || after.not_for_us - before.not_for_us != runs * 100
-            || after.angle_commands != before.angle_commands
+            || after.angle_setpoints != before.angle_setpoints
             || after.vehicle_updates != before.vehicle_updates
         {
             println!("bench: the receive path without acting was not what it should be");
@@ -364,7 +364,7 @@ mod fw {
         if s.reader.bad_frames != 0
             || s.reader.frames == 0
             || !s.reader.frames.is_multiple_of(FRAMES_A_SECOND)
-            || s.angle_commands == 0
+            || s.angle_setpoints == 0
             || s.vehicle_updates == 0
         {
             println!("bench: unexpected stats {:?}", s.reader);
@@ -422,6 +422,7 @@ mod fw {
         // Latency: the call that takes a SET_ATTITUDE's last byte (the vehicle's state fresh
         // from the second just fed, so that the earth-frame setpoints convert).
         let before_latency = bridge.stats();
+        let sent_before = bridge.gimbal().stats().frames_sent;
         let mut frame = heapless::Vec::<u8, SECOND>::new();
         let mut seq = 0;
         let mut total = 0.0;
@@ -442,10 +443,13 @@ mod fw {
             total += m.once(|| bridge.receive(black_box(last), now));
             drain(&mut bridge);
         }
-        // Every setpoint was followed: its heading and pitch commands queued, none refused.
+        // Every setpoint was followed: taken as the aim, its heading and pitch commands
+        // queued and sent, none refused.
         let after = bridge.stats();
+        let sent = bridge.gimbal().stats().frames_sent - sent_before;
         if after.refused_setpoints != before_latency.refused_setpoints
-            || after.angle_commands - before_latency.angle_commands != 2 * N
+            || after.angle_setpoints - before_latency.angle_setpoints != N
+            || sent < 2 * N
         {
             println!("bench: the latency's setpoints were not all followed");
             qemu::exit(false);

@@ -466,8 +466,8 @@ mod fw {
         }
         let s = w.bridge.stats();
         println!(
-            "bridge: {} frames in, {} bad, {} ACKs, {} angle commands, {} rate setpoints, {} refused",
-            s.reader.frames, s.reader.bad_frames, s.acks, s.angle_commands, s.rate_setpoints, s.refused_setpoints
+            "bridge: {} frames in, {} bad, {} ACKs, {} angle setpoints, {} rate setpoints, {} refused",
+            s.reader.frames, s.reader.bad_frames, s.acks, s.angle_setpoints, s.rate_setpoints, s.refused_setpoints
         );
         println!(
             "{}",
