@@ -188,8 +188,8 @@ pub(crate) struct Hold<const Q: usize, const T: usize> {
     /// The larger axis error at the last postback judged, 0.01° ([`NO_ERROR`]: a command
     /// went since, so the next postback is not judged: it may predate any movement).
     prev_err_cdeg: u16,
-    /// The earliest a re-command may go (the ceiling).
-    next: Instant,
+    /// The loop's next look (its grid), and the earliest a re-command may go.
+    pub(crate) next: Instant,
     /// The steering's step, stored when the aim or point-at starts: firmware that never
     /// aims links none of this.
     pub(crate) step: fn(&mut Link<Q, T>, Instant, &mut Earliest),
@@ -319,32 +319,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             now,
             ahead: MAX_QUIET_MS,
         };
-        self.hold_step(&mut hold, now, &mut earliest);
+        let period = u32::from(self.config.aim_period_ms);
+        self.hold_step(&mut hold, now, &mut earliest, period);
         self.steering = Steering::Aim(hold);
         // The next poll runs the loop's step.
         self.quiet = quiet::Quiet::NONE;
         Ok(())
-    }
-
-    /// A start-tracking command went out: an aim or a point-at yields to the tracker (see
-    /// [`AimState::yielded_to_tracker`]); `false` when neither is active.
-    pub(super) fn yield_to_tracker(&mut self) -> bool {
-        match &mut self.steering {
-            Steering::Aim(h) => h.suspend(),
-            Steering::Point(p) => p.hold.suspend(),
-            _ => return false,
-        }
-        true
-    }
-
-    /// A stop-tracking command went out: an aim or a point-at that yielded takes the
-    /// gimbal back at the loop's next look.
-    pub(super) fn take_back_from_tracker(&mut self) {
-        match &mut self.steering {
-            Steering::Aim(h) => h.resume(),
-            Steering::Point(p) => p.hold.resume(),
-            _ => {}
-        }
     }
 
     /// Stops holding an aim; the gimbal keeps its last command. (A point-at is stopped
@@ -380,22 +360,42 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         let Steering::Aim(mut hold) = self.steering else {
             return;
         };
-        self.hold_step(&mut hold, now, earliest);
+        let period = u32::from(self.config.aim_period_ms);
+        self.hold_step(&mut hold, now, earliest, period);
         self.steering = Steering::Aim(hold);
     }
 
     /// One step of the closed loop (see the [module docs](aim)). A new aim is sent at
-    /// once; everything else happens on the loop's grid, every `aim_period_ms`: what came
-    /// since (a postback, the vehicle's heading, the gimbal's reference) is looked at
-    /// there, and a re-command goes there. So what the loop does depends on the grid, not
-    /// on how often the link is polled.
-    pub(super) fn hold_step(&mut self, h: &mut Hold<Q, T>, now: Instant, earliest: &mut Earliest) {
-        let new = h.flags & NEW != 0;
-        if !new && !now.is_at_or_after(h.next) {
+    /// once; everything else happens on the loop's grid, every `period` ms (an aim's
+    /// `aim_period_ms`, a point-at's `point_at_period_ms`): what came since (a postback,
+    /// the vehicle's heading, the gimbal's reference) is looked at there, and a re-command
+    /// goes there. So what the loop does depends on the grid, not on how often the link is
+    /// polled.
+    pub(super) fn hold_step(
+        &mut self,
+        h: &mut Hold<Q, T>,
+        now: Instant,
+        earliest: &mut Earliest,
+        period: u32,
+    ) {
+        if h.flags & NEW == 0 && !now.is_at_or_after(h.next) {
             earliest.offer(h.next);
             return;
         }
-        let period = u32::from(self.config.aim_period_ms).max(1);
+        self.hold_look(h, now, earliest, period);
+    }
+
+    /// The loop's look at `now`, a time on its grid or a new aim's: what came since, and
+    /// what to send (see [`Link::hold_step`]).
+    pub(super) fn hold_look(
+        &mut self,
+        h: &mut Hold<Q, T>,
+        now: Instant,
+        earliest: &mut Earliest,
+        period: u32,
+    ) {
+        let new = h.flags & NEW != 0;
+        let period = period.max(1);
         let north = self.north_referenced(now);
         let vehicle = self
             .is_fresh(ATTITUDE, now)
@@ -414,11 +414,20 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             (true, false) => vehicle.map(|v| yaw + v),
             (false, true) => vehicle.map(|v| yaw - v),
         };
-        let limit = i32::from(
-            self.gimbal_type()
-                .unwrap_or_default()
-                .motor_yaw_limit_cdeg(),
-        );
+        // What the latest postback says, read once (no copy of the whole postback).
+        let (limit, tracking, reading) = match &self.latest {
+            Some((p, _)) => (
+                p.gimbal_type.motor_yaw_limit_cdeg(),
+                p.tracking,
+                Some((
+                    p.motor_heading,
+                    p.pitch,
+                    p.mode == ControlMode::HeadingFollow,
+                )),
+            ),
+            None => (GimbalType::X30.motor_yaw_limit_cdeg(), false, None),
+        };
+        let limit = i32::from(limit);
         match motor {
             Some(m) if m.abs() > limit => h.flags |= AT_LIMIT,
             Some(_) => h.flags &= !AT_LIMIT,
@@ -435,7 +444,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         // While the gimbal tracks a target its tracker owns the yaw and pitch: started
         // through the link (the aim suspended until the tracker lets go), or otherwise
         // (the postback says so).
-        let tracking = self.latest.is_some_and(|(p, _)| p.tracking);
         if h.state & SUSPENDED != 0 {
             if fresh && tracking {
                 h.state |= TRACK_SEEN;
@@ -448,13 +456,13 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         // The vehicle's heading the gimbal turns a command into a motor angle with: the
         // attitude it last received while north-referenced, ours otherwise.
         let reference = if north {
-            self.gimbal_vehicle_heading(now).map(i32::from)
+            Some(i32::from(self.vehicle.attitude_sent_cdeg))
         } else {
             vehicle
         };
         if h.flags & SENT != 0 && !owned {
-            if let (true, Some((p, _)), Some(m)) = (fresh, self.latest, motor) {
-                self.judge(h, &p, m.clamp(-limit, limit));
+            if let (true, Some(reading), Some(m)) = (fresh, reading, motor) {
+                self.judge(h, reading, m.clamp(-limit, limit));
             }
             if (h.flags & SENT_NORTH != 0) != north {
                 h.flags |= PENDING;
@@ -521,14 +529,19 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         h.prev_err_cdeg = NO_ERROR;
     }
 
-    /// Judges a postback against the aim, the motor expected at `motor_cdeg` (within its
-    /// travel): on target, getting closer, or off and due a re-command (or not reached).
-    fn judge(&mut self, h: &mut Hold<Q, T>, p: &Postback, motor_cdeg: i32) {
-        let yaw_err = angle_cdeg(i32::from(p.motor_heading) - motor_cdeg).abs();
-        let pitch_err = (i32::from(p.pitch) - i32::from(h.pitch.deci()) * 10).abs();
+    /// Judges a postback (its motor angle and pitch, 0.01°, and whether its mode is heading
+    /// follow) against the aim, the motor expected at `motor_cdeg` (within its travel): on
+    /// target, getting closer, or off and due a re-command (or not reached).
+    fn judge(
+        &mut self,
+        h: &mut Hold<Q, T>,
+        (motor, pitch, followed): (i16, i16, bool),
+        motor_cdeg: i32,
+    ) {
+        let yaw_err = angle_cdeg(i32::from(motor) - motor_cdeg).abs();
+        let pitch_err = (i32::from(pitch) - i32::from(h.pitch.deci()) * 10).abs();
         let err = yaw_err.max(pitch_err);
         let tolerance = i32::from(self.config.aim_tolerance_mdeg) / 10;
-        let followed = p.mode == ControlMode::HeadingFollow;
         let prev = h.prev_err_cdeg;
         h.prev_err_cdeg = err.min(i32::from(NO_ERROR) - 1) as u16;
         if err <= tolerance && !followed {

@@ -19,27 +19,41 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
             return Err(QueueFull(command));
         }
-        let tracker = |c: &Command| match c {
-            Command::Gimbal(GimbalCommand::StartTracking(_))
-            | Command::DualLight(DualLightCommand::StartTracking(_)) => Some(true),
-            Command::Gimbal(GimbalCommand::StopTracking)
-            | Command::DualLight(DualLightCommand::StopTracking) => Some(false),
-            _ => None,
-        };
-        match tracker(&command) {
-            // An aim or a point-at yields to the tracker rather than ending: the setpoint
-            // stream that keeps giving the same aim must not take the gimbal back from it.
-            Some(true) if self.yield_to_tracker() => self.tx.cancel_zero_rate(),
-            Some(false) => self.take_back_from_tracker(),
-            _ if command.is_pointing() => {
-                self.steering = Steering::Manual;
-                // A zero-rate frame still waiting would arrive after this command and undo
-                // it.
-                self.tx.cancel_zero_rate();
-            }
-            _ => {}
+        if let Steering::Aim(_) | Steering::Point(_) = self.steering {
+            self.aim_commanded(command);
+        } else if command.is_pointing() {
+            self.steering = Steering::Manual;
+            // A zero-rate frame still waiting would arrive after this command and undo it.
+            self.tx.cancel_zero_rate();
         }
         Ok(())
+    }
+
+    /// A command went out while an aim or a point-at is held: start tracking makes it yield
+    /// to the tracker rather than end (the setpoint stream that keeps giving the same aim
+    /// must not take the gimbal back from it), stop tracking gives the gimbal back to it,
+    /// any other pointing command ends it. Out of line: the common path, nothing held,
+    /// pays one test of the steering for it.
+    #[inline(never)]
+    fn aim_commanded(&mut self, command: Command) {
+        let hold = match &mut self.steering {
+            Steering::Aim(h) => h,
+            Steering::Point(p) => &mut p.hold,
+            Steering::Manual | Steering::Rate(_) => return,
+        };
+        match command {
+            Command::Gimbal(GimbalCommand::StartTracking(_))
+            | Command::DualLight(DualLightCommand::StartTracking(_)) => hold.suspend(),
+            Command::Gimbal(GimbalCommand::StopTracking)
+            | Command::DualLight(DualLightCommand::StopTracking) => {
+                hold.resume();
+                return;
+            }
+            c if c.is_pointing() => self.steering = Steering::Manual,
+            _ => return,
+        }
+        // A zero-rate frame still waiting would arrive after this command and undo it.
+        self.tx.cancel_zero_rate();
     }
 
     /// Queues a text message, all of it or nothing.

@@ -92,7 +92,7 @@ impl Target {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PointAt<const Q: usize, const T: usize> {
     pub(crate) target: Target,
-    pub(crate) next: Instant,
+    /// Compute the aim at the next step, whatever the grid says (the first, or a retry).
     pub(crate) due: bool,
     pub(crate) unreachable: bool,
     /// The aim at the target, held closed loop, once one was computed. Its step is the
@@ -111,7 +111,6 @@ impl<const Q: usize, const T: usize> PointAt<Q, T> {
         };
         PointAt {
             target: Target::new(&target),
-            next: Instant::from_millis(0),
             due: true,
             unreachable: false,
             hold: Hold::new(placeholder, super::Link::point_step),
@@ -177,28 +176,35 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// One point-at step: a new aim at the target each period, and the closed loop's step.
+    /// One point-at step, on the closed loop's grid at `point_at_period_ms`: a new aim at
+    /// the target, and the loop's step.
     pub(super) fn point_step(&mut self, now: Instant, earliest: &mut Earliest) {
         let Steering::Point(mut p) = self.steering else {
             return;
         };
-        if p.due || now.is_at_or_after(p.next) {
-            let period = u32::from(self.config.point_at_period_ms);
-            p.next = if p.due {
-                now.add_millis(period)
-            } else {
-                advance(p.next, period, now)
-            };
+        let period = u32::from(self.config.point_at_period_ms);
+        if p.due || now.is_at_or_after(p.hold.next) {
+            let first = p.due;
             p.due = false;
             if self.is_fresh(GPS, now) && self.is_fresh(ALTITUDE, now) {
                 let solution = solve(&p.target, &self.vehicle.gps, &self.vehicle.altitude);
                 self.aim_at(&mut p, solution);
             }
+            if p.aiming {
+                // The loop looks on the point-at's grid (it sets the next look).
+                self.hold_look(&mut p.hold, now, earliest, period);
+            } else {
+                // No aim yet: look again a period on.
+                p.hold.next = if first {
+                    now.add_millis(period)
+                } else {
+                    advance(p.hold.next, period.max(1), now)
+                };
+                earliest.offer(p.hold.next);
+            }
+        } else {
+            earliest.offer(p.hold.next);
         }
-        if p.aiming {
-            self.hold_step(&mut p.hold, now, earliest);
-        }
-        earliest.offer(p.next);
         self.steering = Steering::Point(p);
     }
 

@@ -471,7 +471,7 @@ mod point_at {
         let target = Position::new(47.001, 8.001, 400.0).unwrap();
         vehicle(&mut link, 0, 47.0, 8.0, 500.0, 10.0);
         link.point_at(target);
-        let log = run(&mut link, 0, 60, 1);
+        let log = run(&mut link, 0, 110, 1);
         let expected = look_at(&Position::new(47.0, 8.0, 500.0).unwrap(), &target).unwrap();
         let heading = |deg: f64| {
             Command::from(GimbalCommand::Heading(
@@ -488,10 +488,10 @@ mod point_at {
                 // bearing less the vehicle's 10°, sent ahead of the attitude frame.
                 (0, heading(expected.bearing_deg - 10.0)),
                 (0, pitch),
-                // The attitude went out at 0: the loop's next look (50 ms) finds the gimbal
-                // north-referenced and sends the bearing itself.
-                (50, heading(expected.bearing_deg)),
-                (50, pitch),
+                // The attitude went out at 0: the loop's next look (the point-at's period,
+                // 100 ms) finds the gimbal north-referenced and sends the bearing itself.
+                (100, heading(expected.bearing_deg)),
+                (100, pitch),
             ],
         );
     }
@@ -508,7 +508,7 @@ mod point_at {
             log.extend(run(&mut link, t, t + 10, 1));
         }
         let times: Vec<u32> = aims(&log).iter().map(|(t, _)| *t).collect();
-        assert_eq!(times, [0, 0, 50, 50]);
+        assert_eq!(times, [0, 0, 100, 100]);
         // A vehicle moving east at 20 m/s: the bearing changes by more than the dead-band
         // (0.2°) per 100 ms, so the aim is re-sent at 10 Hz, never faster.
         let mut log = Vec::new();

@@ -46,8 +46,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
                 // the frames behind it would still come out now.
                 queue::Next::Vehicle(slot) => {
                     if slot == ATTITUDE {
-                        // Known as reached only when the driver takes it.
-                        self.vehicle.due |= vehicle::ATTITUDE_TAKEN;
+                        self.attitude_taken();
                     }
                     self.vehicle.value(slot).map(|v| v.to_frame())
                 }
@@ -73,9 +72,6 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     #[inline]
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
-        if self.vehicle.due & vehicle::ATTITUDE_TAKEN != 0 {
-            self.attitude_handed_over();
-        }
         if let Some(frame) = displaced {
             self.displaced(frame);
         }
@@ -101,7 +97,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// The driver did not take the frame last taken (it was busy or failed): it goes back
     /// to the front of its class.
     pub fn transmit_refused(&mut self, frame: Frame) {
-        self.vehicle.due &= !vehicle::ATTITUDE_TAKEN;
+        if frame.id == ids::ATTITUDE {
+            self.attitude_refused();
+        }
         if let Requeued::NoRoom | Requeued::Foreign = self.requeue(frame) {
             self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
         }

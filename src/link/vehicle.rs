@@ -16,21 +16,22 @@ pub(super) struct VehicleSources {
     /// Bit `i`: slot `i` holds a value.
     pub(super) has: u8,
     /// Bit `i`: push slot `i` at the next poll, whatever `next` says (new data after none
-    /// or stale data). Bit [`ATTITUDE_TAKEN`]: the frame just taken for transmission is an
-    /// attitude frame.
+    /// or stale data). Bit [`ATTITUDE_FIRST`]: the attitude frame last taken was the first
+    /// since none had gone ([`ATTITUDE_SENT`] clear): if the driver refuses it, the gimbal
+    /// still has none.
     pub(super) due: u8,
-    /// When an attitude frame was last handed to the transport (with [`ATTITUDE_SENT`] in
-    /// `has`): the gimbal has the vehicle's attitude from then on.
-    pub(super) attitude_sent: Instant,
-    /// That frame's heading, 0.01°: the vehicle's heading as the gimbal knows it, which a
-    /// north-referenced heading command is turned into a motor angle with.
+    /// The heading of the attitude frame last handed to the transport, 0.01°: the vehicle's
+    /// heading as the gimbal knows it, which a north-referenced heading command is turned
+    /// into a motor angle with.
     pub(super) attitude_sent_cdeg: i16,
+    /// When that frame's attitude was measured: the gimbal's attitude is as fresh as that.
+    pub(super) attitude_sent_stamp: Instant,
 }
 
-/// `VehicleSources::due`: the frame last taken for transmission is an attitude frame.
-pub(super) const ATTITUDE_TAKEN: u8 = 1 << 3;
-/// `VehicleSources::has`: an attitude frame was handed to the transport, at
-/// `attitude_sent`.
+/// `VehicleSources::due`: see there.
+pub(super) const ATTITUDE_FIRST: u8 = 1 << 3;
+/// `VehicleSources::has`: an attitude frame was taken for the transport and not refused
+/// (its heading and stamp in `attitude_sent_cdeg` and `attitude_sent_stamp`).
 pub(super) const ATTITUDE_SENT: u8 = 1 << 3;
 
 impl VehicleSources {
@@ -42,8 +43,8 @@ impl VehicleSources {
         next: [Instant::from_millis(0); 3],
         has: 0,
         due: 0b111,
-        attitude_sent: Instant::from_millis(0),
         attitude_sent_cdeg: 0,
+        attitude_sent_stamp: Instant::from_millis(0),
     };
 
     pub(super) fn has(&self, slot: VehicleSlot) -> bool {
@@ -146,9 +147,11 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     /// Whether the gimbal references headings to north now rather than to the nose: its
-    /// attitude push is on, the attitude set is fresh, and an attitude frame has reached
-    /// the transport (handed to the CAN driver, [`Link::transmit_done`]) within
-    /// `vehicle_stale_ms`. Attitude merely queued is not enough: a heading command queued
+    /// attitude push is on, the attitude set is fresh, and so is the attitude of the last
+    /// frame that reached the transport (taken by the CAN driver and not refused,
+    /// [`Link::transmit_refused`]).
+    /// Attitude merely queued is not enough, nor a stream resumed after going stale until
+    /// a frame of it has gone: a heading command queued
     /// beside it goes first (control frames outrank vehicle frames in the queue and on the
     /// bus), and the gimbal would take it nose-referenced. So a heading computed now is
     /// computed in the reference the gimbal will apply when it arrives. (Two frames already
@@ -158,28 +161,35 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     ///
     /// Always false on the UART, which carries no vehicle frames.
     pub fn north_referenced(&self, now: Instant) -> bool {
+        let stale = u32::from(self.config.vehicle_stale_ms);
         self.config.attitude_period_ms != 0
             && self.vehicle.has & ATTITUDE_SENT != 0
-            && Self::age(self.vehicle.attitude_sent, now) <= u32::from(self.config.vehicle_stale_ms)
+            && Self::age(self.vehicle.attitude_sent_stamp, now) <= stale
             && self.is_fresh(ATTITUDE, now)
     }
 
-    /// The frame last taken was handed to the transport, and it was an attitude frame
-    /// (out of line: once per push).
-    #[inline(never)]
-    pub(super) fn attitude_handed_over(&mut self) {
-        self.vehicle.due &= !ATTITUDE_TAKEN;
-        self.vehicle.has |= ATTITUDE_SENT;
-        self.vehicle.attitude_sent = self.last_poll;
-        // The frame just taken was built from the value held now: nothing set it since.
-        self.vehicle.attitude_sent_cdeg = self.vehicle.attitude.heading_centideg();
+    /// An attitude frame, built from the value held now, is taken for the transport: the
+    /// gimbal has it unless the driver refuses it (out of line, as the vehicle frames'
+    /// whole path, so that a control frame's send and its report pay nothing for it).
+    pub(super) fn attitude_taken(&mut self) {
+        if let Some(stamp) = self.vehicle.stamp(ATTITUDE) {
+            if self.vehicle.has & ATTITUDE_SENT == 0 {
+                self.vehicle.due |= ATTITUDE_FIRST;
+            } else {
+                self.vehicle.due &= !ATTITUDE_FIRST;
+            }
+            self.vehicle.has |= ATTITUDE_SENT;
+            self.vehicle.attitude_sent_cdeg = self.vehicle.attitude.heading_centideg();
+            self.vehicle.attitude_sent_stamp = stamp;
+        }
     }
 
-    /// The vehicle's heading as the gimbal last received it, 0.01°, while it is
-    /// north-referenced.
-    pub(super) fn gimbal_vehicle_heading(&self, now: Instant) -> Option<i16> {
-        self.north_referenced(now)
-            .then_some(self.vehicle.attitude_sent_cdeg)
+    /// The driver refused an attitude frame: if it was the first, the gimbal has none yet.
+    /// (A later one refused leaves the gimbal with the one before, a push period older.)
+    pub(super) fn attitude_refused(&mut self) {
+        if self.vehicle.due & ATTITUDE_FIRST != 0 {
+            self.vehicle.has &= !ATTITUDE_SENT;
+        }
     }
 
     /// The latest vehicle attitude set, fresh or not.
