@@ -8,12 +8,12 @@ use idu_gimbal_mavlink::codec;
 use idu_gimbal_mavlink::framing::Outbox;
 use mavio::dialects::common::enums::{
     CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, EstimatorStatusFlags,
-    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavLandedState, MavModeFlag, MavState,
-    MavType,
+    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavLandedState, MavModeFlag,
+    MavSeverity, MavState, MavType,
 };
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CameraTrackingImageStatus, GimbalDeviceAttitudeStatus,
-    GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
+    GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat, Statustext,
 };
 use mavio::mavspec::rust::spec::{MavLinkVersion, MessageSpecStatic};
 use mavio::protocol::{Frame, V2};
@@ -138,6 +138,23 @@ proptest! {
             1, 7, 100, codec::heartbeat::LEN, |p| codec::heartbeat::encode(&m, p),
         );
         prop_assert_eq!(ours, mavio_frame(1, 7, 100, &m));
+    }
+
+    #[test]
+    fn the_statustext_frame_is_mavios(
+        severity in 0u8..8, text in proptest::collection::vec(any::<u8>(), 50),
+        id in any::<u16>(), chunk in any::<u8>(),
+    ) {
+        let m = Statustext {
+            severity: MavSeverity::try_from(severity).unwrap(),
+            text: <[u8; 50]>::try_from(text).unwrap(),
+            id,
+            chunk_seq: chunk,
+        };
+        let ours = codec_frame::<Statustext>(
+            2, 9, 154, codec::statustext::LEN, |p| codec::statustext::encode(&m, p),
+        );
+        prop_assert_eq!(ours, mavio_frame(2, 9, 154, &m));
     }
 
     #[test]

@@ -38,12 +38,7 @@ impl State {
     /// flags carry the first (`AT_YAW_LIMIT`), but no flag the second, and ground stations
     /// show a status text to the pilot (QGroundControl as a message, ArduPilot and PX4
     /// forward it). Once each time it begins.
-    fn tell_aim<G: GimbalControl>(&mut self, gimbal: &G) {
-        let state = gimbal.aim_state();
-        let now = AimTold {
-            at_yaw_limit: state.is_some_and(|a| a.at_yaw_limit),
-            not_reached: state.is_some_and(|a| a.not_reached),
-        };
+    fn tell_aim(&mut self, now: AimTold) {
         let was = core::mem::replace(&mut self.aim_told, now);
         // The text says how many re-commands the link makes.
         const _: () = assert!(idu_gimbal::link::aim::ATTEMPTS == 3);
@@ -60,7 +55,11 @@ impl State {
             id: 0,
             chunk_seq: 0,
         };
-        self.send(self.config.gimbal_component, &message);
+        self.send_encoded::<Statustext>(
+            self.config.gimbal_component,
+            codec::statustext::LEN,
+            |p| codec::statustext::encode(&message, p),
+        );
     }
 
     /// The heartbeats, when due: the gimbal device's and, with one, the camera's.
@@ -142,10 +141,15 @@ impl State {
         if !gimbal.is_link_up() {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
         }
-        if gimbal.aim_state().is_some_and(|a| a.at_yaw_limit) {
+        let aim = gimbal.aim_state();
+        let told = AimTold {
+            at_yaw_limit: aim.is_some_and(|a| a.at_yaw_limit),
+            not_reached: aim.is_some_and(|a| a.not_reached),
+        };
+        if told.at_yaw_limit {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
-        self.tell_aim(gimbal);
+        self.tell_aim(told);
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,
             target_component: 0,
