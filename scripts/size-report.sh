@@ -10,12 +10,15 @@
 # .rodata + .data (initial values live in flash); static RAM counts .data + .bss + .uninit.
 #
 # Budgets: the goals where tighter than the floors: driver flash <= 6 KiB (the floor: 8 KiB);
-# static RAM <= 512 B in all (a floor) and <= 256 B beyond the transmit queue's slots (a
-# goal). The serial driver is held to the same flash and RAM budgets (it has none of its
-# own). The MAVLink bridge (footprint_bridge: a Bridge with a camera over footprint_driver's
-# driver) is measured against footprint_driver: flash <= 40 KiB (the camera definition files
-# included) and static RAM <= 4 KiB. Exit
-# status 1 when one is exceeded.
+# static RAM <= 512 B in all (a floor) and <= 288 B beyond the transmit queue's slots (256 B
+# before closed-loop aiming, whose state takes 28 B of it: BENCHMARKS.md). The serial driver
+# is held to the same RAM budget, and to 6.25 KiB of flash: the link it shares carries the
+# closed loop's hooks (the tracker's hand-over, the attitude's accounting), about 350 B,
+# beside its stream parser. The MAVLink bridge
+# (footprint_bridge: a Bridge with a camera over footprint_driver's driver) is measured
+# against footprint_driver: flash <= 42 KiB (the camera definition files included, and the
+# core's closed-loop aiming, which the bridge links and footprint_driver does not: 40 KiB
+# before it) and static RAM <= 4 KiB. Exit status 1 when one is exceeded.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/firmware-env.sh
@@ -24,13 +27,14 @@ ensure_target
 ensure_binutils
 
 FLASH_BUDGET=6144
+SERIAL_FLASH_BUDGET=6400
 RAM_BUDGET=512
-RAM_BEYOND_SLOTS_BUDGET=256
+RAM_BEYOND_SLOTS_BUDGET=288
 # The default queues' slots: 8 control frames of 8 bytes, 8 text frames of 9 (8 data bytes
 # and whether the frame ends its text). src/link/queue.rs checks this size in a test.
 TX_SLOTS=136
 # The MAVLink bridge, everything beyond the plain CAN driver.
-BRIDGE_FLASH_BUDGET=40960
+BRIDGE_FLASH_BUDGET=43008
 BRIDGE_RAM_BUDGET=4096
 
 ensure_bench_toolchain
@@ -89,7 +93,7 @@ if [ "$bridge_flash" -gt "$BRIDGE_FLASH_BUDGET" ]; then bridge_flash_verdict="OV
 if [ "$bridge_ram" -gt "$BRIDGE_RAM_BUDGET" ]; then bridge_ram_verdict="OVER BUDGET"; status=1; fi
 serial_flash_verdict=ok
 serial_ram_verdict=ok
-if [ "$serial_flash" -gt "$FLASH_BUDGET" ]; then serial_flash_verdict="OVER BUDGET"; status=1; fi
+if [ "$serial_flash" -gt "$SERIAL_FLASH_BUDGET" ]; then serial_flash_verdict="OVER BUDGET"; status=1; fi
 if [ "$serial_ram" -gt "$RAM_BUDGET" ]; then serial_ram_verdict="OVER BUDGET"; status=1; fi
 echo "| driver (footprint_driver - footprint_base) | bytes | budget | verdict |"
 echo "|---|---:|---:|---|"
@@ -99,7 +103,7 @@ echo "| static RAM beyond the $TX_SLOTS B of TX slots | $beyond | <= $RAM_BEYOND
 echo
 echo "| serial driver (footprint_serial - footprint_base) | bytes | budget | verdict |"
 echo "|---|---:|---:|---|"
-echo "| flash | $serial_flash | <= $FLASH_BUDGET | $serial_flash_verdict |"
+echo "| flash | $serial_flash | <= $SERIAL_FLASH_BUDGET | $serial_flash_verdict |"
 echo "| static RAM | $serial_ram | <= $RAM_BUDGET | $serial_ram_verdict |"
 echo
 echo "| MAVLink bridge, beyond the CAN driver (footprint_bridge - footprint_driver) | bytes | budget | verdict |"

@@ -9,7 +9,7 @@ pub struct Row {
 }
 
 pub struct Table {
-    rows: heapless::Vec<Row, 32>,
+    rows: heapless::Vec<Row, 40>,
 }
 
 impl Default for Table {
