@@ -6,9 +6,16 @@ Also listens to the bridge directly as a passive UDP peer (it answers every peer
 from), so the simulated gimbal's own GIMBAL_DEVICE_ATTITUDE_STATUS can be compared with
 ArduPilot's re-published one.
 
-Everything is bounded: --deadline seconds overall (default 150).
+The steps on the ground print what they see against what is expected (the yaw and pitch, and
+the bridge's own YAW_LOCK/NEUTRAL flags). The last step flies (unless --no-flight): GUIDED, arm,
+take off, a region of interest, then a turn on the spot; it passes or fails on the earth yaw's
+error against the true bearing to the ROI (see turning_roi). Exit code: 0, 2 when ArduPilot did
+not find the gimbal, 4 when the turning ROI failed, 3 on the overall deadline.
+
+Everything is bounded: --deadline seconds overall (default 280).
 """
 import argparse
+import collections
 import math
 import os
 import sys
@@ -24,7 +31,7 @@ GDF = [(1, "RETRACT"), (2, "NEUTRAL"), (4, "ROLL_LOCK"), (8, "PITCH_LOCK"), (16,
        (256, "RC_EXCLUSIVE"), (512, "RC_MIXED")]
 
 T0 = time.monotonic()
-DEADLINE = 150.0
+DEADLINE = 280.0
 
 
 def log(*a):
@@ -77,6 +84,10 @@ class Pump:
         self.bridge_err_pos = 0
         self.seen_sources = set()
         self.mount_text_at = None  # when ArduPilot announced "Mount: <vendor> <model>"
+        # ArduPilot's ATTITUDE as (its time_boot_ms, yaw deg, yawspeed deg/s), to pair its
+        # re-published GIMBAL_DEVICE_ATTITUDE_STATUS (stamped with the same clock) with the
+        # vehicle yaw of that moment while the vehicle turns
+        self.att_hist = collections.deque(maxlen=600)
 
     def send_heartbeats(self):
         now = time.monotonic()
@@ -118,6 +129,10 @@ class Pump:
                     self.acks.append(m)
                 elif t == "PARAM_VALUE":
                     self.params[m.param_id] = m.param_value
+                elif t == "ATTITUDE" and m.get_srcSystem() == 1 and m.get_srcComponent() == 1:
+                    if self.att_hist and m.time_boot_ms < self.att_hist[-1][0]:
+                        self.att_hist.clear()  # rebooted
+                    self.att_hist.append((m.time_boot_ms, math.degrees(m.yaw), math.degrees(m.yawspeed)))
 
     def spin(self, seconds):
         end = time.monotonic() + seconds
@@ -144,6 +159,22 @@ class Pump:
             if best is None or ts > best[0]:
                 best = (ts, m)
         return None if best is None else best[1]
+
+    def vehicle_yaw_at(self, boot_ms):
+        """ArduPilot's vehicle yaw (deg) at its time boot_ms, interpolated between ATTITUDE
+        samples; None if there is no sample within 0.3 s of it."""
+        h = self.att_hist
+        if not h:
+            return None
+        if boot_ms <= h[0][0]:
+            return h[0][1] if h[0][0] - boot_ms <= 300 else None
+        if boot_ms >= h[-1][0]:
+            return h[-1][1] if boot_ms - h[-1][0] <= 300 else None
+        for (t0, y0, _), (t1, y1, _) in zip(reversed(list(h)[:-1]), reversed(list(h)[1:])):
+            if t0 <= boot_ms <= t1:
+                f = 0.0 if t1 == t0 else (boot_ms - t0) / float(t1 - t0)
+                return wrap180(y0 + f * wrap180(y1 - y0))
+        return None
 
     def bridge_stderr_new(self):
         if not self.bridge_err or not os.path.exists(self.bridge_err):
@@ -261,10 +292,12 @@ def describe_gdas(m, vehicle_yaw):
 
 
 SUMMARY = []
+FLAG_CHECKS = []  # (step, bridge status flags, (YAW_LOCK, NEUTRAL) expected, as expected?)
 
 
-def report(p, title, expect, want=None):
-    """want: ("body"|"earth", yaw_deg, pitch_deg) commanded target, for the summary table."""
+def report(p, title, expect, want=None, want_flags=None):
+    """want: ("body"|"earth", yaw_deg, pitch_deg) commanded target, for the summary table.
+    want_flags: (YAW_LOCK expected?, NEUTRAL expected?) in the bridge's own status."""
     att = p.get("ap", "ATTITUDE", 1, 1, max_age=2)
     vyaw = math.degrees(att.yaw) if att else None
     print("-" * 100)
@@ -304,10 +337,236 @@ def report(p, title, expect, want=None):
             _, dev_p, y = q_to_euler_deg(list(dev.q))
             dev_e = wrap180(y + math.degrees(dev.delta_yaw)) if dev.flags & 32 else wrap180(y)
         SUMMARY.append((title.split(" (")[0][:58], frame, wy, wp, vyaw, exp_earth, ap_e, ap_p, dev_e, dev_p))
+    if want_flags is not None:
+        dev = p.get("bridge", "GIMBAL_DEVICE_ATTITUDE_STATUS", comp=154, max_age=2) or \
+            p.get("ap", "GIMBAL_DEVICE_ATTITUDE_STATUS", comp=154, max_age=2)
+        got = (bool(dev.flags & 16), bool(dev.flags & 2)) if dev else None
+        ok = got == tuple(want_flags)
+        print("  bridge's own flags: YAW_LOCK %s NEUTRAL %s, expected YAW_LOCK %s NEUTRAL %s: %s" % (
+            ("yes" if got[0] else "no") if got else "?", ("yes" if got[1] else "no") if got else "?",
+            "yes" if want_flags[0] else "no", "yes" if want_flags[1] else "no", "ok" if ok else "MISMATCH"))
+        FLAG_CHECKS.append((title.split(" (")[0][:58], dev.flags if dev else -1, want_flags, ok))
     lines = p.bridge_stderr_new()
     print("  bridge stderr since last step: %s" % ("(nothing)" if not lines else ""))
     for ln in lines[-15:]:
         print("    | " + ln)
+
+
+def bearing_deg(lat1, lon1, lat2, lon2):
+    """Bearing (deg from north) from point 1 to point 2, flat earth, as ArduPilot's
+    AP_Mount_Backend::get_angle_target_to_location computes it for a region of interest."""
+    x = wrap180(lon2 - lon1) * math.cos(math.radians((lat1 + lat2) / 2.0))
+    y = lat2 - lat1
+    return math.degrees(math.atan2(x, y))
+
+
+def distance_m(lat1, lon1, lat2, lon2):
+    x = math.radians(wrap180(lon2 - lon1)) * math.cos(math.radians((lat1 + lat2) / 2.0)) * 6378137.0
+    y = math.radians(lat2 - lat1) * 6378137.0
+    return math.hypot(x, y)
+
+
+# Bounds of the turning step (see turning_roi). The simulated gimbal reports its motor angle
+# in a postback every 500 ms (idu_gimbal::sim::SimConfig::postback_period_ms); the bridge's
+# status (every 100 ms) carries the last postback's motor angle with delta_yaw = the vehicle's
+# heading when that postback arrived, so its own earth yaw (q yaw + delta_yaw) is consistent
+# whatever the postback's age. ArduPilot instead adds the vehicle's *current* yaw to that motor
+# angle (AP_Mount reads the quaternion as body frame), so while the vehicle turns at w deg/s its
+# reading lags by up to w x (postback period + status period).
+POSTBACK_PERIOD_S = 0.5
+# What the closed loop itself may lag by: the autopilot's attitude reaches the bridge every
+# 20 ms (ArduPilot's AUTOPILOT_STATE_FOR_GIMBAL_DEVICE at 50 Hz), the link re-commands the
+# gimbal at most every 50 ms (aim_period_ms) once the heading moved past its 0.2 deg dead-band,
+# the simulated gimbal slews at 60 deg/s (well above the turn rate), the bridge's status comes
+# every 100 ms; 0.25 s covers their sum with room to spare.
+LOOP_LAG_S = 0.25
+STEADY_TOL_DEG = 2.0
+
+
+def turning_roi(p, a, lat, lon):
+    """Arm, take off in GUIDED, set a region of interest, turn the vehicle on the spot with
+    CONDITION_YAW and compare, every 0.5 s, the mount's earth yaw (as ArduPilot reports it, and
+    as the bridge reports it) with the true bearing from the vehicle to the ROI.
+    Returns (passed, summary lines)."""
+    print("=" * 100)
+    log("STEP: yaw-locked ROI while the vehicle turns (GUIDED, take off to %g m, DO_SET_ROI_LOCATION,"
+        " CONDITION_YAW %g deg at %g deg/s)" % (a.takeoff_alt, a.turn_deg, a.turn_rate))
+    print("  expected: ArduPilot (mount mode GPS_POINT) re-sends the earth bearing to the ROI at 50 Hz with"
+          " flags ROLL|PITCH|YAW_LOCK (28); the camera keeps that bearing while the vehicle turns under it:")
+    print("  within %.1f deg once the turn is over; during it within %.1f deg + w x %.2f s (the bridge's own"
+          " status) and %.1f deg + w x %.2f s (ArduPilot's reading, which adds the current vehicle yaw to the"
+          " motor angle of the gimbal's last postback), w = the vehicle's peak yaw rate" % (
+              STEADY_TOL_DEG, STEADY_TOL_DEG, LOOP_LAG_S, STEADY_TOL_DEG, POSTBACK_PERIOD_S + LOOP_LAG_S))
+    fail = []
+    # faster streams for this step: the readings are paired by time while the vehicle turns
+    for mid, us in ((mavlink.MAVLINK_MSG_ID_ATTITUDE, 50000),
+                    (mavlink.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS, 100000),
+                    (mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100000)):
+        r = command_long(p, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, [mid, us], wait=1.5)
+        log("SET_MESSAGE_INTERVAL %s %d us -> %s" % (mavlink.mavlink_map[mid].msgname, us, res_name(r)))
+
+    # --- GUIDED, arm (retried while the pre-arm checks are not yet met), take off
+    r = command_long(p, mavlink.MAV_CMD_DO_SET_MODE, [mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4])
+    log("DO_SET_MODE GUIDED -> %s" % res_name(r))
+    armed = False
+    end = time.monotonic() + a.arm_wait
+    while time.monotonic() < end:
+        r = command_long(p, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, [1], wait=3)
+        log("COMPONENT_ARM_DISARM arm -> %s" % res_name(r))
+        if r == mavlink.MAV_RESULT_ACCEPTED:
+            armed = True
+            break
+        p.spin(3.0)
+    if not armed:
+        return False, ["turning ROI: FAIL: could not arm within %.0f s" % a.arm_wait]
+    r = command_long(p, mavlink.MAV_CMD_NAV_TAKEOFF, [0, 0, 0, 0, 0, 0, a.takeoff_alt])
+    log("NAV_TAKEOFF %g m -> %s" % (a.takeoff_alt, res_name(r)))
+    end = time.monotonic() + 40
+    gp = None
+    while time.monotonic() < end:
+        p.spin(0.5)
+        gp = p.get("ap", "GLOBAL_POSITION_INT", 1, 1, max_age=1)
+        if gp and gp.relative_alt >= (a.takeoff_alt - 0.5) * 1000 and abs(gp.vz) < 30:
+            break
+    else:
+        return False, ["turning ROI: FAIL: did not reach %g m (relative alt %s m)" % (
+            a.takeoff_alt, fmt(gp.relative_alt / 1000.0) if gp else "nan")]
+    log("at %.1f m above home" % (gp.relative_alt / 1000.0))
+
+    # --- the ROI: 100 m north of home, 57.7 m below it (as the ROI step on the ground)
+    roi_lat = lat + math.degrees(100.0 / 6378137.0)
+    roi_lon = lon
+    roi_rel_alt = -57.7
+    r = command_int(p, mavlink.MAV_CMD_DO_SET_ROI_LOCATION, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+                    [0], int(round(roi_lat * 1e7)), int(round(roi_lon * 1e7)), roi_rel_alt)
+    log("DO_SET_ROI_LOCATION 100 m north of home, %g m relative -> %s" % (roi_rel_alt, res_name(r)))
+    p.spin(a.settle)
+    p.bridge_stderr_new()
+
+    att = p.get("ap", "ATTITUDE", 1, 1, max_age=1)
+    gp = p.get("ap", "GLOBAL_POSITION_INT", 1, 1, max_age=1)
+    if att is None or gp is None:
+        return False, ["turning ROI: FAIL: no ATTITUDE or GLOBAL_POSITION_INT from ArduPilot"]
+    h0 = math.degrees(att.yaw)
+    body0 = wrap180(bearing_deg(gp.lat / 1e7, gp.lon / 1e7, roi_lat, roi_lon) - h0)
+    # turn the way that brings the ROI toward the nose, so the gimbal's yaw stays within the
+    # motor's travel (+-170 deg) throughout
+    turn = math.copysign(a.turn_deg, body0 if body0 != 0 else 1.0)
+    target_h = wrap180(h0 + turn)
+
+    samples = []  # (t, phase, vyaw, vrate, brg, exp_pitch, ap_e, ap_err, ap_pitch, ap_flags, dev_e, dev_err, dev_pitch, dev_flags)
+
+    def sample(t_rel, phase):
+        att = p.get("ap", "ATTITUDE", 1, 1, max_age=1)
+        gp = p.get("ap", "GLOBAL_POSITION_INT", 1, 1, max_age=1)
+        vyaw = math.degrees(att.yaw) if att else float("nan")
+        vrate = math.degrees(att.yawspeed) if att else float("nan")
+        brg = exp_pitch = float("nan")
+        if gp:
+            vlat, vlon = gp.lat / 1e7, gp.lon / 1e7
+            brg = bearing_deg(vlat, vlon, roi_lat, roi_lon)
+            exp_pitch = math.degrees(math.atan2(roi_rel_alt - gp.relative_alt / 1000.0,
+                                                distance_m(vlat, vlon, roi_lat, roi_lon)))
+        ap_e = ap_pitch = float("nan")
+        ap_flags = -1
+        apm = p.get("ap", "GIMBAL_DEVICE_ATTITUDE_STATUS", 1, 1, max_age=1)
+        if apm:
+            _, ap_pitch, y = q_to_euler_deg(list(apm.q))
+            # the vehicle yaw of the moment ArduPilot sent it (same clock), as AP_Mount pairs them
+            vy = p.vehicle_yaw_at(apm.time_boot_ms)
+            if vy is not None:
+                ap_e = wrap180(y + vy)
+            ap_flags = apm.flags
+        dev_e = dev_pitch = float("nan")
+        dev_flags = -1
+        dev = p.get("bridge", "GIMBAL_DEVICE_ATTITUDE_STATUS", comp=154, max_age=1)
+        if dev:
+            _, dev_pitch, y = q_to_euler_deg(list(dev.q))
+            dev_e = wrap180(y + math.degrees(dev.delta_yaw)) if dev.flags & 32 else wrap180(y)
+            dev_flags = dev.flags
+        samples.append((t_rel, phase, vyaw, vrate, brg, exp_pitch, ap_e, wrap180(ap_e - brg), ap_pitch, ap_flags,
+                        dev_e, wrap180(dev_e - brg), dev_pitch, dev_flags))
+        print("  %6.1f %-6s | %7s %6s | %7s %6s | %7s %6s %6s %4s | %7s %6s %6s %4s" % (
+            t_rel, phase, fmt(vyaw), fmt(vrate), fmt(brg), fmt(exp_pitch), fmt(ap_e), fmt(wrap180(ap_e - brg)),
+            fmt(ap_pitch), ap_flags, fmt(dev_e), fmt(wrap180(dev_e - brg)), fmt(dev_pitch), dev_flags))
+
+    print("  vehicle yaw %s, ROI at body yaw %s: turning %+g deg (CONDITION_YAW relative, direction %+d) to %s" % (
+        fmt(h0), fmt(body0), turn, 1 if turn > 0 else -1, fmt(target_h)))
+    print("  every 0.5 s; earth yaws in deg; 'AP' = ArduPilot's re-published status: q yaw (read as body frame)"
+          " + the vehicle's ATTITUDE yaw at that status's time_boot_ms;")
+    print("  'dev' = the bridge's own status: q yaw + delta_yaw; err = earth yaw - true bearing from the vehicle"
+          " to the ROI; flags = GIMBAL_DEVICE_FLAGS (28 ROLL|PITCH|YAW_LOCK, +32 YAW_IN_VEHICLE_FRAME, +2 NEUTRAL)")
+    print("  %6s %-6s | %7s %6s | %7s %6s | %7s %6s %6s %4s | %7s %6s %6s %4s" % (
+        "t", "phase", "vehYaw", "rate", "bearing", "expPit", "APearth", "APerr", "APpit", "APfl",
+        "devEarth", "devErr", "devPit", "dvfl"))
+    for i in range(2):
+        sample(-1.0 + 0.5 * i, "before")
+        p.spin(0.5)
+    att = p.get("ap", "ATTITUDE", 1, 1)
+    boot_ms_cmd = att.time_boot_ms if att else 0
+    p.acks.clear()
+    p.ap.mav.command_long_send(1, 1, mavlink.MAV_CMD_CONDITION_YAW, 0, abs(turn), a.turn_rate,
+                               1 if turn > 0 else -1, 1, 0, 0, 0)
+    t_cmd = time.monotonic()
+    expected_dur = abs(turn) / a.turn_rate
+    done_at = None
+    boot_ms_done = None
+    next_t = t_cmd
+    while True:
+        while time.monotonic() < next_t:
+            p.spin(min(0.02, max(0.0, next_t - time.monotonic())))
+        now = time.monotonic()
+        t_rel = now - t_cmd
+        att = p.get("ap", "ATTITUDE", 1, 1, max_age=1)
+        if done_at is None and att is not None and abs(wrap180(math.degrees(att.yaw) - target_h)) < 1.0 \
+                and abs(math.degrees(att.yawspeed)) < 1.0:
+            done_at = now
+            boot_ms_done = att.time_boot_ms
+        if done_at is None:
+            phase = "turn"
+        elif now - done_at < a.after_settle:
+            phase = "settle"
+        else:
+            phase = "after"
+        sample(t_rel, phase)
+        if done_at is not None and now - done_at >= a.after_settle + a.after_s - 1e-6:
+            break
+        if done_at is None and t_rel > expected_dur * 2 + 10:
+            fail.append("the vehicle did not finish its turn within %.0f s" % t_rel)
+            break
+        next_t += 0.5
+    for ack in p.acks:
+        if ack.command == mavlink.MAV_CMD_CONDITION_YAW:
+            log("(the CONDITION_YAW sent at t=0 had been answered %s)" % res_name(ack.result))
+    # the vehicle's peak yaw rate through the turn, from every ATTITUDE (20 Hz), not only the samples
+    rates = [abs(r) for (t, _, r) in p.att_hist if t >= boot_ms_cmd and (boot_ms_done is None or t <= boot_ms_done)]
+    w = max(rates) if rates else a.turn_rate
+    dev_bound = STEADY_TOL_DEG + w * LOOP_LAG_S
+    ap_bound = STEADY_TOL_DEG + w * (POSTBACK_PERIOD_S + LOOP_LAG_S)
+
+    def worst(phase_set, idx):
+        v = [abs(s_[idx]) if not math.isnan(s_[idx]) else float("inf") for s_ in samples if s_[1] in phase_set]
+        return max(v) if v else float("nan")
+
+    during = ("turn", "settle")
+    res = {
+        "AP during": (worst(during, 7), ap_bound), "AP after": (worst(("after",), 7), STEADY_TOL_DEG),
+        "dev during": (worst(during, 11), dev_bound), "dev after": (worst(("after",), 11), STEADY_TOL_DEG),
+    }
+    lines = ["turning ROI: turned %+g deg in %s s (peak yaw rate %.1f deg/s); |error| worst (bound):" % (
+        turn, fmt(done_at - t_cmd) if done_at else "nan", w)]
+    for k in ("AP during", "AP after", "dev during", "dev after"):
+        e, b = res[k]
+        ok = e <= b
+        lines.append("  %-10s %6s (%.1f) %s" % (k, fmt(e), b, "ok" if ok else "FAIL"))
+        if not ok:
+            fail.append("%s |error| %s > %.1f deg" % (k, fmt(e), b))
+    fl = sorted(set(s_[13] for s_ in samples if s_[1] != "before"))
+    lines.append("  bridge status flags seen through the turn: %s" % ", ".join(flag_names(f) for f in fl if f >= 0))
+    lines.append("turning ROI: %s" % ("PASS" if not fail else "FAIL: " + "; ".join(fail)))
+    for ln in p.bridge_stderr_new()[-10:]:
+        print("    | " + ln)
+    return not fail, lines
 
 
 def main():
@@ -321,7 +580,15 @@ def main():
     ap_.add_argument("--cam-type", type=int, default=6)
     ap_.add_argument("--settle", type=float, default=3.0)
     ap_.add_argument("--heading-wait", type=float, default=45.0, help="max s to wait for a steady heading")
-    ap_.add_argument("--deadline", type=float, default=150.0)
+    ap_.add_argument("--deadline", type=float, default=280.0)
+    ap_.add_argument("--no-flight", action="store_true", help="skip the last step (arm, take off, ROI while turning)")
+    ap_.add_argument("--takeoff-alt", type=float, default=10.0, help="m above home for the turning ROI step")
+    ap_.add_argument("--turn-deg", type=float, default=90.0, help="how far the vehicle turns with the ROI set")
+    ap_.add_argument("--turn-rate", type=float, default=10.0, help="deg/s of that turn (CONDITION_YAW param2)")
+    ap_.add_argument("--after-settle", type=float, default=1.0,
+                     help="s after the turn ends still judged by the turn's bound (a postback period and more)")
+    ap_.add_argument("--after-s", type=float, default=3.0, help="s sampled after that, judged within 2 deg")
+    ap_.add_argument("--arm-wait", type=float, default=60.0, help="max s to retry arming (pre-arm checks)")
     a = ap_.parse_args()
     DEADLINE = a.deadline
     lat, lon, alt, hdg = [float(v) for v in a.home.split(",")]
@@ -396,25 +663,37 @@ def main():
     for (l, t, s, c), (ts, mm) in sorted(p.latest.items(), key=lambda kv: kv[0]):
         if t == "HEARTBEAT" and c != 190:
             log("heartbeat seen on %s link from %d/%d: type %d autopilot %d" % (l, s, c, mm.type, mm.autopilot))
-    report(p, "idle after discovery (no command yet)", "vehicle yaw ~%g" % hdg)
+    # The bridge's own status flags (its GIMBAL_DEVICE_ATTITUDE_STATUS, not ArduPilot's re-published
+    # one, whose flags ArduPilot computes from its own mount mode): YAW_LOCK is set only while the
+    # bridge holds the yaw in the earth frame (an earth-frame setpoint, which is what ArduPilot
+    # sends for YAW_LOCK and for a region of interest: GIMBAL_DEVICE_SET_ATTITUDE flags 28), not
+    # while it follows the vehicle (flags 0 from ArduPilot, or nothing commanded yet). It used to
+    # be set whenever the gimbal reported its lock mode, i.e. after any angle command, which said
+    # nothing about the frame; the released bridge still does that and shows MISMATCH here.
+    report(p, "idle after discovery (no command yet)",
+           "vehicle yaw ~%g; the bridge's own flags: no YAW_LOCK (nothing held in the earth frame)" % hdg,
+           want_flags=(False, False))
 
     P = -30.0
     Y = 20.0
     steps = [
         ("DO_GIMBAL_MANAGER_PITCHYAW pitch %g yaw %g flags 0 (yaw body frame / follow)" % (P, Y),
          lambda: command_long(p, mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, [P, Y, float("nan"), float("nan"), 0, 0, 0]),
-         "body yaw %g -> earth yaw %g, pitch %g" % (Y, wrap180(Y + hdg), P), ("body", Y, P)),
+         "body yaw %g -> earth yaw %g, pitch %g; bridge flags without YAW_LOCK (follows the vehicle)" % (
+             Y, wrap180(Y + hdg), P), ("body", Y, P), (False, False)),
         ("DO_GIMBAL_MANAGER_PITCHYAW pitch %g yaw %g flags YAW_LOCK|YAW_IN_EARTH_FRAME (80)" % (P, Y),
          lambda: command_long(p, mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, [P, Y, float("nan"), float("nan"), 16 | 64, 0, 0]),
-         "earth yaw %g -> body yaw %g, pitch %g" % (Y, wrap180(Y - hdg), P), ("earth", Y, P)),
+         "earth yaw %g -> body yaw %g, pitch %g; bridge flags with YAW_LOCK (earth-frame hold)" % (
+             Y, wrap180(Y - hdg), P), ("earth", Y, P), (True, False)),
         ("DO_GIMBAL_MANAGER_PITCHYAW pitch %g yaw %g flags YAW_IN_EARTH_FRAME only (64)" % (P, Y),
          lambda: command_long(p, mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, [P, Y, float("nan"), float("nan"), 64, 0, 0]),
-         "per spec earth yaw %g (body %g); ArduPilot only looks at YAW_LOCK so likely body %g" % (Y, wrap180(Y - hdg), Y),
-         ("earth", Y, P)),
+         "per spec earth yaw %g (body %g); ArduPilot only looks at YAW_LOCK so likely body %g, sent with flags 0:"
+         " bridge flags without YAW_LOCK" % (Y, wrap180(Y - hdg), Y),
+         ("earth", Y, P), (False, False)),
         ("DO_MOUNT_CONTROL pitch %g roll 0 yaw %g mode MAVLINK_TARGETING" % (P, Y),
          lambda: command_long(p, mavlink.MAV_CMD_DO_MOUNT_CONTROL, [P, 0, Y, 0, 0, 0, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING]),
-         "body yaw %g (DO_MOUNT_CONTROL yaw is body frame) -> earth %g, pitch %g" % (Y, wrap180(Y + hdg), P),
-         ("body", Y, P)),
+         "body yaw %g (DO_MOUNT_CONTROL yaw is body frame) -> earth %g, pitch %g; bridge flags without YAW_LOCK" % (
+             Y, wrap180(Y + hdg), P), ("body", Y, P), (False, False)),
     ]
     # ROI: 100 m north of home, 57.7 m below home -> bearing 0 (north), pitch ~ -30
     roi_lat = lat + math.degrees(100.0 / 6378137.0)
@@ -422,17 +701,25 @@ def main():
         "DO_SET_ROI_LOCATION 100 m north of home, 57.7 m below (COMMAND_INT, GLOBAL_RELATIVE_ALT)",
         lambda: command_int(p, mavlink.MAV_CMD_DO_SET_ROI_LOCATION, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                             [0], int(round(roi_lat * 1e7)), int(round(lon * 1e7)), -57.7),
-        "earth yaw 0 (north) -> body yaw %g, pitch ~-30" % wrap180(0 - hdg), ("earth", 0.0, -30.0)))
+        "earth yaw 0 (north) -> body yaw %g, pitch ~-30; bridge flags with YAW_LOCK" % wrap180(0 - hdg),
+        ("earth", 0.0, -30.0), (True, False)))
+    # NEUTRAL: ArduPilot's MAVLink gimbal backend does not pass NEUTRAL on to the device; it sends
+    # MNT1_NEUTRAL_x (default 0, 0, 0) as a vehicle-frame angle target (GIMBAL_DEVICE_SET_ATTITUDE
+    # flags 0, yaw 0, pitch 0, as seen on the wire). The bridge holds that forward and level in the
+    # vehicle frame: its own flags have neither YAW_LOCK nor NEUTRAL (it was sent angles, not the
+    # NEUTRAL flag); ArduPilot's re-published status says NEUTRAL, from its own mount mode.
     steps.append((
         "DO_GIMBAL_MANAGER_PITCHYAW flags NEUTRAL (2)",
         lambda: command_long(p, mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, [float("nan")] * 4 + [2, 0, 0]),
-        "neutral (MNT1_NEUTRAL_x), flags NEUTRAL", ("body", 0.0, 0.0)))
+        "neutral: MNT1_NEUTRAL_x (0, 0, 0) sent as a vehicle-frame angle: forward and level, following the vehicle"
+        " (earth yaw = heading); ArduPilot's flags NEUTRAL, the bridge's without YAW_LOCK or NEUTRAL",
+        ("body", 0.0, 0.0), (False, False)))
 
-    for title, fn, expect, want in steps:
+    for title, fn, expect, want, want_flags in steps:
         r = fn()
         log("sent %s -> %s" % (title, res_name(r)))
         p.spin(a.settle)
-        report(p, title, expect, want)
+        report(p, title, expect, want, want_flags)
 
     print("=" * 100)
     print("SUMMARY (earth-frame yaw in deg, wrapped to +-180; 'AP' = ArduPilot's re-published status read as")
@@ -444,9 +731,24 @@ def main():
             t, fr, fmt(wy), fmt(wp), fmt(vy), fmt(ee), fmt(ae), fmt(wrap180(ae - ee)), fmt(ap_p),
             fmt(de), fmt(wrap180(de - ee)), fmt(dp)))
     print("(the YAW_IN_EARTH_FRAME-only row is expected to be off by the heading: ArduPilot reads only YAW_LOCK)")
+    print("the bridge's own status flags (expected: YAW_LOCK only while the yaw is held in the earth frame):")
+    for (t, fl, (wl, wn), ok) in FLAG_CHECKS:
+        print("  %-58s %-44s expected YAW_LOCK %-3s NEUTRAL %-3s %s" % (
+            t, flag_names(fl) if fl >= 0 else "none", "yes" if wl else "no", "yes" if wn else "no",
+            "ok" if ok else "MISMATCH"))
+    print("  %d of %d as expected" % (sum(1 for c in FLAG_CHECKS if c[3]), len(FLAG_CHECKS)))
     print("-" * 100)
+    turn_ok, turn_lines = True, []
+    if not a.no_flight:
+        turn_ok, turn_lines = turning_roi(p, a, lat, lon)
+        print("=" * 100)
+        for ln in turn_lines:
+            print(ln)
+        print("-" * 100)
     log("done; sources seen: %s" % sorted(p.seen_sources))
-    return 0 if found else 2
+    if not found:
+        return 2
+    return 0 if turn_ok else 4
 
 
 if __name__ == "__main__":

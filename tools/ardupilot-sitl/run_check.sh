@@ -2,12 +2,16 @@
 # By-hand check: what a real ArduPilot (ArduCopter SITL) reports of a MAVLink gimbal bridge.
 #
 #   bash tools/ardupilot-sitl/run_check.sh /path/to/gimbalctl [extra args for check_gimbal.py]
+#   BRIDGE_ARGS="--sim-lock-holds motor" bash tools/ardupilot-sitl/run_check.sh /path/to/gimbalctl
 #
-# Starts `gimbalctl mavlink --sim --listen 127.0.0.1:14560`, ArduCopter SITL (-I0, GCS on
+# Starts `gimbalctl mavlink --sim --listen 127.0.0.1:14560 $BRIDGE_ARGS`, ArduCopter SITL (-I0, GCS on
 # TCP 5760, SERIAL2 = udpclient to the bridge, home heading $HEADING), then check_gimbal.py
-# (pymavlink) sets SERIAL2_PROTOCOL=2, MNT1_TYPE=6 (Gremsy = MAVLink gimbal v2),
-# CAM1_TYPE=6 (MAVLinkCamV2), reboots SITL, waits for the gimbal and aims it step by step.
-# Bounded (< 3 min) and cleans up what it started. Env overrides: AP_DIR, PY, HEADING, HOME_LLA.
+# (pymavlink) sets SERIAL2_PROTOCOL=2, MNT1_TYPE=6 (MAVLink gimbal v2, "Gremsy" in older trees),
+# CAM1_TYPE=6 (MAVLinkCamV2), reboots SITL, waits for the gimbal and aims it step by step,
+# the last step in flight (arm, take off, a region of interest held while the vehicle turns).
+# Bounded (< 5 min) and cleans up what it started. Env overrides: AP_DIR, PY, HEADING, HOME_LLA,
+# BRIDGE_ARGS (extra `gimbalctl mavlink` options, split on spaces, e.g. --sim-lock-holds motor,
+# which only a bridge that has them accepts), RUNS_DIR (where the run dirs go; default ./runs here).
 set -u
 GIMBALCTL=${1:?usage: run_check.sh /path/to/gimbalctl [helper args]}
 shift
@@ -21,7 +25,7 @@ SITL_BIN=$AP_DIR/build/sitl/bin/arducopter
 DEFAULTS=$AP_DIR/Tools/autotest/default_params/copter.parm
 
 [ -x "$GIMBALCTL" ] || { echo "not executable: $GIMBALCTL" >&2; exit 1; }
-[ -x "$SITL_BIN" ] || { echo "SITL not built: $SITL_BIN (see $HERE/NOTES.md)" >&2; exit 1; }
+[ -x "$SITL_BIN" ] || { echo "SITL not built: $SITL_BIN (see $HERE/README.md)" >&2; exit 1; }
 if ! "$PY" -c 'import pymavlink' 2>/dev/null; then
     echo "pymavlink missing for $PY; installing" >&2
     "$PY" -m pip install -q pymavlink || exit 1
@@ -32,7 +36,10 @@ for port in 5760 14560; do
     fi
 done
 
-RUN=$(mktemp -d "$HERE/runs/run-$(date +%Y%m%d-%H%M%S)-XXXX" 2>/dev/null || { mkdir -p "$HERE/runs"; mktemp -d "$HERE/runs/run-XXXX"; })
+BRIDGE_ARGS=${BRIDGE_ARGS:-}
+RUNS_DIR=${RUNS_DIR:-$HERE/runs}
+mkdir -p "$RUNS_DIR" || exit 1
+RUN=$(mktemp -d "$RUNS_DIR/run-$(date +%Y%m%d-%H%M%S)-XXXX") || exit 1
 BRIDGE_PID= SITL_PID=
 cleanup() {
     for pid in $SITL_PID $BRIDGE_PID; do
@@ -53,24 +60,25 @@ echo "== gimbalctl: $GIMBALCTL ($(stat -c '%y' "$GIMBALCTL" 2>/dev/null))"
 echo "== ArduPilot: $(git -C "$AP_DIR" log --oneline -1 2>/dev/null)"
 echo "== home: $HOME (heading $HEADING)"
 
-# 1. the bridge under test (hard cap 170 s in case cleanup is skipped)
-timeout 170 "$GIMBALCTL" mavlink --sim --listen 127.0.0.1:14560 >"$RUN/bridge.out" 2>"$RUN/bridge.err" &
+# 1. the bridge under test (hard cap 300 s in case cleanup is skipped)
+# shellcheck disable=SC2086 # BRIDGE_ARGS is a list of options, split on purpose
+timeout 300 "$GIMBALCTL" mavlink --sim --listen 127.0.0.1:14560 $BRIDGE_ARGS >"$RUN/bridge.out" 2>"$RUN/bridge.err" &
 BRIDGE_PID=$!
 sleep 0.5
 kill -0 $BRIDGE_PID 2>/dev/null || { echo "bridge did not start:"; cat "$RUN/bridge.err"; exit 1; }
-echo "== bridge: $(head -1 "$RUN/bridge.out")"
+echo "== bridge: $(head -1 "$RUN/bridge.out")${BRIDGE_ARGS:+ (extra options: $BRIDGE_ARGS)}"
 
 # 2. ArduCopter SITL, run from the run dir (eeprom.bin, logs there); -w wipes params at the
 #    first start only (SITL's reboot re-execs without it).
-(cd "$RUN" && exec timeout 170 "$SITL_BIN" -w -I0 --model + --speedup 1 \
+(cd "$RUN" && exec timeout 300 "$SITL_BIN" -w -I0 --model + --speedup 1 \
     --defaults "$DEFAULTS" --home "$HOME" \
     --serial2 udpclient:127.0.0.1:14560 >"$RUN/sitl.log" 2>&1) &
 SITL_PID=$!
 echo "== SITL pid $SITL_PID: $SITL_BIN -w -I0 --model + --speedup 1 --defaults $DEFAULTS --home $HOME --serial2 udpclient:127.0.0.1:14560"
 
 # 3. the GCS-side helper (bounded)
-timeout 160 "$PY" "$HERE/check_gimbal.py" --ap tcp:127.0.0.1:5760 --bridge 127.0.0.1:14560 \
-    --bridge-stderr "$RUN/bridge.err" --home="$HOME" --deadline 150 "$@"
+timeout 290 "$PY" "$HERE/check_gimbal.py" --ap tcp:127.0.0.1:5760 --bridge 127.0.0.1:14560 \
+    --bridge-stderr "$RUN/bridge.err" --home="$HOME" --deadline 280 "$@"
 RC=$?
 echo "== helper exit code $RC"
 echo "== bridge stderr (last 20 lines of $RUN/bridge.err):"
