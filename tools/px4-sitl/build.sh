@@ -1,19 +1,19 @@
 #!/usr/bin/env bash
 # Fetch and build PX4 SITL (px4_sitl, SIH simulator, no Gazebo) for run_check.sh.
 #
-#   bash tools/px4-sitl/build.sh [WORK_DIR]        # default /work/sitl/px4
+#   bash tools/px4-sitl/build.sh [WORK_DIR]        # default ~/px4-sitl
 #
 # Leaves WORK_DIR/PX4-Autopilot (the source tree, build/px4_sitl_sihmin in it) and
 # WORK_DIR/venv (Python with the build's generators and pymavlink). Only the three submodules
 # the build needs are checked out; the board label `sihmin` (created here) disables what needs
 # the others. Sources are cloned from the URLs below; without access to GitHub point them at
 # local mirrors (bare repositories), e.g.
-#   PX4_URL=/work/.mirror/dakejahl+PX4-Autopilot/repo MAVLINK_URL=/work/.mirror/mavlink+mavlink/repo \
-#   PYMAVLINK_URL=/work/.mirror/ArduPilot+pymavlink/repo LIBEVENTS_URL=/work/.mirror/mavlink+libevents/repo \
-#   HEATSHRINK_URL=/work/.mirror/PX4+heatshrink/repo bash tools/px4-sitl/build.sh
+#   PX4_URL=/srv/mirror/PX4-Autopilot.git MAVLINK_URL=/srv/mirror/mavlink.git \
+#   PYMAVLINK_URL=/srv/mirror/pymavlink.git LIBEVENTS_URL=/srv/mirror/libevents.git \
+#   HEATSHRINK_URL=/srv/mirror/heatshrink.git bash tools/px4-sitl/build.sh
 # Env: PX4_COMMIT (default below), JOBS (2), NO_APT=1 to skip apt-get.
 set -eu
-WORK=${1:-/work/sitl/px4}
+WORK=${1:-$HOME/px4-sitl}
 # The newest commit of PX4's main in the snapshot used whose submodules all exist in theirs
 # (its child a1be954 moves mavlink to a commit the mavlink snapshot lacks, which the next
 # commit needs for AVAILABLE_MODES.seq). The fork dakejahl/PX4-Autopilot holds the same tree.

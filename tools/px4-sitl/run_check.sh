@@ -14,6 +14,7 @@
 # flies and runs the cases. Bounded (< 6 min) and cleans up what it started.
 #
 # Env overrides: PX4_DIR (source tree), PX4_BUILD (build dir), PY (python with pymavlink),
+# BRIDGE_ARGS (extra `gimbalctl mavlink` options, split on spaces, e.g. --sim-lock-holds motor),
 # BRIDGE_PORT (14560), RELAY_PORT (14561), LINK_PORT (14562), LINK_RATE (46080; empty: no -r),
 # LINK (normal: the link above; sitl-gimbal: no link of our own, the bridge behind SITL's own
 # gimbal link, mode Gimbal, which sends to UDP 13280), RUN_ROOT (where run directories go).
@@ -21,7 +22,7 @@ set -u
 GIMBALCTL=${1:?usage: run_check.sh /path/to/gimbalctl [helper args]}
 shift
 HERE=$(cd "$(dirname "$0")" && pwd)
-PX4_DIR=${PX4_DIR:-/work/sitl/px4/PX4-Autopilot}
+PX4_DIR=${PX4_DIR:-$HOME/px4-sitl/PX4-Autopilot}
 PX4_BUILD=${PX4_BUILD:-$PX4_DIR/build/px4_sitl_sihmin}
 if [ -z "${PY:-}" ]; then
     PY=python3
@@ -32,6 +33,7 @@ RELAY_PORT=${RELAY_PORT:-14561}
 LINK_PORT=${LINK_PORT:-14562}
 LINK_RATE=${LINK_RATE-46080}
 LINK=${LINK:-normal}
+BRIDGE_ARGS=${BRIDGE_ARGS:-}
 GCS_PORT=18570        # SITL's GCS link (px4-rc.mavlink, instance 0)
 SITL_GIMBAL_PORT=13280 # where SITL's own gimbal link (mode Gimbal) sends
 RUN_ROOT=${RUN_ROOT:-${TMPDIR:-/tmp}/px4-sitl-runs}
@@ -133,11 +135,12 @@ echo "== PX4: $(git -C "$PX4_DIR" log -1 --format='%H %cd %s' --date=short 2>/de
 echo "== link: $LINK, bridge UDP $BRIDGE_PORT, relay $RELAY_LISTEN, PX4 link port $LINK_PORT, rate ${LINK_RATE:-(no -r)}"
 
 # 1. the bridge under test (hard cap in case cleanup is skipped)
-timeout 380 "$GIMBALCTL" mavlink --sim --listen "127.0.0.1:$BRIDGE_PORT" >"$RUN/bridge.out" 2>"$RUN/bridge.err" &
+# shellcheck disable=SC2086 # BRIDGE_ARGS is a list of options, split on purpose
+timeout 380 "$GIMBALCTL" mavlink --sim --listen "127.0.0.1:$BRIDGE_PORT" $BRIDGE_ARGS >"$RUN/bridge.out" 2>"$RUN/bridge.err" &
 BRIDGE_PID=$!
 sleep 0.5
 kill -0 $BRIDGE_PID 2>/dev/null || { echo "bridge did not start:"; cat "$RUN/bridge.err"; exit 1; }
-echo "== bridge: $(head -1 "$RUN/bridge.out")"
+echo "== bridge: $(head -1 "$RUN/bridge.out")${BRIDGE_ARGS:+ (extra options: $BRIDGE_ARGS)}"
 
 # 2. PX4, first boot: the parameters
 PX4_LOG=$RUN/px4-boot1.log
