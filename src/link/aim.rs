@@ -33,9 +33,9 @@
 //!   first may predate any movement); a gimbal off the aim and not getting closer is
 //!   re-commanded at most [`ATTEMPTS`] times, then the aim is **not reached**: counted in
 //!   [`LinkStats::aim_not_reached`](super::LinkStats::aim_not_reached), raised once as
-//!   [`Event::AimNotReached`](super::Event::AimNotReached), and not re-commanded for that
-//!   error again until the aim, the vehicle's heading or the gimbal's reference changes, or
-//!   the link comes up again (a gimbal that restarted);
+//!   [`Event::AimNotReached`], and not re-commanded for that error again until the aim,
+//!   the vehicle's heading or the gimbal's reference changes, or the link comes up again
+//!   (a gimbal that restarted);
 //! - a yaw the motor cannot reach (beyond its travel: ±170°, ±325° on the 3.5× models) is
 //!   commanded as it is, the gimbal stops at its limit, and the aim reports
 //!   [`AimState::at_yaw_limit`]: the limit is what the postback is held to, so the gimbal

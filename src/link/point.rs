@@ -141,7 +141,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Keeps the gimbal pointed at `target` while the vehicle moves: every
     /// `point_at_period_ms` ([`Config`]) the exact WGS84 bearing and elevation from the
     /// vehicle's fresh GPS and altitude become an earth-frame aim, held closed loop (see
-    /// the [module docs](point)); a target out of the pitch range raises
+    /// [`aim`]); a target out of the pitch range raises
     /// [`Event::TargetUnreachable`] once. Ends a rate hold or an aim (the heading and pitch
     /// commands that follow replace it).
     pub fn point_at(&mut self, target: Position) {
