@@ -556,7 +556,10 @@ mod fw {
             || !state.is_some_and(|s| s.on_target)
             || !aiming.is_link_up()
         {
-            println!("aim bench: the aim was not held quietly: {:?} {:?}", stats, state);
+            println!(
+                "aim bench: the aim was not held quietly: {:?} {:?}",
+                stats, state
+            );
             qemu::exit(false);
         }
         let step = ((aim_20 - plain_20) - (aim_10 - plain_10)) / 10.0;
