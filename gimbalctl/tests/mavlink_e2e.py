@@ -269,8 +269,12 @@ class Autopilot:
             self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
             self.setpoint_asked = True
             self.setpoint_interval = interval
+        elif what == ID_SETPOINT:
+            # ArduPilot has no stream of its setpoints to re-time: it denies the ask (and
+            # its SITL tells the ground station, GCS_Common.cpp set_message_interval).
+            self.setpoint_asked = True
+            self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_DENIED)
         else:
-            # ArduPilot has no stream of its setpoints to re-time.
             self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_FAILED)
 
     def wait(self, what, cond, timeout=STEP_TIMEOUT):
@@ -480,6 +484,8 @@ def ardupilot(ap):
     locks = mav.GIMBAL_DEVICE_FLAGS_ROLL_LOCK | mav.GIMBAL_DEVICE_FLAGS_PITCH_LOCK | mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK
     ap.settle("setpoint yaw 120 (ROLL|PITCH|YAW_LOCK: earth) pitch -10", locks, 120, -10, 120)
     ap.settle("setpoint yaw -60 (earth, across north) pitch 20", locks, -60, 20, -60)
+    ap.check(ap.next_pos is not None, "the gimbal asked ArduPilot for GLOBAL_POSITION_INT")
+    ap.check(not ap.setpoint_asked, "setpoints not asked of ArduPilot (it sends them unasked, and denies)")
     # Retract: a NaN quaternion, zero rates, RETRACT: the gimbal looks down, and says so.
     ap.setpoint = lambda: (mav.GIMBAL_DEVICE_FLAGS_RETRACT, [math.nan] * 4, [0.0, 0.0, 0.0])
     down = ap.wait("retracted", lambda: (a := status_angles(ap)) is not None and abs(a[1] + 90) < ANGLE_TOL

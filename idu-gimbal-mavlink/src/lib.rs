@@ -24,7 +24,7 @@
 //! - `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE` → the core's attitude push and the vehicle's
 //!   heading; `GLOBAL_POSITION_INT` → GPS and altitude. Both are asked of the autopilot with
 //!   `MAV_CMD_SET_MESSAGE_INTERVAL` until they come (PX4 streams neither to a port in mode
-//!   Normal), and the setpoints at 20 Hz once.
+//!   Normal), and the setpoints at 20 Hz once (not of ArduPilot, which sends them unasked).
 //! - `GIMBAL_DEVICE_ATTITUDE_STATUS` at 10 Hz from the latest postback, in the vehicle
 //!   frame with `delta_yaw` the vehicle's heading (see [`status`] for why), with
 //!   `COMMS_ERROR` while the gimbal link is down.

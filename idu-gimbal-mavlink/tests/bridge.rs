@@ -600,7 +600,11 @@ fn streams_are_asked_of_the_autopilot_until_they_come() {
         n
     };
     assert!(asks(&mut b, 0, 100).is_empty(), "no autopilot yet");
-    b.receive(&frame(AP, 0, &heartbeat()), t(100));
+    let px4 = Heartbeat {
+        autopilot: MavAutopilot::Px4,
+        ..heartbeat()
+    };
+    b.receive(&frame(AP, 0, &px4), t(100));
     // At once: the autopilot state at 20 Hz (PX4 streams it only in mode Gimbal), the
     // position at 5 Hz, and the setpoints at 20 Hz (once: PX4's Normal mode sends 5 Hz).
     // Then again after 5 s for the two that did not come.
@@ -651,6 +655,24 @@ fn streams_are_asked_of_the_autopilot_until_they_come() {
     // The core now holds and pushes the position.
     b.gimbal_mut().poll(t(26_000));
     let _ = queued(b.gimbal_mut());
+}
+
+#[test]
+fn the_setpoints_are_not_asked_of_ardupilot() {
+    // ArduPilot sends its setpoints at 50 Hz unasked; asked, it refuses and tells the
+    // ground station. The other two streams are asked as of any autopilot.
+    let mut b = fresh();
+    b.receive(&frame(AP, 0, &heartbeat()), t(100));
+    let mut asked = Vec::new();
+    for ms in 100..6_000 {
+        b.poll(t(ms));
+        asked.extend(
+            of::<CommandLong>(&sent(&mut b))
+                .iter()
+                .map(|c| c.param1 as u32),
+        );
+    }
+    assert_eq!(asked, [286, 33, 286, 33]);
 }
 
 #[test]

@@ -5,7 +5,7 @@
 
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
-use mavio::dialects::common::enums::MavCmd;
+use mavio::dialects::common::enums::{MavAutopilot, MavCmd};
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt,
 };
@@ -56,8 +56,10 @@ const AUTOPILOT_STATE_STREAM: Wanted = Wanted {
 
 /// `GIMBAL_DEVICE_SET_ATTITUDE` at 20 Hz, asked once: PX4 re-sends its latest setpoint at
 /// the stream's rate, 5 Hz on a port in mode Normal (`configure_streams`), too slow for a
-/// smooth rate or ROI; ArduPilot sends its setpoints at 50 Hz unasked and refuses the
-/// request, which costs one command.
+/// smooth rate or ROI. Not asked of ArduPilot (its heartbeat's autopilot): it sends its
+/// setpoints at 50 Hz unasked and has no such stream, so it answers `DENIED`, and its SITL
+/// tells the ground station too ("No ap_message for mavlink id (284)",
+/// `GCS_Common.cpp` `set_message_interval`).
 const SETPOINT_STREAM: Wanted = Wanted {
     id: 284,
     interval_us: 50_000,
@@ -121,8 +123,9 @@ fn fresh(v: Option<(f32, Instant)>, now: Instant) -> Option<f32> {
 
 impl State {
     /// A heartbeat: the autopilot's (component 1) gives the system id (unless configured)
-    /// and, when it is a new one, asks it for the streams at once.
-    pub(super) fn heartbeat(&mut self, system: u8, component: u8) {
+    /// and, when it is a new one, asks it for the streams at once. `autopilot` is the
+    /// heartbeat's `MAV_AUTOPILOT`.
+    pub(super) fn heartbeat(&mut self, system: u8, component: u8, autopilot: u8, now: Instant) {
         if component != AUTOPILOT_COMPONENT {
             return;
         }
@@ -130,7 +133,9 @@ impl State {
             // A new autopilot: ask it for the streams at once.
             self.position_stream.asked = None;
             self.autopilot_state_stream.asked = None;
-            self.setpoint_stream.asked = None;
+            // Taken as asked where the ask is refused (see `SETPOINT_STREAM`).
+            self.setpoint_stream.asked =
+                (autopilot == MavAutopilot::Ardupilotmega as u8).then_some(now);
             self.next_stream_check = None;
         }
         self.autopilot = Some((system, component));

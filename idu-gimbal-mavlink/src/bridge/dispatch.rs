@@ -70,11 +70,14 @@ impl State {
                 bump(&mut self.stats.not_for_us);
             }
         } else if id == id_of::<Heartbeat>() {
-            // Checked for its CRC; only who sent it matters.
+            // Checked for its CRC; who sent it matters, and which autopilot it is.
             if !frame.checksum_holds(Heartbeat::crc_extra()) {
                 return Check::Bad;
             }
-            self.heartbeat(from.0, from.1);
+            // MAVLink 2 drops trailing zeros only: `autopilot` (offset 5) is followed by
+            // `mavlink_version`, never 0, so it is there; absent it reads as 0 (generic).
+            let autopilot = frame.payload().get(5).copied().unwrap_or(0);
+            self.heartbeat(from.0, from.1, autopilot, now);
         } else if id == id_of::<CommandLong>() {
             let Some(cmd) = decode::<CommandLong>(frame) else {
                 return Check::Bad;
