@@ -402,10 +402,23 @@ fn zoom_by_range_continuous_and_step() {
     // 4× of 1×..30×: (4 − 1) / 29 = 10.34 %.
     let level = of::<CameraSettings>(&frames)[0].zoom_level;
     assert!((level - 300.0 / 29.0).abs() < 1e-4, "{level}");
+    // QGroundControl's pinch out: round(scale × −10) steps (FlightDisplayViewVideo.qml), here
+    // −10: five halvings take any level of the range to its wide end, 1×.
+    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(Zoom::Half); 5]);
+    assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 0.0);
+    // And 7 steps in from 1×: five doublings, 30× (32 beyond the range's end).
+    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(Zoom::Double); 5]);
+    assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
     for (p, result) in [
         ([2.0, 150.0, 0.0], MavResult::Denied),
         ([1.0, f32::NAN, 0.0], MavResult::Denied),
-        ([0.0, 9.0, 0.0], MavResult::Denied),
+        ([0.0, 0.0, 0.0], MavResult::Denied),
+        ([0.0, 2.5, 0.0], MavResult::Denied),
+        ([0.0, f32::INFINITY, 0.0], MavResult::Denied),
         ([3.0, 24.0, 0.0], MavResult::Unsupported),
     ] {
         let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, p, 40);

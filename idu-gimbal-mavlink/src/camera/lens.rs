@@ -3,7 +3,8 @@
 //!
 //! **Zoom.** Range (0 to 100 % of the zoom range) → zoom ratio; continuous → zoom in, out
 //! or stop by the value's sign (common.xml: "a rate ... the sign decides the direction");
-//! step (±1 to ±5) → 2× in or out per step; focal length and field of view → `UNSUPPORTED`.
+//! step (any whole number but 0) → 2× in or out per step, at most five sent (2^5 spans any
+//! of the document's ranges); focal length and field of view → `UNSUPPORTED`.
 //! The level reported is the ratio last set, unknown (NaN) after a continuous zoom, which
 //! the gimbal does not report the end of.
 //!
@@ -75,6 +76,9 @@ pub(crate) fn focus<G: GimbalControl>(gimbal: &mut G, params: [f32; 4]) -> MavRe
     MavResult::Accepted
 }
 
+/// The most zoom steps sent to the gimbal for one `ZOOM_TYPE_STEP`.
+const MAX_STEPS: usize = 5;
+
 impl Camera {
     pub(crate) fn zoom<G: GimbalControl>(
         &mut self,
@@ -84,7 +88,7 @@ impl Camera {
         gimbal_type: Option<GimbalType>,
     ) -> MavResult {
         let [kind, v, _, _] = params;
-        let (commands, ratio): ([Option<GimbalCommand>; 5], f32) =
+        let (commands, ratio): ([Option<GimbalCommand>; MAX_STEPS], f32) =
             if kind == CameraZoomType::ZoomTypeRange as u8 as f32 {
                 if !(0.0..=100.0).contains(&v) {
                     return MavResult::Denied;
@@ -124,19 +128,23 @@ impl Camera {
                     ratio,
                 )
             } else if kind == CameraZoomType::ZoomTypeStep as u8 as f32 {
-                if !(v.is_finite() && v == libm::truncf(v) && v != 0.0 && libm::fabsf(v) <= 5.0) {
+                // Any whole number of steps: QGroundControl's pinch sends round(scale × −10)
+                // when zooming out (FlightDisplayViewVideo.qml), −10 to −6 for a pinch.
+                if !(v.is_finite() && v == libm::truncf(v) && v != 0.0) {
                     return MavResult::Denied;
                 }
                 let z = if v > 0.0 { Zoom::Double } else { Zoom::Half };
-                // In range and whole: exact.
-                let n = libm::fabsf(v) as usize;
-                let mut c = [None; 5];
+                // A step doubles or halves the ratio: MAX_STEPS of them span the document's
+                // ranges (2^5 = 32 ≥ 30), and further ones would reach a gimbal already at
+                // its end. Whole and at most 5: exact.
+                let n = libm::fabsf(v).min(MAX_STEPS as f32) as usize;
+                let mut c = [None; MAX_STEPS];
                 for slot in c.iter_mut().take(n) {
                     *slot = Some(GimbalCommand::Zoom(z));
                 }
                 // The gimbal stops at its ends; an unknown level stays unknown (NaN through
                 // the arithmetic: f32::max/min would turn it into a bound).
-                // 2^|v| for |v| ≤ 5: a shift, exact (no powf).
+                // 2^n for n ≤ 5: a shift, exact (no powf).
                 let factor = (1u8 << n) as f32;
                 let stepped = if v > 0.0 {
                     self.zoom * factor
