@@ -411,7 +411,10 @@ fn zoom_by_range_continuous_and_step() {
     // And 7 steps in from 1×: five doublings, 30× (32 beyond the range's end).
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
     assert_eq!(ack.result, MavResult::Accepted);
-    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(Zoom::Double); 5]);
+    assert_eq!(
+        queued(b.gimbal_mut()),
+        [GimbalCommand::Zoom(Zoom::Double); 5]
+    );
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
     for (p, result) in [
         ([2.0, 150.0, 0.0], MavResult::Denied),

@@ -16,8 +16,8 @@ use mavio::dialects::common::enums::{
     MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
 };
 use mavio::dialects::common::messages::{
-    CommandAck, FileTransferProtocol, ParamExtAck, ParamExtRequestList, ParamExtRequestRead,
-    ParamExtSet, ParamExtValue, VideoStreamInformation, VideoStreamStatus,
+    CameraSettings, CommandAck, FileTransferProtocol, ParamExtAck, ParamExtRequestList,
+    ParamExtRequestRead, ParamExtSet, ParamExtValue, VideoStreamInformation, VideoStreamStatus,
 };
 use mavio::protocol::{Frame, V2};
 
@@ -244,12 +244,9 @@ fn a_value_outside_the_options_is_refused_with_the_value_kept() {
         ParamAck::Accepted
     );
     let _ = queued_all(b.gimbal_mut());
-    let mut two_bytes = value_of(3);
-    two_bytes[1] = 1;
     for (value, ty) in [
         (value_of(15), MavParamExtType::Uint8),
         (value_of(255), MavParamExtType::Uint8),
-        (two_bytes, MavParamExtType::Uint8),
         (value_of(3), MavParamExtType::Uint16),
         (value_of(3), MavParamExtType::Real32),
     ] {
@@ -274,6 +271,53 @@ fn a_value_outside_the_options_is_refused_with_the_value_kept() {
     let ack = set(&mut z, "IR_PALETTE", value_of(1), MavParamExtType::Uint8);
     assert_eq!(ack.param_result, ParamAck::ValueUnsupported);
     assert!(queued_all(z.gimbal_mut()).is_empty());
+}
+
+#[test]
+fn a_value_is_read_by_its_types_width_whatever_follows_it() {
+    // QGroundControl 5.0 leaves its stack buffer's bytes after the value
+    // (QGCCameraIO.cc _sendParameter): a uint8 is its first byte.
+    let mut b = bridge(Family::DualLight);
+    let mut garbage = [0xA5u8; 128];
+    garbage[0] = 7;
+    let ack = set(&mut b, "IR_PALETTE", garbage, MavParamExtType::Uint8);
+    assert_eq!(ack.param_result, ParamAck::Accepted);
+    assert_eq!(ack.param_value, value_of(7));
+    assert_eq!(
+        queued_all(b.gimbal_mut()),
+        [Command::from(DualLightCommand::Palette(
+            Palette::from_code(7).unwrap()
+        ))]
+    );
+}
+
+#[test]
+fn reset_camera_settings_puts_every_setting_back_to_its_default() {
+    let mut b = bridge(Family::DualLight);
+    for (name, v) in [("IR_PALETTE", 9), ("CAM_FOCUS", 3), ("IR_EZOOM", 1)] {
+        let ack = set(&mut b, name, value_of(v), MavParamExtType::Uint8);
+        assert_eq!(ack.param_result, ParamAck::Accepted, "{name}");
+    }
+    let _ = queued_all(b.gimbal_mut());
+    // QGroundControl sends param1 1 and, until ACCEPTED, TEMPORARILY_REJECTED or FAILED,
+    // blocks its photo, video and mode buttons (VehicleCameraControl.cc _mavCommandResult).
+    let (result, frames) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
+    assert_eq!(result, MavResult::Accepted);
+    assert_eq!(of::<CameraSettings>(&frames).len(), 1);
+    assert_eq!(
+        queued_all(b.gimbal_mut()),
+        [
+            Command::from(GimbalCommand::Focus(Focus::Stop)),
+            Command::from(DualLightCommand::Palette(Palette::from_code(0).unwrap())),
+            Command::from(DualLightCommand::ElectronicZoom(ElectronicZoom::Stop)),
+        ]
+    );
+    let listed = list(&mut b);
+    assert!(listed.iter().all(|(_, v, _, _)| *v == 0), "{listed:?}");
+    // A queue without room: TEMPORARILY_REJECTED, which QGroundControl also lets go of.
+    while b.gimbal_mut().send(GimbalCommand::Recenter).is_ok() {}
+    let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
+    assert_eq!(result, MavResult::TemporarilyRejected);
 }
 
 #[test]

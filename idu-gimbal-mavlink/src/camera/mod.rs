@@ -21,6 +21,8 @@
 //! - on a camera with a thermal sensor, the camera definition file (served over MAVLink
 //!   FTP, see [`definition`] and [`crate::ftp`]) and its settings (the extended parameter
 //!   protocol, see [`settings`]);
+//! - `MAV_CMD_RESET_CAMERA_SETTINGS`: the settings back to their defaults (see
+//!   [`settings`]);
 //! - `CAMERA_INFORMATION` (vendor and model from the postback's gimbal type, the gimbal
 //!   device's component id as `gimbal_device_id`), `CAMERA_SETTINGS`,
 //!   `CAMERA_CAPTURE_STATUS`, `STORAGE_INFORMATION` (one storage, status `NOT_SUPPORTED`:
@@ -285,7 +287,8 @@ pub(crate) fn owns(cmd: &Command) -> bool {
         | MavCmd::CameraTrackPoint
         | MavCmd::CameraTrackRectangle
         | MavCmd::CameraStopTracking
-        | MavCmd::SetCameraSource => true,
+        | MavCmd::SetCameraSource
+        | MavCmd::ResetCameraSettings => true,
         _ => false,
     }
 }
@@ -418,6 +421,18 @@ impl Camera {
             MavCmd::CameraStopTracking => return (self.tracking.stop(gimbal), Reply::Nothing),
             MavCmd::SetCameraSource => {
                 return (self.set_source(config, cmd.params), Reply::Nothing)
+            }
+            // Answered ACCEPTED or TEMPORARILY_REJECTED, never DENIED or UNSUPPORTED: on those
+            // QGroundControl stays "resetting" and ignores its photo, video and mode buttons
+            // until it restarts (`VehicleCameraControl.cc` `_mavCommandResult`).
+            MavCmd::ResetCameraSettings => {
+                let result = self.settings.reset(gimbal);
+                let reply = if result == MavResult::Accepted {
+                    Reply::Settings
+                } else {
+                    Reply::Nothing
+                };
+                return (result, reply);
             }
             _ => return (MavResult::Unsupported, Reply::Nothing),
         };

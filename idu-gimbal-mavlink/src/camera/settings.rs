@@ -22,13 +22,15 @@
 //!
 //! A set with an unknown name, another type or a value outside the parameter's options is
 //! answered `PARAM_ACK_VALUE_UNSUPPORTED` with the value kept; a set the gimbal's queue has
-//! no room for, `PARAM_ACK_FAILED`. A read of an unknown name or index is not answered
+//! no room for, `PARAM_ACK_FAILED`. A value is read by its type's width (a `uint8`: the
+//! first byte), whatever follows it. `MAV_CMD_RESET_CAMERA_SETTINGS` sets every parameter
+//! back to its default. A read of an unknown name or index is not answered
 //! (the protocol has no error reply for a read; the client times out).
 
 use idu_gimbal::wire::control::{
     Command as GimbalCmd, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, Palette,
 };
-use mavio::dialects::common::enums::{MavParamExtType, ParamAck};
+use mavio::dialects::common::enums::{MavParamExtType, MavResult, ParamAck};
 use mavio::dialects::common::messages::{ParamExtAck, ParamExtSet, ParamExtValue};
 
 use crate::bridge::{name, Tx};
@@ -214,13 +216,37 @@ impl Settings {
         let Some(i) = self.index_of(&set.param_id) else {
             return ParamAck::ValueUnsupported;
         };
-        let [v, rest @ ..] = set.param_value;
+        // A `uint8` is its first byte: the value is read by its type's width. What follows
+        // is not looked at: QGroundControl 5.0 sends there what its stack buffer held
+        // (`QGCCameraIO.cc` `_sendParameter`), and rejecting it bounced every change.
+        let [v, ..] = set.param_value;
+        let Some(p) = PARAMETERS.get(i) else {
+            return ParamAck::ValueUnsupported;
+        };
+        if set.param_type != MavParamExtType::Uint8 || v > p.max {
+            return ParamAck::ValueUnsupported;
+        }
+        self.put(gimbal, i, v)
+    }
+
+    /// `MAV_CMD_RESET_CAMERA_SETTINGS`: every parameter back to its default, each sent to
+    /// the gimbal. `TEMPORARILY_REJECTED` when the gimbal's queue has no room for them all
+    /// (those sent keep their default): the client may try again.
+    pub(crate) fn reset<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
+        for (i, p) in PARAMETERS.iter().enumerate().take(self.count) {
+            match self.put(gimbal, i, p.default) {
+                ParamAck::Accepted => {}
+                _ => return MavResult::TemporarilyRejected,
+            }
+        }
+        MavResult::Accepted
+    }
+
+    /// Sends parameter `i`'s setting `v` (within its range) to the gimbal and keeps it.
+    fn put<G: GimbalControl>(&mut self, gimbal: &mut G, i: usize, v: u8) -> ParamAck {
         let (Some(p), Some(slot)) = (PARAMETERS.get(i), self.values.get_mut(i)) else {
             return ParamAck::ValueUnsupported;
         };
-        if set.param_type != MavParamExtType::Uint8 || v > p.max || rest.iter().any(|&b| b != 0) {
-            return ParamAck::ValueUnsupported;
-        }
         let command: Option<GimbalCmd> = match p.name {
             "CAM_FOCUS" => Some(
                 GimbalCommand::Focus(match v {
