@@ -8,7 +8,7 @@ use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
 use idu_gimbal::wire::control::{GimbalCommand, Photo, Video, Zoom};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
-use idu_gimbal_mavlink::camera::{CameraConfig, UriTooLong};
+use idu_gimbal_mavlink::camera::{camera_model, CameraConfig, UriTooLong};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{
     CameraCapFlags, MavCmd, MavResult, MavType, StorageStatus, VideoStreamStatusFlags,
@@ -72,16 +72,25 @@ fn ask4(
 }
 
 #[test]
-fn camera_heartbeats_beside_the_gimbals() {
+fn camera_heartbeats_beside_the_gimbals_once_its_identity_is_known() {
     let mut b = bridge();
-    for ms in 0..2_000 {
-        b.poll(t(ms));
-    }
-    let hbs: Vec<(u8, Heartbeat)> = sent(&mut b)
-        .iter()
-        .filter(|f| f.message_id() == 0)
-        .map(|f| (f.component_id(), f.decode_message().unwrap()))
-        .collect();
+    let heartbeats = |b: &mut Bridge<Link>, from: u32, to: u32| {
+        for ms in from..to {
+            b.poll(t(ms));
+        }
+        sent(b)
+            .iter()
+            .filter(|f| f.message_id() == 0)
+            .map(|f| (f.component_id(), f.decode_message().unwrap()))
+            .collect::<Vec<(u8, Heartbeat)>>()
+    };
+    // No postback yet, so no model: a ground station reads a camera's identity once, at
+    // its first heartbeat (QGCCameraManager.cc), and would keep a provisional one.
+    let hbs = heartbeats(&mut b, 0, 2_000);
+    assert!(hbs.iter().all(|h| h.0 == 154), "{hbs:?}");
+    assert_eq!(hbs.len(), 2);
+    postback(&mut b, GimbalType::X30, 2_000);
+    let hbs = heartbeats(&mut b, 2_000, 4_000);
     let camera: Vec<_> = hbs.iter().filter(|h| h.0 == 100).collect();
     assert_eq!(camera.len(), 2);
     assert!(camera.iter().all(|h| h.1.type_ == MavType::Camera));
@@ -89,8 +98,34 @@ fn camera_heartbeats_beside_the_gimbals() {
 }
 
 #[test]
+fn every_model_name_can_name_a_file() {
+    // QGroundControl caches the definition as <vendor>_<model>_<version>.xml.
+    for code in 0..=255u8 {
+        let model = camera_model(GimbalType::from_code(code));
+        assert!(!model.is_empty() && model.len() < 32, "{model:?}");
+        assert!(
+            model
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || " .-_".contains(c)),
+            "{model:?}"
+        );
+    }
+    assert_eq!(camera_model(GimbalType::X30), "X30-X30GT");
+}
+
+#[test]
 fn information_by_request_message_and_by_the_legacy_command() {
     let mut b = bridge();
+    // Before the postback gives the model: no provisional identity, asked again later.
+    for (cmd, p1) in [
+        (MavCmd::RequestMessage, 259.0),
+        (MavCmd::RequestCameraInformation, 1.0),
+    ] {
+        let (ack, frames) = ask(&mut b, 100, cmd, [p1, 0.0, 0.0], 5);
+        assert_eq!(ack.result, MavResult::TemporarilyRejected);
+        assert!(of::<CameraInformation>(&frames).is_empty());
+    }
+    postback(&mut b, GimbalType::X30, 6);
     for (to, cmd, p1) in [
         (0, MavCmd::RequestMessage, 259.0),
         (100, MavCmd::RequestMessage, 259.0),
@@ -117,6 +152,7 @@ fn information_by_request_message_and_by_the_legacy_command() {
         assert!(!f.contains(CameraCapFlags::HAS_MODES));
         assert!(!f.contains(CameraCapFlags::HAS_TRACKING_GEO_STATUS));
         assert_eq!(info[0].gimbal_device_id, 154);
+        assert_eq!(&info[0].model_name[..10], b"X30-X30GT\0");
         // The definition, in the one form QGroundControl and MAVSDK both read.
         let uri = &info[0].cam_definition_uri;
         assert_eq!(&uri[..18], b"mftp://camera.xml\0");
@@ -480,6 +516,7 @@ fn the_camera_names_its_gimbal_by_the_configured_component() {
         },
     );
     b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    postback(&mut b, GimbalType::X30T, 10);
     let (_, frames) = ask(
         &mut b,
         100,

@@ -62,8 +62,12 @@ impl State {
         );
     }
 
-    /// The heartbeats, when due: the gimbal device's and, with one, the camera's.
-    pub(super) fn send_heartbeats(&mut self, now: Instant) {
+    /// The heartbeats, when due: the gimbal device's and, with one, the camera's once its
+    /// identity is known (`camera_known`: the postback gave the gimbal type). Ground
+    /// stations read a camera's identity once, at its first heartbeat, and name its cached
+    /// definition after it (QGroundControl's `QGCCameraManager`), so the camera is not
+    /// announced under a provisional one.
+    pub(super) fn send_heartbeats(&mut self, now: Instant, camera_known: bool) {
         if !self.next_heartbeat.is_none_or(|t| now.is_at_or_after(t)) {
             return;
         }
@@ -79,7 +83,7 @@ impl State {
         self.send_encoded::<Heartbeat>(self.config.gimbal_component, codec::heartbeat::LEN, |p| {
             codec::heartbeat::encode(&hb, p)
         });
-        if let Some(camera) = self.camera_component() {
+        if let (Some(camera), true) = (self.camera_component(), camera_known) {
             let hb = Heartbeat {
                 type_: MavType::Camera,
                 ..hb

@@ -202,6 +202,18 @@ pub fn zoom_max_of(t: GimbalType) -> Option<f32> {
     }
 }
 
+/// The camera's model name for a gimbal type (`CAMERA_INFORMATION.model_name`): the
+/// document's name, with characters a file name cannot hold replaced by `-`, because
+/// QGroundControl names its cached definition `<vendor>_<model>_<version>.xml`
+/// (`VehicleCameraControl.cc` `_cacheFile`) and a `/` made the download fail ("X30/X30GT").
+/// A type the document does not list is `IDU camera`.
+pub fn camera_model(t: GimbalType) -> &'static str {
+    match t {
+        GimbalType::X30 => "X30-X30GT",
+        t => t.model_name().unwrap_or("IDU camera"),
+    }
+}
+
 /// What to send after a command's ACK.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) enum Reply {
@@ -331,6 +343,16 @@ impl Camera {
     ) -> (MavResult, Reply) {
         let streams = |id| stream::selection(config, id);
         let reply = match cmd.command {
+            // No identity before the postback gives the gimbal type: ground stations keep
+            // the first they read (see `camera_model`). The client asks again.
+            MavCmd::RequestCameraInformation if gimbal.gimbal_type().is_none() => {
+                return (MavResult::TemporarilyRejected, Reply::Nothing)
+            }
+            MavCmd::RequestMessage
+                if cmd.requests(id_of::<CameraInformation>()) && gimbal.gimbal_type().is_none() =>
+            {
+                return (MavResult::TemporarilyRejected, Reply::Nothing)
+            }
             MavCmd::RequestCameraInformation => Reply::Information,
             MavCmd::RequestCameraSettings => Reply::Settings,
             MavCmd::RequestStorageInformation => Reply::Storage,
@@ -682,10 +704,9 @@ impl Camera {
     }
 
     fn send_information(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
-        let model = tx
-            .gimbal_type
-            .and_then(GimbalType::model_name)
-            .unwrap_or("IDU gimbal camera");
+        let Some(model) = tx.gimbal_type.map(camera_model) else {
+            return;
+        };
         let (resolution_h, resolution_v) = config.resolution.unwrap_or((0, 0));
         let info = CameraInformation {
             time_boot_ms: now.as_millis(),
