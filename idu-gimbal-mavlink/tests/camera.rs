@@ -11,7 +11,7 @@ use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{camera_model, CameraConfig, UriTooLong};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{
-    CameraCapFlags, MavCmd, MavResult, MavType, StorageStatus, VideoStreamStatusFlags,
+    CameraCapFlags, CameraMode, MavCmd, MavResult, MavType, StorageStatus, VideoStreamStatusFlags,
     VideoStreamType,
 };
 use mavio::dialects::common::messages::{
@@ -98,6 +98,40 @@ fn camera_heartbeats_beside_the_gimbals_once_its_identity_is_known() {
 }
 
 #[test]
+fn the_mode_is_set_and_told_back_in_the_settings() {
+    let mut b = bridge();
+    let mode = |frames: &[Frame<V2>]| of::<CameraSettings>(frames)[0].mode_id;
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraSettings,
+        [1.0, 0.0, 0.0],
+        1,
+    );
+    assert_eq!(mode(&frames), CameraMode::Image);
+    // QGroundControl's photo/video switch: param2 0 or 1 (VehicleCameraControl.cc
+    // setCameraMode); it reads the mode back only from CAMERA_SETTINGS, sent at once.
+    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 1.0, 0.0], 2);
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(mode(&frames), CameraMode::Video);
+    // Recording and a photo need no switch either way: nothing sent to the gimbal for it.
+    assert!(queued(b.gimbal_mut()).is_empty());
+    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 2.0, 0.0], 3);
+    assert_eq!(ack.result, MavResult::Denied, "survey: no such mode");
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraSettings,
+        [1.0, 0.0, 0.0],
+        4,
+    );
+    assert_eq!(mode(&frames), CameraMode::Video);
+    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 0.0, 0.0], 5);
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(mode(&frames), CameraMode::Image);
+}
+
+#[test]
 fn every_model_name_can_name_a_file() {
     // QGroundControl caches the definition as <vendor>_<model>_<version>.xml.
     for code in 0..=255u8 {
@@ -148,8 +182,11 @@ fn information_by_request_message_and_by_the_legacy_command() {
         ] {
             assert!(f.contains(flag), "{flag:?}");
         }
-        // No modes to switch (both capture in either), no geo-tracking status.
-        assert!(!f.contains(CameraCapFlags::HAS_MODES));
+        // Modes, for QGroundControl's photo/video switch (both capture in either); no
+        // geo-tracking status.
+        assert!(f.contains(CameraCapFlags::HAS_MODES));
+        assert!(f.contains(CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE));
+        assert!(f.contains(CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE));
         assert!(!f.contains(CameraCapFlags::HAS_TRACKING_GEO_STATUS));
         assert_eq!(info[0].gimbal_device_id, 154);
         assert_eq!(&info[0].model_name[..10], b"X30-X30GT\0");

@@ -247,6 +247,8 @@ pub(crate) struct Camera {
     gimbal_device_id: u8,
     /// The zoom ratio last set; NaN when unknown (after a continuous zoom).
     zoom: f32,
+    /// The mode last set (`MAV_CMD_SET_CAMERA_MODE`), image at start.
+    mode: CameraMode,
     capture: Capture,
     /// Kept images still to be sent again (first..=last), as the outbox makes room.
     resend: Option<(i32, i32)>,
@@ -300,7 +302,8 @@ pub(crate) fn owns(cmd: &Command) -> bool {
         | MavCmd::CameraTrackRectangle
         | MavCmd::CameraStopTracking
         | MavCmd::SetCameraSource
-        | MavCmd::ResetCameraSettings => true,
+        | MavCmd::ResetCameraSettings
+        | MavCmd::SetCameraMode => true,
         _ => false,
     }
 }
@@ -316,6 +319,7 @@ impl Camera {
         Camera {
             gimbal_device_id,
             zoom: 1.0,
+            mode: CameraMode::Image,
             capture: Capture::new(),
             resend: None,
             recording_since: None,
@@ -444,10 +448,27 @@ impl Camera {
             MavCmd::SetCameraSource => {
                 return (self.set_source(config, cmd.params), Reply::Nothing)
             }
+            // param2 the mode. Both capture in either (the CAN_CAPTURE_*_IN_*_MODE flags), so
+            // the mode is the ground station's choice of shutter, told back in
+            // CAMERA_SETTINGS: QGroundControl shows its photo/video switch only with
+            // HAS_MODES and never reads the mode back itself (PhotoVideoControl.qml).
+            MavCmd::SetCameraMode => {
+                let [_, mode, _, _] = cmd.params;
+                self.mode = if mode == CameraMode::Image as u8 as f32 {
+                    CameraMode::Image
+                } else if mode == CameraMode::Video as u8 as f32 {
+                    CameraMode::Video
+                } else {
+                    // Survey (2) and anything else: no such mode here.
+                    return (MavResult::Denied, Reply::Nothing);
+                };
+                Reply::Settings
+            }
             // Answered ACCEPTED or TEMPORARILY_REJECTED, never DENIED or UNSUPPORTED: on those
             // QGroundControl stays "resetting" and ignores its photo, video and mode buttons
             // until it restarts (`VehicleCameraControl.cc` `_mavCommandResult`).
             MavCmd::ResetCameraSettings => {
+                self.mode = CameraMode::Image;
                 let result = self.settings.reset(gimbal);
                 let reply = if result == MavResult::Accepted {
                     Reply::Settings
@@ -721,6 +742,7 @@ impl Camera {
             lens_id: 0,
             flags: CameraCapFlags::CAPTURE_IMAGE
                 | CameraCapFlags::CAPTURE_VIDEO
+                | CameraCapFlags::HAS_MODES
                 | CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE
                 | CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE
                 | CameraCapFlags::HAS_BASIC_ZOOM
@@ -749,11 +771,7 @@ impl Camera {
     fn send_settings(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
         let s = CameraSettings {
             time_boot_ms: now.as_millis(),
-            mode_id: if self.recording_since.is_some() {
-                CameraMode::Video
-            } else {
-                CameraMode::Image
-            },
+            mode_id: self.mode,
             zoom_level: self.zoom_level(config, tx.gimbal_type),
             focus_level: f32::NAN,
             camera_device_id: 0,
