@@ -717,15 +717,25 @@ def tracking_status(gcs, bridge):
             "point_x", "point_y", "radius", "rec_top_x", "rec_top_y", "rec_bottom_x", "rec_bottom_y")))
     check(s is not None and s.tracking_status == 0 and s.tracking_mode == 0 and nothing_known(s),
           f"{kind} before tracking: IDLE, mode NONE, target_data 0, coordinates NaN")
+    # While tracking, the target at the image's centre (the gimbal's tracker turns it there)
+    # with the box it was given: a 0.25 square, a point of radius 0.1 off centre.
+    centred = {
+        mav.CAMERA_TRACKING_MODE_RECTANGLE: lambda s: (
+            (s.rec_top_x, s.rec_top_y, s.rec_bottom_x, s.rec_bottom_y) == (0.375, 0.375, 0.625, 0.625)
+            and math.isnan(s.point_x)),
+        mav.CAMERA_TRACKING_MODE_POINT: lambda s: (
+            (s.point_x, s.point_y) == (0.5, 0.5) and abs(s.radius - 0.1) < 1e-6 and math.isnan(s.rec_top_x)),
+    }
     for command, params, mode in ((mav.MAV_CMD_CAMERA_TRACK_RECTANGLE, [0.25, 0.25, 0.5, 0.5], mav.CAMERA_TRACKING_MODE_RECTANGLE),
-                                  (mav.MAV_CMD_CAMERA_TRACK_POINT, [0.5, 0.5, 0.015625], mav.CAMERA_TRACKING_MODE_POINT)):
+                                  (mav.MAV_CMD_CAMERA_TRACK_POINT, [0.3, 0.7, 0.1], mav.CAMERA_TRACKING_MODE_POINT)):
         name = mav.enums["MAV_CMD"][command].name
         ack, since = gcs.expect(CAMERA, command, params, mav.MAV_RESULT_ACCEPTED, name)
         t0 = time.monotonic()
         s = gcs.wait(lambda m: m.get_type() == kind and m.tracking_status == 1, POSTBACK_TIMEOUT, since)
-        check(s is not None and s.tracking_mode == mode and nothing_known(s),
+        check(s is not None and s.tracking_mode == mode
+              and s.target_data == mav.CAMERA_TRACKING_TARGET_DATA_IN_STATUS and centred[mode](s),
               f"{kind} after {name}: ACTIVE in {time.monotonic() - t0:.2f} s, mode {mode}, "
-              f"target_data 0, coordinates NaN: {s}")
+              f"the target at the centre with the box given: {s}")
         ack, since = gcs.expect(CAMERA, mav.MAV_CMD_CAMERA_STOP_TRACKING, [], mav.MAV_RESULT_ACCEPTED, "CAMERA_STOP_TRACKING")
         t0 = time.monotonic()
         s = gcs.wait(lambda m: m.get_type() == kind and m.tracking_status == 0, POSTBACK_TIMEOUT, since)

@@ -312,9 +312,11 @@ fn statuses(frames: &[Frame<V2>]) -> Vec<(CameraTrackingStatusFlags, CameraTrack
     of::<CameraTrackingImageStatus>(frames)
         .iter()
         .map(|s| {
-            // The gimbal does not say where the target is: nothing is invented.
-            assert_eq!(s.target_data, CameraTrackingTargetData::empty());
-            assert!(s.point_x.is_nan() && s.rec_top_x.is_nan() && s.radius.is_nan());
+            // Where the target is: said only for tracking the bridge started, at the centre
+            // (checked in the_target_is_at_the_centre_with_the_box_it_was_given).
+            if s.target_data.is_empty() {
+                assert!(s.point_x.is_nan() && s.rec_top_x.is_nan() && s.radius.is_nan());
+            }
             (s.tracking_status, s.tracking_mode)
         })
         .collect()
@@ -324,7 +326,7 @@ fn statuses(frames: &[Frame<V2>]) -> Vec<(CameraTrackingStatusFlags, CameraTrack
 fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
     let mut b = bridge(Family::X3);
     let idle = (CameraTrackingStatusFlags::Idle, CameraTrackingMode::None);
-    // None until asked.
+    // None until asked, or tracking.
     b.poll(t(1000));
     assert!(statuses(&sent(&mut b)).is_empty());
     // QGroundControl: SET_MESSAGE_INTERVAL(275, 500000) after its track command.
@@ -347,7 +349,7 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
         1100,
     );
     assert_eq!(r, MavResult::Accepted);
-    // Every 500 ms: 1500 idle (the gimbal has not said it tracks), 2000 active.
+    // At once, then every 500 ms: idle until the gimbal says it tracks (at 1701).
     let mut seen = Vec::new();
     for ms in (1101..=2600).step_by(10) {
         if ms == 1701 {
@@ -362,7 +364,7 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
         CameraTrackingStatusFlags::Active,
         CameraTrackingMode::Rectangle,
     );
-    assert_eq!(seen, vec![(1501, idle), (2001, active), (2501, active)]);
+    assert_eq!(seen, vec![(1101, idle), (1601, idle), (2101, active)]);
     // The gimbal loses the target: idle again, asked for once by REQUEST_MESSAGE.
     postback(&mut b, false, 2600);
     let (r, frames, _) = ask(
@@ -438,4 +440,80 @@ fn fast_calibration_is_the_gyroscope_calibration_addressed_to_the_gimbal() {
     b.receive(&frame(GCS, 0, &c), t(20));
     assert!(of::<CommandAck>(&sent(&mut b)).is_empty());
     assert!(queued_all(b.gimbal_mut()).is_empty());
+}
+
+#[test]
+fn the_target_is_at_the_centre_with_the_box_it_was_given_streamed_unasked() {
+    // QGroundControl 5.0 never asks for the status (its _requestTrackingStatus has no
+    // caller): while tracking what the bridge started it comes every 500 ms unasked.
+    let mut b = bridge(Family::X3);
+    postback(&mut b, false, 0);
+    let (r, _, _) = ask(
+        &mut b,
+        CAMERA,
+        MavCmd::CameraTrackPoint,
+        p4(0.3, 0.6, 0.05, N),
+        1000,
+    );
+    assert_eq!(r, MavResult::Accepted);
+    let mut seen = Vec::new();
+    for ms in (1001..=3000).step_by(10) {
+        if ms == 1201 {
+            postback(&mut b, true, ms);
+        }
+        b.poll(t(ms));
+        for s in of::<CameraTrackingImageStatus>(&sent(&mut b)) {
+            seen.push((ms, s));
+        }
+    }
+    let times: Vec<u32> = seen.iter().map(|(ms, _)| *ms).collect();
+    assert_eq!(times, [1001, 1501, 2001, 2501]);
+    assert_eq!(seen[0].1.tracking_status, CameraTrackingStatusFlags::Idle);
+    for (_, s) in &seen[1..] {
+        assert_eq!(s.tracking_status, CameraTrackingStatusFlags::Active);
+        assert_eq!(s.tracking_mode, CameraTrackingMode::Point);
+        assert_eq!(s.target_data, CameraTrackingTargetData::IN_STATUS);
+        // The tracker brings its target to the centre; the radius is the one given.
+        assert_eq!((s.point_x, s.point_y, s.radius), (0.5, 0.5, 0.05));
+    }
+    // A rectangle: the box given, centred.
+    let (r, _, _) = ask(
+        &mut b,
+        CAMERA,
+        MavCmd::CameraTrackRectangle,
+        p4(0.1, 0.2, 0.3, 0.6),
+        3000,
+    );
+    assert_eq!(r, MavResult::Accepted);
+    b.poll(t(3001));
+    let s = &of::<CameraTrackingImageStatus>(&sent(&mut b))[0];
+    assert_eq!(s.tracking_mode, CameraTrackingMode::Rectangle);
+    let close = |a: f32, e: f32| (a - e).abs() < 1e-6;
+    assert!(close(s.rec_top_x, 0.4) && close(s.rec_top_y, 0.3), "{s:?}");
+    assert!(
+        close(s.rec_bottom_x, 0.6) && close(s.rec_bottom_y, 0.7),
+        "{s:?}"
+    );
+    // Stopped: IDLE once the gimbal says it no longer tracks, then nothing.
+    let (r, _, _) = ask(
+        &mut b,
+        CAMERA,
+        MavCmd::CameraStopTracking,
+        p4(N, N, N, N),
+        3100,
+    );
+    assert_eq!(r, MavResult::Accepted);
+    let mut after = Vec::new();
+    for ms in (3101..=5000).step_by(10) {
+        if ms == 3301 {
+            postback(&mut b, false, ms);
+        }
+        b.poll(t(ms));
+        for s in statuses(&sent(&mut b)) {
+            after.push((ms, s));
+        }
+    }
+    let idle = (CameraTrackingStatusFlags::Idle, CameraTrackingMode::None);
+    let active_unknown = (CameraTrackingStatusFlags::Active, CameraTrackingMode::None);
+    assert_eq!(after, [(3101, active_unknown), (3601, idle)]);
 }

@@ -13,11 +13,18 @@
 //! the box of side 2r, and at least [`POINT_BOX_SIDE`]: the tracker needs an area to
 //! follow, and "0 is one pixel" gives it none.
 //!
-//! **Status.** The postback says only whether the gimbal tracks, not where the target is
-//! in the image, so the status says `ACTIVE` (with the mode last commanded) or `IDLE`
-//! and `target_data` is empty: no position is invented. It is sent when asked
-//! (`MAV_CMD_REQUEST_MESSAGE`) and at the interval set with `MAV_CMD_SET_MESSAGE_INTERVAL`
-//! (none until set).
+//! **Status.** The postback says whether the gimbal tracks, not where the target is in the
+//! image. The gimbal's tracker turns the gimbal to keep its target at the image's centre,
+//! so while it tracks what the bridge started, the status gives the target there, with the
+//! size it was given: a point at (0.5, 0.5) with the commanded radius, or the commanded
+//! rectangle centred on it (`target_data` `IN_STATUS`). Between the command and the
+//! gimbal's turn the target is still off centre: the box says where it is being brought.
+//! Tracking the bridge did not start (the gimbal's own controls) is `ACTIVE` with no mode
+//! and no box, nothing invented. The status is sent when asked (`MAV_CMD_REQUEST_MESSAGE`),
+//! at the interval set with `MAV_CMD_SET_MESSAGE_INTERVAL`, and, with no interval set, every
+//! [`TRACKING_STATUS_MS`] while tracking the bridge started and once `IDLE` when it stops:
+//! QGroundControl 5.0 never asks for it (`_requestTrackingStatus` has no caller) and draws
+//! the box from it. An interval of −1 stops it altogether.
 //!
 //! What the clients send and read (QGroundControl at HTRamsey/qgroundcontrol c15cc32, which
 //! tracks master; MAVSDK at mavlink/MAVSDK 158e339, the 4.1 wheel's source):
@@ -45,6 +52,10 @@ use crate::bridge::Tx;
 use crate::command::Interval;
 use crate::gimbal::GimbalControl;
 
+/// The status's period while tracking when no interval was set, ms: QGroundControl's own
+/// ask (500,000 µs).
+pub const TRACKING_STATUS_MS: u32 = 500;
+
 /// The smallest box a point is tracked with, image units (1/32 of the image).
 pub const POINT_BOX_SIDE: f32 = 256.0;
 /// Image units across the image (0..8191).
@@ -59,15 +70,26 @@ pub(crate) enum Source {
     Infrared,
 }
 
+/// A tracking the bridge started.
+#[derive(Clone, Copy, Debug)]
+struct Started {
+    mode: CameraTrackingMode,
+    source: Source,
+    /// The box's sides, normalized (a point's: twice its radius).
+    size: (f32, f32),
+}
+
 /// What was last commanded, and how often to report.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Tracking {
-    /// The mode of the last start, while not stopped.
-    mode: Option<(CameraTrackingMode, Source)>,
+    /// The last start, while not stopped.
+    started: Option<Started>,
     pub(crate) source: Source,
-    /// The status interval, ms; 0: only on request.
-    interval_ms: u32,
+    /// The status interval set, ms: `None` the default (while tracking), `Some(0)` none.
+    interval_ms: Option<u32>,
     next: Option<Instant>,
+    /// An `IDLE` status is owed: tracking stopped, the default interval in force.
+    idle_owed: bool,
 }
 
 /// A normalized coordinate in [0, 1], or `None`.
@@ -101,7 +123,7 @@ impl Tracking {
         let Some(b) = tracking_box(x, y, side, side) else {
             return MavResult::Denied;
         };
-        self.start(gimbal, b, CameraTrackingMode::Point)
+        self.start(gimbal, b, CameraTrackingMode::Point, (side, side))
     }
 
     /// `MAV_CMD_CAMERA_TRACK_RECTANGLE`: param1, param2 the top-left corner, param3, param4
@@ -116,16 +138,11 @@ impl Tracking {
         else {
             return MavResult::Denied;
         };
-        let b = tracking_box(
-            (x1 + x2) / 2.0,
-            (y1 + y2) / 2.0,
-            libm::fabsf(x2 - x1),
-            libm::fabsf(y2 - y1),
-        );
-        let Some(b) = b else {
+        let size = (libm::fabsf(x2 - x1), libm::fabsf(y2 - y1));
+        let Some(b) = tracking_box((x1 + x2) / 2.0, (y1 + y2) / 2.0, size.0, size.1) else {
             return MavResult::Denied;
         };
-        self.start(gimbal, b, CameraTrackingMode::Rectangle)
+        self.start(gimbal, b, CameraTrackingMode::Rectangle, size)
     }
 
     fn start<G: GimbalControl>(
@@ -133,6 +150,7 @@ impl Tracking {
         gimbal: &mut G,
         b: TrackingBox,
         mode: CameraTrackingMode,
+        size: (f32, f32),
     ) -> MavResult {
         let command = match self.source {
             Source::Visible => GimbalCmd::from(GimbalCommand::StartTracking(b)),
@@ -141,13 +159,20 @@ impl Tracking {
         if gimbal.send(command).is_err() {
             return MavResult::TemporarilyRejected;
         }
-        self.mode = Some((mode, self.source));
+        self.started = Some(Started {
+            mode,
+            source: self.source,
+            size,
+        });
+        // The status at the next poll.
+        self.next = None;
+        self.idle_owed = false;
         MavResult::Accepted
     }
 
     /// `MAV_CMD_CAMERA_STOP_TRACKING`, on the image the tracking was started on.
     pub(crate) fn stop<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
-        let source = self.mode.map_or(self.source, |(_, s)| s);
+        let source = self.started.map_or(self.source, |s| s.source);
         let command = match source {
             Source::Visible => GimbalCmd::from(GimbalCommand::StopTracking),
             Source::Infrared => GimbalCmd::from(DualLightCommand::StopTracking),
@@ -155,7 +180,8 @@ impl Tracking {
         if gimbal.send(command).is_err() {
             return MavResult::TemporarilyRejected;
         }
-        self.mode = None;
+        self.idle_owed = self.started.take().is_some();
+        self.next = None;
         MavResult::Accepted
     }
 
@@ -163,17 +189,27 @@ impl Tracking {
     /// (none: only on request). Below 1 ms or above a minute is out of range.
     pub(crate) fn set_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
         self.interval_ms = match Interval::from_us(interval_us) {
-            Some(Interval::Stop | Interval::Default) => 0,
-            Some(Interval::Every(ms)) => ms,
+            Some(Interval::Stop) => Some(0),
+            Some(Interval::Default) => None,
+            Some(Interval::Every(ms)) => Some(ms),
             None => return MavResult::Denied,
         };
         self.next = Some(now);
         MavResult::Accepted
     }
 
+    /// The status's period now, ms, if it is sent on one.
+    fn period(&self) -> Option<u32> {
+        match self.interval_ms {
+            Some(0) => None,
+            Some(ms) => Some(ms),
+            None => (self.started.is_some() || self.idle_owed).then_some(TRACKING_STATUS_MS),
+        }
+    }
+
     /// Whether the status is due at `now`.
     pub(crate) fn due(&self, now: Instant) -> bool {
-        self.interval_ms > 0 && self.next.is_none_or(|t| now.is_at_or_after(t))
+        self.period().is_some() && self.next.is_none_or(|t| now.is_at_or_after(t))
     }
 
     /// Sends the status, due or asked for.
@@ -184,30 +220,43 @@ impl Tracking {
         now: Instant,
         tx: &mut Tx<'_>,
     ) {
-        if self.interval_ms > 0 {
-            self.next = Some(now.add_millis(self.interval_ms));
+        if let Some(ms) = self.period() {
+            self.next = Some(now.add_millis(ms));
         }
         let tracking = gimbal.latest_postback(now).is_some_and(|(p, _)| p.tracking);
-        let (status, mode) = match (tracking, self.mode) {
-            (true, Some((mode, _))) => (CameraTrackingStatusFlags::Active, mode),
-            // Tracking the bridge did not start (the gimbal's own controls): active, mode
-            // unknown.
-            (true, None) => (CameraTrackingStatusFlags::Active, CameraTrackingMode::None),
-            (false, _) => (CameraTrackingStatusFlags::Idle, CameraTrackingMode::None),
-        };
-        let s = CameraTrackingImageStatus {
-            tracking_status: status,
-            tracking_mode: mode,
+        if !tracking && self.started.is_none() {
+            self.idle_owed = false;
+        }
+        let nan = f32::NAN;
+        let mut s = CameraTrackingImageStatus {
+            tracking_status: CameraTrackingStatusFlags::Idle,
+            tracking_mode: CameraTrackingMode::None,
             target_data: CameraTrackingTargetData::empty(),
-            point_x: f32::NAN,
-            point_y: f32::NAN,
-            radius: f32::NAN,
-            rec_top_x: f32::NAN,
-            rec_top_y: f32::NAN,
-            rec_bottom_x: f32::NAN,
-            rec_bottom_y: f32::NAN,
+            point_x: nan,
+            point_y: nan,
+            radius: nan,
+            rec_top_x: nan,
+            rec_top_y: nan,
+            rec_bottom_x: nan,
+            rec_bottom_y: nan,
             camera_device_id: 0,
         };
+        if tracking {
+            s.tracking_status = CameraTrackingStatusFlags::Active;
+            // Tracking the bridge did not start (the gimbal's own controls): no mode, no box.
+            if let Some(t) = self.started {
+                let (w, h) = t.size;
+                s.tracking_mode = t.mode;
+                s.target_data = CameraTrackingTargetData::IN_STATUS;
+                // The tracker keeps its target at the centre (module docs).
+                if t.mode == CameraTrackingMode::Point {
+                    (s.point_x, s.point_y, s.radius) = (0.5, 0.5, w / 2.0);
+                } else {
+                    (s.rec_top_x, s.rec_top_y) = (0.5 - w / 2.0, 0.5 - h / 2.0);
+                    (s.rec_bottom_x, s.rec_bottom_y) = (0.5 + w / 2.0, 0.5 + h / 2.0);
+                }
+            }
+        }
         tx.send_encoded::<CameraTrackingImageStatus>(
             component,
             crate::codec::tracking_image_status::LEN,
