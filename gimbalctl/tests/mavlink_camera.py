@@ -457,23 +457,28 @@ def ftp_raw_tests(gcs, xml):
     ftp.expect_nak(0, OP_LIST, E_EOF, "ListDirectory / from entry 1", data=b"/", offset=1)
     ftp.expect_nak(0, OP_LIST, E_NOT_FOUND, "ListDirectory /camera.xml (not a directory)", data=b"/camera.xml")
 
-    # The path as each client sends it: with or without "/", with or without a NUL; the
-    # second session, then none left; TerminateSession frees it.
-    seq, r = ftp.request(0, OP_OPEN, data=b"camera.xml")
-    ok = check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and u32(r.data) == n and r.session == 1,
-               f"FTP OpenFileRO camera.xml: ACK, session 1, length {n}: {r}")
-    s1 = r.session if ok else 1
-    ftp.expect_nak(0, OP_OPEN, E_NO_SESSIONS, "a third OpenFileRO with two open", data=b"/camera.xml\0")
+    # The path as each client sends it: with or without "/", with or without a NUL. A session
+    # is the client's number, echoed (MAVProxy picks its own and routes replies by it,
+    # mavproxy_ftp.py; ArduPilot's GCS_FTP.cpp does the same): the second session, then none
+    # left for a third; TerminateSession frees it.
+    seq, r = ftp.request(1, OP_OPEN, data=b"camera.xml")
+    check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and u32(r.data) == n and r.session == 1,
+          f"FTP OpenFileRO camera.xml in session 1: ACK in session 1, length {n}: {r}")
+    s1 = 1
+    ftp.expect_nak(2, OP_OPEN, E_NO_SESSIONS, "a third session (2) with two open", data=b"/camera.xml\0")
     for path in (b"/camera.xml\0", b"camera.xml\0"):
         seq, r = ftp.request(s1, OP_TERMINATE)
         check(ftp.is_reply(r, seq, OP_TERMINATE) and r.opcode == ACK and r.session == s1,
               f"FTP TerminateSession {s1}: ACK: {r}")
-        seq, r = ftp.request(0, OP_OPEN, data=path)
+        seq, r = ftp.request(s1, OP_OPEN, data=path)
         check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and u32(r.data) == n and r.session == s1,
               f"FTP OpenFileRO {path!r} in the freed session {s1}: length {n}: {r}")
     seq, r = ftp.request(s1, OP_TERMINATE)
     check(ftp.is_reply(r, seq, OP_TERMINATE) and r.opcode == ACK, f"FTP TerminateSession {s1}: ACK: {r}")
-    ftp.expect_nak(s1, OP_TERMINATE, E_INVALID_SESSION, f"TerminateSession {s1} again (not open)")
+    # A session not open: ACK as ArduPilot's server does (MAVProxy terminates on every exit).
+    seq, r = ftp.request(s1, OP_TERMINATE)
+    check(ftp.is_reply(r, seq, OP_TERMINATE) and r.opcode == ACK,
+          f"FTP TerminateSession {s1} again (not open): ACK: {r}")
 
     # Re-transmission: the same seq and bytes get the same reply, and open no second session.
     ftp.request(0, OP_RESET)
@@ -481,32 +486,40 @@ def ftp_raw_tests(gcs, xml):
     _, again = ftp.request(0, OP_OPEN, data=b"/camera.xml", seq=seq)
     check(first is not None and again is not None and first.raw == again.raw and first.opcode == ACK,
           f"FTP OpenFileRO re-sent with seq {seq}: the same reply ({first} / {again})")
-    a = first.session if first is not None else 0
+    a = 0
     seq, first = ftp.request(a, OP_READ, offset=0, size=50)
     _, again = ftp.request(a, OP_READ, offset=0, size=50, seq=seq)
     check(first is not None and again is not None and first.raw == again.raw and first.data == xml[:50],
           f"FTP ReadFile re-sent with seq {seq}: the same bytes")
-    seq, r = ftp.request(0, OP_OPEN, data=b"/camera.xml")
-    ok = check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session != a,
-               f"FTP the next OpenFileRO gets the other session (the re-sent one took none): {r}")
-    b = r.session if ok else 1 - a
+    # A retried open after another request (a new seq, the same session): the same session
+    # re-opened, no second slot taken.
+    seq, r = ftp.request(a, OP_OPEN, data=b"/camera.xml")
+    check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session == a,
+          f"FTP OpenFileRO retried after another request: session {a} re-opened: {r}")
+    b = 1
+    seq, r = ftp.request(b, OP_OPEN, data=b"/camera.xml")
+    check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session == b,
+          f"FTP the second session still free for another open: {r}")
     seq, first = ftp.request(b, OP_TERMINATE)
     _, again = ftp.request(b, OP_TERMINATE, seq=seq)
     check(first is not None and again is not None and first.opcode == ACK and first.raw == again.raw,
-          f"FTP TerminateSession re-sent: ACK again, not InvalidSession ({again})")
-    seq, r = ftp.request(0, OP_OPEN, data=b"/camera.xml")
+          f"FTP TerminateSession re-sent: ACK again ({again})")
+    seq, r = ftp.request(b, OP_OPEN, data=b"/camera.xml")
     check(ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session == b, f"FTP re-open session {b}: {r}")
-    ftp.expect_nak(0, OP_OPEN, E_NO_SESSIONS, "OpenFileRO with both sessions open (idle < 5 s)", data=b"/camera.xml")
+    ftp.expect_nak(2, OP_OPEN, E_NO_SESSIONS, "OpenFileRO in a third session with both open (idle < 5 s)",
+                   data=b"/camera.xml")
     # Session a was last used before b: it is the one idle longest.
     return ftp, a, time.monotonic()
 
 
 def ftp_reclaim_test(ftp, oldest, idle_since):
-    """Both sessions idle for more than 5 s: an OpenFileRO takes the one idle longest."""
+    """Both sessions idle for more than 5 s: an OpenFileRO in a third session takes the slot of
+    the one idle longest, which is then gone."""
     idle = time.monotonic() - idle_since
-    seq, r = ftp.request(0, OP_OPEN, data=b"/camera.xml")
-    check(idle > 5.0 and ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session == oldest,
-          f"FTP OpenFileRO after {idle:.1f} s idle: session {oldest} (idle longest) reclaimed: {r}")
+    seq, r = ftp.request(2, OP_OPEN, data=b"/camera.xml")
+    check(idle > 5.0 and ftp.is_reply(r, seq, OP_OPEN) and r.opcode == ACK and r.session == 2,
+          f"FTP OpenFileRO in session 2 after {idle:.1f} s idle: ACK: {r}")
+    ftp.expect_nak(oldest, OP_READ, E_INVALID_SESSION, f"session {oldest} (idle longest) reclaimed", size=10)
     ftp.request(0, OP_RESET)
 
 

@@ -661,7 +661,7 @@ impl Camera {
         match message {
             Message::Ftp(request) => {
                 let mut reply = [0u8; PAYLOAD_LEN];
-                if self.ftp.request(&request, now, &mut reply) {
+                if self.ftp.request(from, &request, now, &mut reply) {
                     // The burst's packets go to whoever asked for it, even with another
                     // client's requests answered between them.
                     if request.get(3) == Some(&BURST_READ_FILE) {

@@ -14,17 +14,17 @@
 //! `session` (2), `opcode` (3), `size` (4), `req_opcode` (5), `burst_complete` (6),
 //! padding (7), `offset` u32 (8–11), `data` (12–250, 239 bytes). A reply's `seq_number` is
 //! the request's plus one, `req_opcode` the request's opcode, `session` and `offset` the
-//! request's (except the session an `OpenFileRO` allocates); bytes past `size` are zero.
+//! request's; bytes past `size` are zero.
 //!
 //! # What it answers
 //!
 //! | opcode | reply |
 //! |---|---|
 //! | 0 None | ACK ("Ignored, always ACKed") |
-//! | 1 TerminateSession | ACK; NAK `InvalidSession` for a session not open |
+//! | 1 TerminateSession | ACK, also for a session not open (as ArduPilot: the client's clean-up of a session reclaimed or never opened) |
 //! | 2 ResetSessions | ACK; every session closed, a burst in progress ended |
 //! | 3 ListDirectory | ACK with entries from index `offset`: `F<name>\t<size>\0` for a file, `D<name>\0` for a sub-directory, as many whole entries as fit; NAK `EOF` past the last; NAK `FileNotFound` for a path that is not a directory |
-//! | 4 OpenFileRO | ACK with the session and the file's size (u32, `size` 4); NAK `FileNotFound`, `NoSessionsAvailable` |
+//! | 4 OpenFileRO | ACK in the client's session with the file's size (u32, `size` 4); NAK `FileNotFound`, `NoSessionsAvailable` |
 //! | 5 ReadFile | ACK with up to `size` bytes from `offset`; NAK `EOF` at or past the end, `InvalidSession` |
 //! | 15 BurstReadFile | ACK packets from `offset` to the end (see [Bursts](#bursts)); NAK `EOF`, `InvalidSession` |
 //! | 14 CalcFileCRC32 | ACK with the file's CRC-32 (u32), MAVLink's variant (mavlink.io "MAVLink CRC": start at 0, no final XOR); NAK `FileNotFound` |
@@ -44,10 +44,15 @@
 //!
 //! # Sessions
 //!
-//! `SESSIONS` read sessions (2 by default), numbered from 0. A client that vanishes never
-//! sends `TerminateSession`, so when an `OpenFileRO` finds none free, the session idle
-//! longest is reclaimed if it has been idle for more than [`SESSION_IDLE_TIMEOUT_MS`]
-//! (reads, bursts and their packets count as use), and counted.
+//! `SESSIONS` read sessions (2 by default). A session is the client's: its number is the
+//! one the client's `OpenFileRO` carries, echoed in every reply, and it is known by that
+//! number and the client's system and component ids. MAVProxy picks its own session
+//! number and routes replies by it (`mavproxy_ftp.py`), as ArduPilot's server allows
+//! (`GCS_FTP.cpp`); QGroundControl, MAVSDK and pymavlink use 0. An `OpenFileRO` in a session
+//! the client already has open re-opens it (a retried open takes no second slot). A client
+//! that vanishes never sends `TerminateSession`, so when an `OpenFileRO` finds none free,
+//! the session idle longest is reclaimed if it has been idle for more than
+//! [`SESSION_IDLE_TIMEOUT_MS`] (reads, bursts and their packets count as use), and counted.
 //!
 //! # Re-transmission
 //!
@@ -158,9 +163,15 @@ pub struct FtpStats {
     pub entries_skipped: u32,
 }
 
+/// Who sent a request: its system and component ids.
+pub type Client = (u8, u8);
+
 /// An open read session.
 #[derive(Clone, Copy, Debug)]
 struct Session {
+    /// Its number, the client's.
+    id: u8,
+    client: Client,
     /// Index in the file table.
     file: usize,
     last_used: Instant,
@@ -169,6 +180,9 @@ struct Session {
 /// A burst in progress: what its next packet is.
 #[derive(Clone, Copy, Debug)]
 struct Burst {
+    /// Its session's slot.
+    slot: usize,
+    /// The session's number, in every packet.
     session: u8,
     offset: u32,
     seq_number: u16,
@@ -184,7 +198,7 @@ enum Replay {
     /// ACK without data (a session terminated).
     Ack,
     /// ACK of an `OpenFileRO`.
-    Opened { session: u8, file: usize },
+    Opened { file: usize },
     /// NAK with this code.
     Nak(ErrorCode),
 }
@@ -222,10 +236,14 @@ impl Header {
         (header, data)
     }
 
-    /// The request's content, to tell a re-transmission: the fields that mean something
-    /// in a request (not `req_opcode`, `burst_complete`, padding or bytes past `size`).
-    fn key(&self, data: &[u8; MAX_DATA_LEN]) -> u32 {
-        let crc = crc32(0, &[self.session, self.opcode, self.size]);
+    /// The request's content and who sent it, to tell a re-transmission: the fields that
+    /// mean something in a request (not `req_opcode`, `burst_complete`, padding or bytes
+    /// past `size`).
+    fn key(&self, client: Client, data: &[u8; MAX_DATA_LEN]) -> u32 {
+        let crc = crc32(
+            0,
+            &[client.0, client.1, self.session, self.opcode, self.size],
+        );
         let crc = crc32(crc, &self.offset.to_le_bytes());
         crc32(crc, data.get(..usize::from(self.size)).unwrap_or(&[]))
     }
@@ -326,11 +344,12 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         self.burst.is_some()
     }
 
-    /// Handles one request packet (`FILE_TRANSFER_PROTOCOL.payload`) at `now`. Returns
-    /// whether to send `reply` (then written in full); `false` only for an ACK or NAK
-    /// received as a request, with `reply` untouched.
+    /// Handles one request packet (`FILE_TRANSFER_PROTOCOL.payload`) from `client` at
+    /// `now`. Returns whether to send `reply` (then written in full, to `client`); `false`
+    /// only for an ACK or NAK received as a request, with `reply` untouched.
     pub fn request(
         &mut self,
+        client: Client,
         request: &[u8; PAYLOAD_LEN],
         now: Instant,
         reply: &mut [u8; PAYLOAD_LEN],
@@ -346,7 +365,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             self.stats.bad_requests = self.stats.bad_requests.wrapping_add(1);
             Err(ErrorCode::InvalidDataSize)
         } else {
-            let key = header.key(data);
+            let key = header.key(client, data);
             let replay = self
                 .last
                 .filter(|last| last.seq_number == header.seq_number && last.key == key)
@@ -357,11 +376,12 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             match replay {
                 Some(Replay::Ack) => Ok(Ack::new(0, header.session)),
                 Some(Replay::Nak(code)) => Err(code),
-                Some(Replay::Opened { session, file }) => {
-                    self.reopened(session, file, now, data_mut(reply))
+                Some(Replay::Opened { file }) => {
+                    self.reopened(client, header.session, file, now, data_mut(reply))
                 }
                 Some(Replay::Execute) | None => {
-                    let (result, replay) = self.execute(&header, data, now, data_mut(reply));
+                    let (result, replay) =
+                        self.execute(client, &header, data, now, data_mut(reply));
                     self.last = Some(LastRequest {
                         seq_number: header.seq_number,
                         key,
@@ -413,7 +433,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         let Some(burst) = self.burst else {
             return false;
         };
-        let Ok(bytes) = self.session_file(burst.session, now) else {
+        let Ok(bytes) = self.slot_file(burst.slot, now) else {
             // Not reached: whatever closes the session ends its burst.
             self.burst = None;
             return false;
@@ -450,6 +470,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     /// outcome and how to answer its re-transmission.
     fn execute(
         &mut self,
+        client: Client,
         header: &Header,
         data: &[u8; MAX_DATA_LEN],
         now: Instant,
@@ -459,7 +480,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         let result = match header.opcode {
             NONE => Ok(Ack::new(0, session)),
             TERMINATE_SESSION => {
-                let result = self.terminate(session);
+                let result = self.terminate(client, session);
                 let replay = match result {
                     Ok(_) => Replay::Ack,
                     Err(code) => Replay::Nak(code),
@@ -475,19 +496,13 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
                 .list(path(data, header.size), header.offset, reply)
                 .map(|size| Ack::new(size, session)),
             OPEN_FILE_RO => {
-                return match self.open(path(data, header.size), now, reply) {
-                    Ok((ack, file)) => (
-                        Ok(ack),
-                        Replay::Opened {
-                            session: ack.session,
-                            file,
-                        },
-                    ),
+                return match self.open(client, session, path(data, header.size), now, reply) {
+                    Ok((ack, file)) => (Ok(ack), Replay::Opened { file }),
                     Err(code) => (Err(code), Replay::Nak(code)),
                 };
             }
-            READ_FILE => self.read(header, now, reply),
-            BURST_READ_FILE => self.start_burst(header, now, reply),
+            READ_FILE => self.read(client, header, now, reply),
+            BURST_READ_FILE => self.start_burst(client, header, now, reply),
             CALC_FILE_CRC32 => find_file(self.files, path(data, header.size))
                 .and_then(|index| self.files.get(index))
                 .map(|file| {
@@ -504,10 +519,11 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         (result, Replay::Execute)
     }
 
-    fn session_mut(&mut self, id: u8) -> Option<&mut Session> {
+    /// The slot of `client`'s session `id`, if open.
+    fn slot_of(&self, client: Client, id: u8) -> Option<usize> {
         self.sessions
-            .get_mut(usize::from(id))
-            .and_then(Option::as_mut)
+            .iter()
+            .position(|s| s.is_some_and(|s| s.id == id && s.client == client))
     }
 
     /// Ends the burst in progress, if any, before its end.
@@ -517,37 +533,52 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         }
     }
 
-    fn terminate(&mut self, id: u8) -> Result<Ack, ErrorCode> {
-        let slot = self
-            .sessions
-            .get_mut(usize::from(id))
-            .filter(|slot| slot.is_some())
-            .ok_or(ErrorCode::InvalidSession)?;
-        *slot = None;
-        if self.burst.is_some_and(|b| b.session == id) {
-            self.end_burst();
+    /// Closes `client`'s session `id`; ACK whether or not it was open.
+    fn terminate(&mut self, client: Client, id: u8) -> Result<Ack, ErrorCode> {
+        if let Some(slot) = self.slot_of(client, id) {
+            self.close(slot);
         }
         Ok(Ack::new(0, id))
     }
 
-    /// Opens the file at `path`; the ACK and the file's index.
+    /// Closes the session in `slot`, and its burst.
+    fn close(&mut self, slot: usize) {
+        if let Some(entry) = self.sessions.get_mut(slot) {
+            *entry = None;
+        }
+        if self.burst.is_some_and(|b| b.slot == slot) {
+            self.end_burst();
+        }
+    }
+
+    /// Opens the file at `path` in `client`'s session `id`: the one it has open under that
+    /// number (re-opened), a free one, or one reclaimed; the ACK and the file's index.
     fn open(
         &mut self,
+        client: Client,
+        id: u8,
         path: &[u8],
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<(Ack, usize), ErrorCode> {
         let file = find_file(self.files, path).ok_or(ErrorCode::FileNotFound)?;
-        let slot = match self.sessions.iter().position(Option::is_none) {
-            Some(free) => free,
-            None => self.reclaim(now).ok_or(ErrorCode::NoSessionsAvailable)?,
+        let slot = match self.slot_of(client, id) {
+            Some(own) => {
+                self.close(own);
+                own
+            }
+            None => match self.sessions.iter().position(Option::is_none) {
+                Some(free) => free,
+                None => self.reclaim(now).ok_or(ErrorCode::NoSessionsAvailable)?,
+            },
         };
-        let id = u8::try_from(slot).map_err(|_| ErrorCode::NoSessionsAvailable)?;
         let entry = self
             .sessions
             .get_mut(slot)
             .ok_or(ErrorCode::NoSessionsAvailable)?;
         *entry = Some(Session {
+            id,
+            client,
             file,
             last_used: now,
         });
@@ -567,25 +598,26 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             .filter_map(|(slot, s)| s.map(|s| (slot, now.millis_since(s.last_used))))
             .filter(|&(_, idle)| idle > SESSION_IDLE_TIMEOUT_MS)
             .max_by_key(|&(_, idle)| idle)?;
-        if let Some(entry) = self.sessions.get_mut(slot) {
-            *entry = None;
-        }
+        self.close(slot);
         self.stats.sessions_reclaimed = self.stats.sessions_reclaimed.wrapping_add(1);
-        if self.burst.is_some_and(|b| usize::from(b.session) == slot) {
-            self.end_burst();
-        }
         Some(slot)
     }
 
     /// The ACK of an `OpenFileRO` re-transmitted: the same session and size again.
     fn reopened(
         &mut self,
+        client: Client,
         id: u8,
         file: usize,
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<Ack, ErrorCode> {
-        if let Some(session) = self.session_mut(id).filter(|s| s.file == file) {
+        if let Some(session) = self
+            .slot_of(client, id)
+            .and_then(|slot| self.sessions.get_mut(slot))
+            .and_then(Option::as_mut)
+            .filter(|s| s.file == file)
+        {
             session.last_used = now;
         }
         Ok(self.file_size_ack(id, file, reply))
@@ -598,21 +630,37 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         Ack::new(4, id)
     }
 
-    /// The open session's file, marked used at `now`.
-    fn session_file(&mut self, id: u8, now: Instant) -> Result<&'static [u8], ErrorCode> {
+    /// The file of the session in `slot`, marked used at `now`.
+    fn slot_file(&mut self, slot: usize, now: Instant) -> Result<&'static [u8], ErrorCode> {
         let files = self.files;
-        let session = self.session_mut(id).ok_or(ErrorCode::InvalidSession)?;
+        let session = self
+            .sessions
+            .get_mut(slot)
+            .and_then(Option::as_mut)
+            .ok_or(ErrorCode::InvalidSession)?;
         session.last_used = now;
         Ok(files.get(session.file).map_or(&[][..], |f| f.bytes))
     }
 
+    /// `client`'s session `id`'s slot and file, marked used at `now`.
+    fn session_file(
+        &mut self,
+        client: Client,
+        id: u8,
+        now: Instant,
+    ) -> Result<(usize, &'static [u8]), ErrorCode> {
+        let slot = self.slot_of(client, id).ok_or(ErrorCode::InvalidSession)?;
+        Ok((slot, self.slot_file(slot, now)?))
+    }
+
     fn read(
         &mut self,
+        client: Client,
         header: &Header,
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<Ack, ErrorCode> {
-        let bytes = self.session_file(header.session, now)?;
+        let (_, bytes) = self.session_file(client, header.session, now)?;
         let (size, _) =
             read_chunk(bytes, header.offset, header.size, reply).ok_or(ErrorCode::Eof)?;
         Ok(Ack::new(size, header.session))
@@ -620,13 +668,14 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
 
     fn start_burst(
         &mut self,
+        client: Client,
         header: &Header,
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<Ack, ErrorCode> {
         // One burst at a time: a new request replaces the one in progress.
         self.end_burst();
-        let bytes = self.session_file(header.session, now)?;
+        let (slot, bytes) = self.session_file(client, header.session, now)?;
         // Size 0 would never advance.
         let chunk = match header.size {
             0 => MAX_DATA,
@@ -636,6 +685,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             read_chunk(bytes, header.offset, chunk, reply).ok_or(ErrorCode::Eof)?;
         self.stats.bursts = self.stats.bursts.wrapping_add(1);
         self.burst = (!complete).then_some(Burst {
+            slot,
             session: header.session,
             offset: header.offset.saturating_add(u32::from(size)),
             seq_number: header.seq_number.wrapping_add(2),

@@ -45,6 +45,8 @@ static FILES: [File; 6] = [
 ];
 
 // Opcodes and error codes as numbers, from mavlink.io's tables, not the module's.
+/// The client of most tests (QGroundControl's ids).
+const GCS: Client = (255, 190);
 const OPEN: u8 = 4;
 const READ: u8 = 5;
 const BURST: u8 = 15;
@@ -127,7 +129,7 @@ fn parse(p: &[u8; 251]) -> Reply {
 
 fn send(s: &mut FtpServer, request: &[u8; 251], now: u32) -> Reply {
     let mut reply = [0xAA; 251];
-    assert!(s.request(request, at(now), &mut reply), "no reply");
+    assert!(s.request(GCS, request, at(now), &mut reply), "no reply");
     let r = parse(&reply);
     assert_eq!(
         r.seq,
@@ -146,7 +148,15 @@ fn assert_nak(r: &Reply, error: u8) {
 }
 
 fn open(s: &mut FtpServer, seq: u16, path: &str, now: u32) -> Reply {
-    send(s, &with_path(seq, 0, OPEN, 0, path), now)
+    open_in(s, 0, seq, path, now)
+}
+
+/// `OpenFileRO` in the client's session `session`.
+fn open_in(s: &mut FtpServer, session: u8, seq: u16, path: &str, now: u32) -> Reply {
+    let r = send(s, &with_path(seq, session, OPEN, 0, path), now);
+    // The client's session, echoed.
+    assert_eq!(r.session, session);
+    r
 }
 
 /// Every packet of a burst: the reply to the request, then `burst_next`'s.
@@ -164,41 +174,41 @@ fn burst(s: &mut FtpServer, request: &[u8; 251], now: u32) -> Vec<Reply> {
 #[test]
 fn packet_layout_literal() {
     let mut s = server();
-    // OpenFileRO "/readme.txt", seq 0x0102, session 7 (ignored), size 11.
+    // OpenFileRO "/readme.txt", seq 0x0102, session 7 (the client's), size 11.
     let mut request = [0u8; 251];
     request[..23].copy_from_slice(&[
         0x02, 0x01, 0x07, 0x04, 0x0B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, b'/', b'r', b'e',
         b'a', b'd', b'm', b'e', b'.', b't', b'x', b't',
     ]);
     let mut reply = [0xAA; 251];
-    assert!(s.request(&request, at(0), &mut reply));
+    assert!(s.request(GCS, &request, at(0), &mut reply));
     let mut expected = [0u8; 251];
-    // seq 0x0103, session 0, ACK, size 4, req_opcode 4, file size 5.
+    // seq 0x0103, session 7, ACK, size 4, req_opcode 4, file size 5.
     expected[..16].copy_from_slice(&[
-        0x03, 0x01, 0x00, 0x80, 0x04, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x05, 0x00, 0x00,
+        0x03, 0x01, 0x07, 0x80, 0x04, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x05, 0x00, 0x00,
         0x00,
     ]);
     assert_eq!(reply, expected);
 
-    // ReadFile session 0, offset 1, size 3: "ell".
+    // ReadFile session 7, offset 1, size 3: "ell".
     let mut request = [0u8; 251];
     request[..12].copy_from_slice(&[
-        0x03, 0x01, 0x00, 0x05, 0x03, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00,
+        0x03, 0x01, 0x07, 0x05, 0x03, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00,
     ]);
-    assert!(s.request(&request, at(1), &mut reply));
+    assert!(s.request(GCS, &request, at(1), &mut reply));
     let mut expected = [0u8; 251];
     expected[..15].copy_from_slice(&[
-        0x04, 0x01, 0x00, 0x80, 0x03, 0x05, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, b'e', b'l', b'l',
+        0x04, 0x01, 0x07, 0x80, 0x03, 0x05, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, b'e', b'l', b'l',
     ]);
     assert_eq!(reply, expected);
 
     // ReadFile at offset 5: NAK EOF, offset echoed.
     request[0] = 0x04;
     request[8] = 0x05;
-    assert!(s.request(&request, at(2), &mut reply));
+    assert!(s.request(GCS, &request, at(2), &mut reply));
     let mut expected = [0u8; 251];
     expected[..13].copy_from_slice(&[
-        0x05, 0x01, 0x00, 0x81, 0x01, 0x05, 0x00, 0x00, 0x05, 0x00, 0x00, 0x00, 0x06,
+        0x05, 0x01, 0x07, 0x81, 0x01, 0x05, 0x00, 0x00, 0x05, 0x00, 0x00, 0x00, 0x06,
     ]);
     assert_eq!(reply, expected);
 }
@@ -236,9 +246,10 @@ fn open_read_terminate() {
     assert_eq!((r.session, r.data.len()), (0, 0));
     let r = send(&mut s, &packet(6, 0, READ, 10, 0, &[]), 5);
     assert_nak(&r, E_INVALID_SESSION);
-    // Terminated twice (not a re-transmission: another seq).
+    // Terminated twice (not a re-transmission: another seq): ACK, as ArduPilot's server
+    // (a client's clean-up of a session it no longer has, MAVProxy's among them).
     let r = send(&mut s, &packet(7, 0, 1, 0, 0, &[]), 6);
-    assert_nak(&r, E_INVALID_SESSION);
+    assert_ack(&r);
     assert_eq!(s.stats().sessions_opened, 1);
 }
 
@@ -271,7 +282,7 @@ fn read_at_or_past_end_is_eof() {
         assert_eq!(r.offset, offset);
     }
     // An empty file: EOF at once, for reads and bursts.
-    let r = open(&mut s, 5, "/empty.bin", 0);
+    let r = open_in(&mut s, 1, 5, "/empty.bin", 0);
     assert_eq!((r.session, r.data.as_slice()), (1, &[0, 0, 0, 0][..]));
     assert_nak(&send(&mut s, &packet(6, 1, READ, 239, 0, &[]), 0), E_EOF);
     assert_nak(&send(&mut s, &packet(7, 1, BURST, 239, 0, &[]), 0), E_EOF);
@@ -290,29 +301,27 @@ fn bad_session_is_invalid_session() {
             &send(&mut s, &packet(seq + 1, session, BURST, 10, 0, &[]), 0),
             E_INVALID_SESSION,
         );
-        assert_nak(
-            &send(&mut s, &packet(seq + 2, session, 1, 0, 0, &[]), 0),
-            E_INVALID_SESSION,
-        );
+        // Terminating a session not open: ACK all the same.
+        assert_ack(&send(&mut s, &packet(seq + 2, session, 1, 0, 0, &[]), 0));
     }
     // Session 1 open, session 0 not: 0 stays invalid.
-    assert_ack(&open(&mut s, 20, "/readme.txt", 0));
-    assert_ack(&open(&mut s, 21, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 0, 20, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 1, 21, "/readme.txt", 0));
     assert_ack(&send(&mut s, &packet(22, 0, 1, 0, 0, &[]), 0));
     assert_nak(
         &send(&mut s, &packet(23, 0, READ, 10, 0, &[]), 0),
         E_INVALID_SESSION,
     );
     assert_ack(&send(&mut s, &packet(24, 1, READ, 10, 0, &[]), 0));
-    assert!(s.stats().naks >= 12);
+    assert!(s.stats().naks >= 8);
 }
 
 #[test]
 fn too_many_sessions() {
     let mut s = server();
-    assert_eq!(open(&mut s, 0, "/readme.txt", 0).session, 0);
-    assert_eq!(open(&mut s, 1, "/camera/idu-x30t.xml", 0).session, 1);
-    assert_nak(&open(&mut s, 2, "/readme.txt", 100), E_NO_SESSIONS);
+    assert_ack(&open_in(&mut s, 0, 0, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 1, 1, "/camera/idu-x30t.xml", 0));
+    assert_nak(&open_in(&mut s, 2, 2, "/readme.txt", 100), E_NO_SESSIONS);
     assert_ack(&send(&mut s, &packet(3, 0, 1, 0, 0, &[]), 100));
     let r = open(&mut s, 4, "/params/exact.bin", 100);
     assert_eq!((r.session, r.data.as_slice()), (0, &[0xDE, 0x01, 0, 0][..]));
@@ -326,46 +335,69 @@ fn too_many_sessions() {
     for seq in 0..4u16 {
         let mut reply = [0; 251];
         assert!(four.request(
-            &with_path(seq, 0, OPEN, 0, "/readme.txt"),
+            GCS,
+            &with_path(seq, seq as u8, OPEN, 0, "/readme.txt"),
             at(0),
             &mut reply
         ));
         assert_eq!((reply[3], reply[2]), (128, seq as u8));
     }
     let mut reply = [0; 251];
-    assert!(four.request(&with_path(9, 0, OPEN, 0, "/readme.txt"), at(0), &mut reply));
+    assert!(four.request(
+        GCS,
+        &with_path(9, 9, OPEN, 0, "/readme.txt"),
+        at(0),
+        &mut reply
+    ));
     assert_eq!((reply[3], reply[12]), (129, E_NO_SESSIONS));
 }
 
 /// Two sessions opened at `start`; session 1 used again 2 s later.
 fn reclaim_from(start: u32) {
     let mut s = server();
-    assert_eq!(open(&mut s, 0, "/readme.txt", start).session, 0);
-    assert_eq!(open(&mut s, 1, "/readme.txt", start).session, 1);
+    assert_ack(&open_in(&mut s, 0, 0, "/readme.txt", start));
+    assert_ack(&open_in(&mut s, 1, 1, "/readme.txt", start));
     let later = start.wrapping_add(2_000);
     assert_ack(&send(&mut s, &packet(2, 1, READ, 1, 0, &[]), later));
     // Session 0 idle for exactly the timeout: not yet.
-    let r = open(&mut s, 3, "/camera/idu-x30t.xml", start.wrapping_add(5_000));
+    let r = open_in(
+        &mut s,
+        2,
+        3,
+        "/camera/idu-x30t.xml",
+        start.wrapping_add(5_000),
+    );
     assert_nak(&r, E_NO_SESSIONS);
     assert_eq!(s.stats().sessions_reclaimed, 0);
     // One ms more: session 0 (idle longest) goes, session 1 stays.
-    let r = open(&mut s, 4, "/camera/idu-x30t.xml", start.wrapping_add(5_001));
+    let r = open_in(
+        &mut s,
+        2,
+        4,
+        "/camera/idu-x30t.xml",
+        start.wrapping_add(5_001),
+    );
     assert_ack(&r);
-    assert_eq!((r.session, r.data.as_slice()), (0, &[7, 0, 0, 0][..]));
+    assert_eq!((r.session, r.data.as_slice()), (2, &[7, 0, 0, 0][..]));
     assert_eq!(s.stats().sessions_reclaimed, 1);
     let r = send(
         &mut s,
-        &packet(5, 0, READ, 239, 0, &[]),
+        &packet(5, 2, READ, 239, 0, &[]),
         start.wrapping_add(5_001),
     );
     assert_eq!(r.data, b"<x30t/>");
+    // Session 0 was the one reclaimed.
+    assert_nak(
+        &send(&mut s, &packet(8, 0, READ, 1, 0, &[]), later),
+        E_INVALID_SESSION,
+    );
     assert_eq!(
         send(&mut s, &packet(6, 1, READ, 239, 0, &[]), later).data,
         b"hello"
     );
     // Both in use now.
     assert_nak(
-        &open(&mut s, 7, "/readme.txt", start.wrapping_add(6_000)),
+        &open_in(&mut s, 3, 7, "/readme.txt", start.wrapping_add(6_000)),
         E_NO_SESSIONS,
     );
 }
@@ -385,13 +417,13 @@ fn idle_session_reclaimed_across_the_tick_wrap() {
 #[test]
 fn reclaiming_the_burst_session_ends_the_burst() {
     let mut s = server();
-    assert_ack(&open(&mut s, 0, "/camera/idu-x30.xml", 0));
-    assert_ack(&open(&mut s, 1, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 0, 0, "/camera/idu-x30.xml", 0));
+    assert_ack(&open_in(&mut s, 1, 1, "/readme.txt", 0));
     assert_ack(&send(&mut s, &packet(2, 0, BURST, 100, 0, &[]), 0));
     assert!(s.burst_pending());
     // Session 1 kept busy; session 0's burst not pulled for 6 s.
     assert_ack(&send(&mut s, &packet(3, 1, READ, 1, 0, &[]), 5_000));
-    assert_eq!(open(&mut s, 4, "/readme.txt", 6_000).session, 0);
+    assert_ack(&open_in(&mut s, 2, 4, "/readme.txt", 6_000));
     assert!(!s.burst_pending());
     assert_eq!((s.stats().sessions_reclaimed, s.stats().bursts_cut), (1, 1));
 }
@@ -744,13 +776,14 @@ fn ack_and_nak_get_no_reply() {
     for opcode in [128u8, 129] {
         let mut reply = [0x5A; 251];
         assert!(!s.request(
+            GCS,
             &packet(1, 0, opcode, 4, 0, &[1, 2, 3, 4]),
             at(0),
             &mut reply
         ));
         assert_eq!(reply, [0x5A; 251]);
         // Even with a size beyond 239.
-        assert!(!s.request(&packet(2, 0, opcode, 255, 0, &[]), at(0), &mut reply));
+        assert!(!s.request(GCS, &packet(2, 0, opcode, 255, 0, &[]), at(0), &mut reply));
     }
     let stats = s.stats();
     assert_eq!(
@@ -791,9 +824,9 @@ fn retransmitted_open_returns_the_same_session_and_opens_no_other() {
     let mut s = server();
     let request = with_path(10, 0, OPEN, 0, "/readme.txt");
     let mut first = [0; 251];
-    assert!(s.request(&request, at(0), &mut first));
+    assert!(s.request(GCS, &request, at(0), &mut first));
     let mut again = [0; 251];
-    assert!(s.request(&request, at(50), &mut again));
+    assert!(s.request(GCS, &request, at(50), &mut again));
     assert_eq!(first, again);
     assert_eq!(parse(&again).session, 0);
     assert_eq!(
@@ -801,25 +834,25 @@ fn retransmitted_open_returns_the_same_session_and_opens_no_other() {
         (1, 1)
     );
     // One more session only.
-    assert_eq!(open(&mut s, 11, "/readme.txt", 100).session, 1);
-    assert_nak(&open(&mut s, 12, "/readme.txt", 100), E_NO_SESSIONS);
+    assert_ack(&open_in(&mut s, 1, 11, "/readme.txt", 100));
+    assert_nak(&open_in(&mut s, 2, 12, "/readme.txt", 100), E_NO_SESSIONS);
     // A refusal is repeated as it was, even once a session is free.
     assert_ack(&send(&mut s, &packet(13, 1, 1, 0, 0, &[]), 100));
-    assert_nak(&open(&mut s, 14, "/nope", 100), E_NOT_FOUND);
-    assert_nak(&open(&mut s, 14, "/nope", 100), E_NOT_FOUND);
+    assert_nak(&open_in(&mut s, 2, 14, "/nope", 100), E_NOT_FOUND);
+    assert_nak(&open_in(&mut s, 2, 14, "/nope", 100), E_NOT_FOUND);
 }
 
 #[test]
 fn retransmitted_open_refusal_is_repeated() {
     let mut s = server();
-    assert_ack(&open(&mut s, 0, "/readme.txt", 0));
-    assert_ack(&open(&mut s, 1, "/readme.txt", 0));
-    assert_nak(&open(&mut s, 2, "/readme.txt", 100), E_NO_SESSIONS);
+    assert_ack(&open_in(&mut s, 0, 0, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 1, 1, "/readme.txt", 0));
+    assert_nak(&open_in(&mut s, 2, 2, "/readme.txt", 100), E_NO_SESSIONS);
     // Same seq, same request, 6 s later: still the refusal, nothing reclaimed.
-    assert_nak(&open(&mut s, 2, "/readme.txt", 6_100), E_NO_SESSIONS);
+    assert_nak(&open_in(&mut s, 2, 2, "/readme.txt", 6_100), E_NO_SESSIONS);
     assert_eq!(s.stats().sessions_reclaimed, 0);
     // A new request reclaims.
-    assert_ack(&open(&mut s, 3, "/readme.txt", 6_100));
+    assert_ack(&open_in(&mut s, 2, 3, "/readme.txt", 6_100));
 }
 
 #[test]
@@ -836,20 +869,22 @@ fn retransmitted_terminate_is_acked_again() {
 #[test]
 fn same_seq_with_another_request_is_executed() {
     let mut s = server();
-    assert_eq!(open(&mut s, 10, "/readme.txt", 0).session, 0);
-    // A new client starting over at the same number, for another file.
-    let r = open(&mut s, 10, "/camera/idu-x30t.xml", 0);
-    assert_eq!((r.session, r.data.as_slice()), (1, &[7, 0, 0, 0][..]));
+    assert_ack(&open_in(&mut s, 0, 10, "/readme.txt", 0));
+    // Starting over at the same number, for another file: executed (session 0 re-opened).
+    let r = open_in(&mut s, 0, 10, "/camera/idu-x30t.xml", 0);
+    assert_eq!(r.data.as_slice(), &[7, 0, 0, 0][..]);
+    assert_eq!(s.stats().sessions_opened, 2);
     // Same file, other session byte: another request too.
+    assert_ack(&open_in(&mut s, 1, 10, "/camera/idu-x30t.xml", 0));
     let r = send(
         &mut s,
-        &with_path(10, 1, OPEN, 0, "/camera/idu-x30t.xml"),
+        &with_path(10, 2, OPEN, 0, "/camera/idu-x30t.xml"),
         0,
     );
     assert_nak(&r, E_NO_SESSIONS);
     assert_eq!(s.stats().retransmissions, 0);
     // The bytes the request does not use do not matter.
-    let mut request = with_path(10, 1, OPEN, 0, "/camera/idu-x30t.xml");
+    let mut request = with_path(10, 2, OPEN, 0, "/camera/idu-x30t.xml");
     request[5] = 9;
     request[6] = 1;
     request[7] = 3;
@@ -872,8 +907,8 @@ fn retransmitted_burst_restarts_it() {
 #[test]
 fn reset_sessions_closes_all() {
     let mut s = server();
-    assert_ack(&open(&mut s, 0, "/readme.txt", 0));
-    assert_ack(&open(&mut s, 1, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 0, 0, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 1, 1, "/readme.txt", 0));
     let r = send(&mut s, &packet(2, 5, 2, 0, 0, &[]), 0);
     assert_ack(&r);
     assert_eq!((r.session, r.data.len()), (5, 0));
@@ -885,8 +920,8 @@ fn reset_sessions_closes_all() {
         &send(&mut s, &packet(4, 1, READ, 1, 0, &[]), 0),
         E_INVALID_SESSION,
     );
-    assert_eq!(open(&mut s, 5, "/readme.txt", 0).session, 0);
-    assert_eq!(open(&mut s, 6, "/readme.txt", 0).session, 1);
+    assert_ack(&open_in(&mut s, 0, 5, "/readme.txt", 0));
+    assert_ack(&open_in(&mut s, 1, 6, "/readme.txt", 0));
     // With nothing open: ACK all the same.
     assert_ack(&send(&mut s, &packet(7, 0, 2, 0, 0, &[]), 0));
     assert_ack(&send(&mut s, &packet(8, 0, 2, 0, 0, &[]), 0));
@@ -1008,7 +1043,7 @@ proptest! {
         for (request, dt, pulls) in steps {
             now = now.wrapping_add(dt);
             let mut reply = [0; 251];
-            let answered = s.request(&request, at(now), &mut reply);
+            let answered = s.request(GCS, &request, at(now), &mut reply);
             prop_assert_eq!(answered, request[3] != 128 && request[3] != 129);
             if answered {
                 let r = parse(&reply);
@@ -1038,7 +1073,7 @@ proptest! {
         for (i, bytes) in packets.iter().enumerate() {
             let request: [u8; 251] = bytes.as_slice().try_into().unwrap();
             let mut reply = [0; 251];
-            if s.request(&request, at(i as u32), &mut reply) {
+            if s.request(GCS, &request, at(i as u32), &mut reply) {
                 parse(&reply);
             }
             while s.burst_next(at(i as u32), &mut reply) {
@@ -1046,4 +1081,60 @@ proptest! {
             }
         }
     }
+}
+
+#[test]
+fn sessions_are_the_clients_numbers_and_each_clients_own() {
+    // MAVProxy picks a session number of its own and routes replies by it
+    // (mavproxy_ftp.py); another client uses 0. Each is answered in its own.
+    let mut s = server();
+    const MAVPROXY: Client = (255, 230);
+    let mut reply = [0; 251];
+    assert!(s.request(
+        MAVPROXY,
+        &with_path(0, 173, OPEN, 0, "/readme.txt"),
+        at(0),
+        &mut reply
+    ));
+    let r = parse(&reply);
+    assert_ack(&r);
+    assert_eq!(r.session, 173);
+    assert_ack(&open_in(&mut s, 0, 1, "/camera/idu-x30t.xml", 0));
+    // The same number from another client is not its session.
+    assert_nak(
+        &send(&mut s, &packet(2, 173, READ, 5, 0, &[]), 0),
+        E_INVALID_SESSION,
+    );
+    assert!(s.request(
+        MAVPROXY,
+        &packet(3, 173, READ, 5, 0, &[]),
+        at(0),
+        &mut reply
+    ));
+    assert_eq!(
+        (parse(&reply).session, parse(&reply).data),
+        (173, b"hello".to_vec())
+    );
+    // Its burst carries its number.
+    assert!(s.request(
+        MAVPROXY,
+        &packet(4, 173, BURST, 2, 0, &[]),
+        at(0),
+        &mut reply
+    ));
+    assert_eq!(parse(&reply).session, 173);
+    assert!(s.burst_next(at(0), &mut reply));
+    assert_eq!(parse(&reply).session, 173);
+    // A retried open (another seq, same session) after another request re-opens the
+    // same session: no second slot.
+    assert_ack(&send(&mut s, &packet(5, 0, READ, 1, 0, &[]), 0));
+    assert_ack(&open_in(&mut s, 0, 6, "/camera/idu-x30t.xml", 0));
+    assert_eq!(s.stats().sessions_reclaimed, 0);
+    // Terminated, and terminated again: ACK both.
+    assert!(s.request(MAVPROXY, &packet(7, 173, 1, 0, 0, &[]), at(0), &mut reply));
+    assert_ack(&parse(&reply));
+    assert!(s.request(MAVPROXY, &packet(8, 173, 1, 0, 0, &[]), at(0), &mut reply));
+    assert_ack(&parse(&reply));
+    // The client's own session 0 is untouched.
+    assert_ack(&send(&mut s, &packet(9, 0, READ, 1, 0, &[]), 0));
 }
