@@ -65,7 +65,7 @@
 //! `opcode`, `size`, `offset`, `data[..size]`) are the last request's: a new client
 //! reusing the number with another request is not mistaken for one. `OpenFileRO` and
 //! `TerminateSession` are answered from the record, so a lost ACK does not open a second
-//! session or turn into `InvalidSession`; every other request changes nothing a second
+//! session and is answered as the first was; every other request changes nothing a second
 //! execution would see (files are read-only), so it is executed again, and a repeated
 //! `BurstReadFile` restarts its burst, which is what a client that lost it wants.
 //!
