@@ -1,5 +1,5 @@
 """What the end-to-end clients share (mavlink_e2e.py, mavlink_camera.py, mavsdk_camera.py,
-mavlink_aiming.py): the tally they keep (each check printed as it is made, "ok" or "FAIL",
+mavlink_aiming.py, qgc_camera.py): the tally they keep (each check printed as it is made, "ok" or "FAIL",
 then a last line "NAME: N passed, M failed"), and the simulated gimbal's behaviour they run
 `gimbalctl mavlink --sim` with. Imported from the clients' own directory, which Python puts
 first on the path when it runs one of them."""
@@ -13,6 +13,17 @@ def sim_options():
     suite runs each client against both; none (gimbalctl's default) when unset."""
     what = os.environ.get("GIMBALCTL_SIM_LOCK_HOLDS")
     return ["--sim-lock-holds", what] if what else []
+
+
+def raw_fields(msg):
+    """A message's fields as bytes on the wire (pymavlink decodes char arrays to str, cut at
+    the first NUL: a PARAM_EXT value byte 0 decodes as ""). MAVLink 2 drops the payload's
+    trailing zeros: pad them back."""
+    buf = bytes(msg.get_msgbuf())
+    payload = buf[10:10 + buf[1]]  # the v2 header is 10 bytes; byte 1 is the payload length
+    u = msg.unpacker
+    values = u.unpack(payload.ljust(u.size, b"\0")[:u.size])
+    return dict(zip(msg.ordered_fieldnames, values))
 
 
 class Checks:

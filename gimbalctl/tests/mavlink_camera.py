@@ -61,7 +61,7 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 from pymavlink.mavftp import MAVFTP, FtpError  # noqa: E402
 
-from checks import Checks, sim_options  # noqa: E402
+from checks import Checks, raw_fields, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
@@ -99,17 +99,6 @@ def f32(x):
     An f32 +, -, *, / of f32 operands is exactly the f64 result rounded once to f32 (f64
     has more than twice the bits), so f32(a op b) emulates the bridge's arithmetic."""
     return struct.unpack("<f", struct.pack("<f", x))[0]
-
-
-def raw_fields(msg):
-    """A message's fields as bytes on the wire (pymavlink decodes char arrays to str, cut at
-    the first NUL: a PARAM_EXT value byte 0 decodes as ""). MAVLink 2 drops the payload's
-    trailing zeros: pad them back."""
-    buf = bytes(msg.get_msgbuf())
-    payload = buf[10:10 + buf[1]]  # the v2 header is 10 bytes; byte 1 is the payload length
-    u = msg.unpacker
-    values = u.unpack(payload.ljust(u.size, b"\0")[:u.size])
-    return dict(zip(msg.ordered_fieldnames, values))
 
 
 # --- the bridge and its stderr -----------------------------------------------------------
