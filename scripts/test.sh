@@ -132,6 +132,10 @@ stage_e2e() {
     step "MAVLink aiming: pymavlink as PX4, the vehicle turning, against both lock behaviours"
     python3 gimbalctl/tests/mavlink_aiming.py target/debug/gimbalctl
 
+    # Once, outside the lock loop: the camera does not depend on what lock holds.
+    step "MAVLink camera: QGroundControl's camera client (from its source) against every camera family"
+    python3 gimbalctl/tests/qgc_camera.py target/debug/gimbalctl
+
     # The document leaves open what the gimbal holds in lock while the vehicle turns: every
     # client runs against the simulated gimbal holding its north heading, then its motor angle.
     for holds in north motor; do
