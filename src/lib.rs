@@ -20,7 +20,8 @@
 //!   ([`driver::Io`] for `embedded-io` 0.7, [`driver::Nb`] for `embedded-hal-nb`) and the
 //!   serial link, which carries control commands and postbacks only.
 //! - Beside them: `sim` (a simulated gimbal, on CAN or serial), `mock` (feature `mock`: an
-//!   in-memory CAN bus and serial pipe with fault injection), [`geo`] (WGS84 look-at),
+//!   in-memory CAN bus and serial pipe with fault injection), [`geo`] (WGS84 look-at and
+//!   where a line of sight meets the ground), [`math`] (`f32` sine and cosine),
 //!   [`video`] (RTSP addresses) and [`interface`] (network, UART and CAN defaults, filter
 //!   helpers).
 //!
@@ -81,6 +82,7 @@ pub mod driver;
 pub mod geo;
 pub mod interface;
 pub mod link;
+pub mod math;
 #[cfg(feature = "mock")]
 pub mod mock;
 pub mod sim;

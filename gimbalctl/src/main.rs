@@ -149,6 +149,12 @@ enum Top {
         /// Camera family: its streams, and with dual-light the thermal stream and settings (a2000, x3, argus, dual-light or f10)
         #[arg(long, value_name = "FAMILY", default_value = "x3")]
         camera: String,
+        /// The main camera's horizontal and vertical field of view at 1× zoom, degrees, each more than 0 and less than 180 (default unknown: no source gives it for any family)
+        #[arg(long, value_name = "HFOV,VFOV")]
+        camera_fov: Option<String>,
+        /// The video streams' resolution in pixels, each 1-65535 (default unknown)
+        #[arg(long, value_name = "WIDTHxHEIGHT")]
+        camera_resolution: Option<String>,
         /// With --sim: what the simulated gimbal holds in lock while the vehicle turns, its north heading or its motor angle (the vendor document does not say)
         #[arg(long, value_name = "WHAT", value_enum, default_value_t = mavlink::SimLock::North)]
         sim_lock_holds: mavlink::SimLock,
@@ -254,6 +260,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             autopilot_serial,
             system_id,
             camera,
+            camera_fov,
+            camera_resolution,
             sim_lock_holds,
             exit_after_ms,
         } => {
@@ -279,6 +287,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 },
                 system_id,
                 camera: &camera,
+                camera_fov: camera_fov.as_deref(),
+                camera_resolution: camera_resolution.as_deref(),
                 sim_lock_holds,
                 exit_after_ms,
             })

@@ -43,6 +43,7 @@ use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
+use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
@@ -101,6 +102,10 @@ pub struct Options<'a> {
     pub autopilot: Autopilot<'a>,
     pub system_id: Option<u8>,
     pub camera: &'a str,
+    /// `--camera-fov HFOV,VFOV`, unparsed.
+    pub camera_fov: Option<&'a str>,
+    /// `--camera-resolution WIDTHxHEIGHT`, unparsed.
+    pub camera_resolution: Option<&'a str>,
     pub sim_lock_holds: SimLock,
     pub exit_after_ms: Option<u64>,
 }
@@ -201,8 +206,10 @@ enum Port {
 pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let family =
         Family::from_name(opts.camera).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
-    let camera = CameraConfig::with_streams_of(&Camera::new(family))
+    let mut camera = CameraConfig::with_streams_of(&Camera::new(family))
         .map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
+    camera.fov = opts.camera_fov.map(parse_fov).transpose()?;
+    camera.resolution = opts.camera_resolution.map(parse_resolution).transpose()?;
     let config = BridgeConfig {
         system_id: opts.system_id,
         camera: Some(camera),
@@ -284,6 +291,35 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
                 },
             )
         }
+    }
+}
+
+/// `--camera-fov HFOV,VFOV`: degrees, each more than 0 and less than 180.
+fn parse_fov(s: &str) -> Result<FieldOfView, Failure> {
+    let usage = || {
+        Failure::Usage(format!(
+            "--camera-fov: {s:?} is not HFOV,VFOV in degrees (each more than 0 and less than 180)"
+        ))
+    };
+    let (h, v) = s.split_once(',').ok_or_else(usage)?;
+    let (h, v) = (
+        h.trim().parse::<f32>().map_err(|_| usage())?,
+        v.trim().parse::<f32>().map_err(|_| usage())?,
+    );
+    FieldOfView::from_degrees(h, v).map_err(|e| Failure::Usage(format!("--camera-fov: {e}")))
+}
+
+/// `--camera-resolution WIDTHxHEIGHT`: pixels, each 1-65535.
+fn parse_resolution(s: &str) -> Result<(u16, u16), Failure> {
+    let usage = || {
+        Failure::Usage(format!(
+            "--camera-resolution: {s:?} is not WIDTHxHEIGHT in pixels (each 1-65535)"
+        ))
+    };
+    let (w, h) = s.split_once('x').ok_or_else(usage)?;
+    match (w.parse::<u16>(), h.parse::<u16>()) {
+        (Ok(w), Ok(h)) if w > 0 && h > 0 => Ok((w, h)),
+        _ => Err(usage()),
     }
 }
 

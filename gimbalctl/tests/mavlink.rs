@@ -29,6 +29,23 @@ fn usage_errors_name_the_argument() {
         ),
         (&["mavlink", "--sim", "--listen", "nowhere"], &["--listen"]),
         (&["mavlink", "--sim", "--to", "nowhere"], &["--to"]),
+        (
+            &["mavlink", "--sim", "--camera-fov", "60"],
+            &["--camera-fov", "HFOV,VFOV", "less than 180"],
+        ),
+        (
+            &["mavlink", "--sim", "--camera-fov", "60,180"],
+            &[
+                "--camera-fov",
+                "vertical",
+                "180°",
+                "more than 0 and less than 180",
+            ],
+        ),
+        (
+            &["mavlink", "--sim", "--camera-resolution", "1920x0"],
+            &["--camera-resolution", "WIDTHxHEIGHT", "1-65535"],
+        ),
     ] {
         usage_error_naming(args, words);
     }

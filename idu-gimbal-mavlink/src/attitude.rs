@@ -43,37 +43,7 @@ pub fn wrap_pi(a: f32) -> f32 {
     }
 }
 
-/// π/2 in two parts (Cody and Waite): the high part has 8 significant bits, so `k ×` it is
-/// exact for |k| < 2¹⁶; the low part carries the rest, to 2.6·10⁻¹².
-const PI_2_HI: f32 = 1.570_312_5;
-const PI_2_LO: f32 = 4.838_268e-4;
-
-/// Sine and cosine in `f32` arithmetic only.
-///
-/// `libm::sincosf` computes in `f64` (musl's kernels), which a Cortex-M4F does in software:
-/// with it the bridge carried about 6 KiB of `f64` routines and a Payne–Hanek table for
-/// angles it never sees. Here the angle is reduced by multiples of π/2 (to within 10⁻⁸
-/// for |x| < 6000 rad, far beyond the half-angles of a gimbal's ±325°) and each quadrant
-/// evaluates Taylor polynomials to x⁹ and x¹⁰ on [−π/4, π/4], whose truncation error is
-/// below 2·10⁻⁹, under f32 rounding (6·10⁻⁸): the result is within a few ulps of the true
-/// value (the tests compare with `f64` on a dense grid). NaN and infinities give NaN.
-pub fn sin_cos(x: f32) -> (f32, f32) {
-    let k = libm::roundf(x * core::f32::consts::FRAC_2_PI);
-    let r = (x - k * PI_2_HI) - k * PI_2_LO;
-    let r2 = r * r;
-    let sin =
-        r + r * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 / 362_880.0)));
-    let cos = 1.0
-        + r2 * (-0.5
-            + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0 - r2 / 3_628_800.0))));
-    // The quadrant: k mod 4 (a saturating cast for huge or NaN k, whose r is NaN anyway).
-    match (k as i32) & 3 {
-        0 => (sin, cos),
-        1 => (cos, -sin),
-        2 => (-sin, -cos),
-        _ => (-cos, sin),
-    }
-}
+pub use idu_gimbal::math::sin_cos;
 
 /// `asin` in `f32` arithmetic only (`libm::asinf` uses `f64` from |v| = 0.5, see
 /// [`sin_cos`]), for |v| ≤ 1. Below 0.5, a vehicle's pitch up to 30° and the common case,
@@ -148,30 +118,6 @@ pub fn is_nan_quaternion(q: [f32; 4]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sin_cos_is_within_a_few_ulps_of_f64() {
-        // Every 1/1000 rad over ±4π, and the gimbal's half-angles' range many times over.
-        let mut worst = 0f64;
-        for i in -12_566..=12_566 {
-            let x = i as f32 / 1000.0;
-            let (s, c) = sin_cos(x);
-            let (s64, c64) = (f64::from(x).sin(), f64::from(x).cos());
-            worst = worst
-                .max((f64::from(s) - s64).abs())
-                .max((f64::from(c) - c64).abs());
-        }
-        // f32's ulp at 1 is 1.2e-7: a few ulps.
-        assert!(worst < 3e-7, "worst error {worst:e}");
-        for x in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
-            let (s, c) = sin_cos(x);
-            assert!(s.is_nan() && c.is_nan());
-        }
-        // Exact at the quadrant points that matter: 0 and ±π/2 (motor at 0 or ±180°).
-        assert_eq!(sin_cos(0.0), (0.0, 1.0));
-        let (s, c) = sin_cos(core::f32::consts::FRAC_PI_2);
-        assert!((s - 1.0).abs() <= 1e-7 && c.abs() <= 1e-7);
-    }
 
     #[test]
     fn asin_matches_f64() {

@@ -21,6 +21,8 @@
 
 use idu_gimbal::Instant;
 
+use crate::attitude::YawPitch;
+
 /// Images kept for re-requests.
 pub const HISTORY: usize = 16;
 /// The shortest interval between scheduled images, ms. The document gives no rate for the
@@ -50,6 +52,22 @@ pub struct Vantage {
     /// motor angle and pitch, with the vehicle's heading); `None` without a postback or a
     /// fresh vehicle heading.
     pub attitude: Option<(i16, i16)>,
+}
+
+impl Vantage {
+    /// The camera's attitude as an earth-frame (NED) quaternion, NaN when unknown.
+    /// common.xml names no frame for `CAMERA_IMAGE_CAPTURED.q` or `CAMERA_FOV_STATUS.q`;
+    /// the messages' producers give it so (PX4's camera_feedback rotates a vehicle-frame
+    /// gimbal attitude by the vehicle's yaw).
+    pub fn quaternion(&self) -> [f32; 4] {
+        self.attitude.map_or([f32::NAN; 4], |(yaw, pitch)| {
+            YawPitch {
+                yaw_rad: (f32::from(yaw) / 100.0).to_radians(),
+                pitch_rad: (f32::from(pitch) / 100.0).to_radians(),
+            }
+            .to_quaternion()
+        })
+    }
 }
 
 /// One image taken: what `CAMERA_IMAGE_CAPTURED` reports of it.

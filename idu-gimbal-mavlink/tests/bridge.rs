@@ -15,8 +15,8 @@ use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
 use mavio::dialects::common::messages::{
-    AutopilotStateForGimbalDevice, CommandAck, CommandLong, GimbalDeviceAttitudeStatus,
-    GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
+    CommandAck, CommandLong, GimbalDeviceAttitudeStatus, GimbalDeviceInformation,
+    GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 
 fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
@@ -32,28 +32,6 @@ fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> Gimba
         angular_velocity_x: f32::NAN,
         angular_velocity_y: f32::NAN,
         angular_velocity_z: f32::NAN,
-    }
-}
-
-fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
-    AutopilotStateForGimbalDevice {
-        target_system: AP.0,
-        target_component: 154,
-        time_boot_us: 0,
-        q: YawPitch {
-            yaw_rad: yaw_deg.to_radians(),
-            pitch_rad: 0.0,
-        }
-        .to_quaternion(),
-        q_estimated_delay_us: 0,
-        vx: 0.0,
-        vy: 0.0,
-        vz: 0.0,
-        v_estimated_delay_us: 0,
-        feed_forward_angular_velocity_z: 0.0,
-        estimator_status: Default::default(),
-        landed_state: Default::default(),
-        angular_velocity_z: 0.0,
     }
 }
 

@@ -33,6 +33,7 @@
 //! not offered.
 
 pub mod definition;
+pub mod fov;
 pub mod lens;
 pub mod settings;
 pub mod stream;
@@ -49,18 +50,18 @@ use mavio::dialects::common::enums::{
     StorageUsageFlag,
 };
 use mavio::dialects::common::messages::{
-    CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings,
+    CameraCaptureStatus, CameraFovStatus, CameraImageCaptured, CameraInformation, CameraSettings,
     CameraTrackingImageStatus, FileTransferProtocol, ParamExtRequestList, ParamExtRequestRead,
     ParamExtSet, StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 
-use crate::attitude::YawPitch;
 use crate::bridge::{id_of, name, Tx};
 use crate::capture::{Capture, Image, Request, Vantage};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
 use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
 use crate::gimbal::GimbalControl;
+use fov::FieldOfView;
 use settings::Settings;
 use stream::{VideoStream, MAX_STREAMS};
 use tracking::{Source, Tracking};
@@ -121,6 +122,9 @@ pub struct CameraConfig {
     /// The streams' resolution (horizontal, vertical), when known: the vendor document
     /// gives none, so `None` by default (reported as 0, "unknown").
     pub resolution: Option<(u16, u16)>,
+    /// The main camera's field of view at 1×, when known: no source gives it for any
+    /// family, so `None` by default (see [`fov`]).
+    pub fov: Option<FieldOfView>,
     streams: heapless::Vec<VideoStream, MAX_STREAMS>,
 }
 
@@ -146,6 +150,7 @@ impl CameraConfig {
             component: CAMERA_COMPONENT,
             zoom_max: None,
             resolution: None,
+            fov: None,
             streams,
         })
     }
@@ -171,6 +176,7 @@ impl CameraConfig {
             component: CAMERA_COMPONENT,
             zoom_max: None,
             resolution: None,
+            fov: None,
             streams,
         })
     }
@@ -223,6 +229,7 @@ pub(crate) enum Reply {
     Storage,
     CaptureStatus,
     TrackingStatus,
+    FovStatus,
     /// This image was taken: its CAMERA_IMAGE_CAPTURED, then the status.
     Captured(Image),
     /// Kept images asked for again, indexes first..=last.
@@ -255,6 +262,7 @@ pub(crate) struct Camera {
     recording_since: Option<Instant>,
     streams: stream::Pending,
     tracking: Tracking,
+    fov_status: fov::Schedule,
     settings: Settings,
     ftp: FtpServer<FTP_SESSIONS>,
     /// Who the burst read in progress is for.
@@ -281,10 +289,16 @@ pub(crate) fn owns(cmd: &Command) -> bool {
             id_of::<VideoStreamInformation>(),
             id_of::<VideoStreamStatus>(),
             id_of::<CameraTrackingImageStatus>(),
+            id_of::<CameraFovStatus>(),
         ]
         .iter()
         .any(|&id| cmd.requests(id)),
-        MavCmd::SetMessageInterval => cmd.params[0] == id_of::<CameraTrackingImageStatus>() as f32,
+        MavCmd::SetMessageInterval => [
+            id_of::<CameraTrackingImageStatus>(),
+            id_of::<CameraFovStatus>(),
+        ]
+        .iter()
+        .any(|&id| cmd.params[0] == id as f32),
         MavCmd::RequestCameraInformation
         | MavCmd::RequestCameraSettings
         | MavCmd::RequestStorageInformation
@@ -325,6 +339,7 @@ impl Camera {
             recording_since: None,
             streams: stream::Pending::default(),
             tracking: Tracking::default(),
+            fov_status: fov::Schedule::default(),
             settings: Settings::new(config.has_thermal()),
             ftp: FtpServer::new(definition::files(config.has_thermal())),
             burst_client: (0, 0),
@@ -384,6 +399,7 @@ impl Camera {
             MavCmd::RequestMessage if cmd.requests(id_of::<CameraTrackingImageStatus>()) => {
                 Reply::TrackingStatus
             }
+            MavCmd::RequestMessage if cmd.requests(id_of::<CameraFovStatus>()) => Reply::FovStatus,
             MavCmd::RequestMessage if cmd.requests(id_of::<CameraImageCaptured>()) => {
                 return self.images_asked(cmd.params[1], cmd.params[2]);
             }
@@ -402,10 +418,13 @@ impl Camera {
                 Reply::Nothing
             }
             MavCmd::SetMessageInterval => {
-                return (
-                    self.tracking.set_interval(cmd.params[1], now),
-                    Reply::Nothing,
-                )
+                let [message, interval, ..] = cmd.params;
+                let result = if message == id_of::<CameraFovStatus>() as f32 {
+                    self.fov_status.set_interval(interval, now)
+                } else {
+                    self.tracking.set_interval(interval, now)
+                };
+                return (result, Reply::Nothing);
             }
             MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now, vantage),
             MavCmd::ImageStopCapture => {
@@ -570,6 +589,7 @@ impl Camera {
             Reply::Storage => self.send_storage(config, now, tx),
             Reply::CaptureStatus => self.send_capture_status(config, now, tx),
             Reply::TrackingStatus => self.tracking.send_status(gimbal, config.component, now, tx),
+            Reply::FovStatus => fov::send_status(config, &mut self.fov_status, self.zoom, now, tx),
             Reply::Captured(image) => {
                 self.send_captured(config, &image, tx);
                 self.send_capture_status(config, now, tx);
@@ -580,7 +600,7 @@ impl Camera {
             }
         }
         // What a request for streams left waiting, as far as there is room.
-        self.streams.send(config, tx);
+        self.streams.send(config, self.zoom, tx);
     }
 
     /// Kept images asked for again, as many as the outbox has room for; the rest at the
@@ -610,6 +630,7 @@ impl Camera {
             || self.settings.pending()
             || self.ftp.burst_pending()
             || self.tracking.due(now)
+            || self.fov_status.due(now)
     }
 
     /// Images as they fall due, what requests left waiting for room in the outbox, the
@@ -622,7 +643,7 @@ impl Camera {
         tx: &mut Tx<'_>,
     ) {
         self.resend_images(config, tx);
-        self.streams.send(config, tx);
+        self.streams.send(config, self.zoom, tx);
         self.settings.send_pending(config.component, tx);
         while self.ftp.burst_pending() && tx.room() >= MAX_FRAME_LEN {
             let mut payload = [0u8; PAYLOAD_LEN];
@@ -633,6 +654,9 @@ impl Camera {
         }
         if self.tracking.due(now) && tx.room() >= MAX_FRAME_LEN {
             self.tracking.send_status(gimbal, config.component, now, tx);
+        }
+        if self.fov_status.due(now) && tx.room() >= MAX_FRAME_LEN {
+            fov::send_status(config, &mut self.fov_status, self.zoom, now, tx);
         }
         // An image whose command the gimbal's queue has no room for is tried at the next
         // poll: late, never lost.
@@ -695,19 +719,7 @@ impl Camera {
 
     fn send_captured(&self, config: &CameraConfig, image: &Image, tx: &mut Tx<'_>) {
         let [lat, lon, alt, relative_alt] = image.vantage.position.unwrap_or([0; 4]);
-        // The earth frame (NED): common.xml names no frame, and the message's producers
-        // give it so (PX4's camera_feedback rotates a vehicle-frame gimbal attitude by the
-        // vehicle's yaw); NaN only when the attitude was unknown.
-        let q = image
-            .vantage
-            .attitude
-            .map_or([f32::NAN; 4], |(yaw, pitch)| {
-                YawPitch {
-                    yaw_rad: (f32::from(yaw) / 100.0).to_radians(),
-                    pitch_rad: (f32::from(pitch) / 100.0).to_radians(),
-                }
-                .to_quaternion()
-            });
+        let q = image.vantage.quaternion();
         let msg = CameraImageCaptured {
             time_boot_ms: image.at.as_millis(),
             time_utc: 0,

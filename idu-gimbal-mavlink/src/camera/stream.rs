@@ -90,8 +90,8 @@ impl Pending {
         self.information | self.status != 0
     }
 
-    /// Sends what waits, as far as the outbox has room.
-    pub(crate) fn send(&mut self, config: &CameraConfig, tx: &mut Tx<'_>) {
+    /// Sends what waits, as far as the outbox has room; `zoom` the ratio now.
+    pub(crate) fn send(&mut self, config: &CameraConfig, zoom: f32, tx: &mut Tx<'_>) {
         let count = config.streams().len() as u8;
         for (i, stream) in config.streams().iter().enumerate() {
             let bit = 1u8 << i;
@@ -101,17 +101,27 @@ impl Pending {
                 if tx.room() < MAX_FRAME_LEN {
                     return;
                 }
-                send_information(config, stream, id, count, tx);
+                send_information(config, stream, id, count, hfov(config, stream, zoom), tx);
                 self.information &= !bit;
             }
             if self.status & bit != 0 {
                 if tx.room() < MAX_FRAME_LEN {
                     return;
                 }
-                send_status(config, stream, id, tx);
+                send_status(config, stream, id, hfov(config, stream, zoom), tx);
                 self.status &= !bit;
             }
         }
+    }
+}
+
+/// A stream's horizontal angle, whole degrees: the main camera's at the zoom now, 0
+/// (unknown) for the infrared stream, whose lens is not configured ([`super::fov`]).
+fn hfov(config: &CameraConfig, stream: &VideoStream, zoom: f32) -> u16 {
+    if stream.is_thermal() {
+        0
+    } else {
+        super::fov::stream_hfov(config, zoom)
     }
 }
 
@@ -120,6 +130,7 @@ fn send_information(
     stream: &VideoStream,
     id: u8,
     count: u8,
+    hfov: u16,
     tx: &mut Tx<'_>,
 ) {
     let (resolution_h, resolution_v) = config.resolution.unwrap_or((0, 0));
@@ -133,7 +144,7 @@ fn send_information(
         resolution_v,
         bitrate: 0,
         rotation: 0,
-        hfov: 0,
+        hfov,
         name: name(stream.kind.name()),
         uri: name::<URI_CAPACITY>(stream.uri()),
         encoding: VideoStreamEncoding::Unknown,
@@ -144,7 +155,7 @@ fn send_information(
 
 /// A stream's status (MAVSDK's camera plugin asks for it before it reports the stream):
 /// running; what the gimbal does not report is 0 (unknown).
-fn send_status(config: &CameraConfig, stream: &VideoStream, id: u8, tx: &mut Tx<'_>) {
+fn send_status(config: &CameraConfig, stream: &VideoStream, id: u8, hfov: u16, tx: &mut Tx<'_>) {
     let (resolution_h, resolution_v) = config.resolution.unwrap_or((0, 0));
     let s = VideoStreamStatus {
         stream_id: id,
@@ -154,7 +165,7 @@ fn send_status(config: &CameraConfig, stream: &VideoStream, id: u8, tx: &mut Tx<
         resolution_v,
         bitrate: 0,
         rotation: 0,
-        hfov: 0,
+        hfov,
         camera_device_id: 0,
     };
     tx.send(config.component, &s);

@@ -6,11 +6,12 @@ use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand};
 use idu_gimbal::wire::ids;
 use idu_gimbal::Instant;
+use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
-use mavio::dialects::common::messages::{CommandLong, Heartbeat};
+use mavio::dialects::common::messages::{AutopilotStateForGimbalDevice, CommandLong, Heartbeat};
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::protocol::{Frame, V2};
 use mavio::Message;
@@ -142,4 +143,27 @@ pub fn queued_all<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<
         }
     }
     out
+}
+
+/// The autopilot's state for the gimbal device: the vehicle level, heading `yaw_deg`.
+pub fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
+    AutopilotStateForGimbalDevice {
+        target_system: AP.0,
+        target_component: 154,
+        time_boot_us: 0,
+        q: YawPitch {
+            yaw_rad: yaw_deg.to_radians(),
+            pitch_rad: 0.0,
+        }
+        .to_quaternion(),
+        q_estimated_delay_us: 0,
+        vx: 0.0,
+        vy: 0.0,
+        vz: 0.0,
+        v_estimated_delay_us: 0,
+        feed_forward_angular_velocity_z: 0.0,
+        estimator_status: Default::default(),
+        landed_state: Default::default(),
+        angular_velocity_z: 0.0,
+    }
 }

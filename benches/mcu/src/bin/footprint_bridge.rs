@@ -16,6 +16,7 @@ fn main() -> ! {
     use idu_gimbal::driver::SerialPort;
     use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::{Config, Gimbal, Instant};
+    use idu_gimbal_mavlink::camera::fov::FieldOfView;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
@@ -26,7 +27,11 @@ fn main() -> ! {
     } else {
         Family::DualLight
     };
-    let camera = CameraConfig::with_streams_of(&Camera::new(family)).ok();
+    let mut camera = CameraConfig::with_streams_of(&Camera::new(family)).ok();
+    // A lens, as a firmware that knows its camera's sets it: the field of view's code linked.
+    if let Some(c) = camera.as_mut() {
+        c.fov = FieldOfView::from_degrees(input(6) as f32, input(7) as f32).ok();
+    }
     let Some(bridge) = cortex_m::singleton!(: Bridge<Gimbal<RegCan>> = Bridge::new(
         Gimbal::new(RegCan, Config::default()),
         BridgeConfig { camera, ..BridgeConfig::default() },
