@@ -144,11 +144,13 @@ class Bridge:
             return len(self.said)
 
     def wait_said(self, since, what, timeout=EFFECT_TIMEOUT):
-        """The first line after `since` that starts with SAID + `what`, or None."""
+        """The first line after `since` that starts with SAID + `what` (or one of them),
+        without SAID; or None."""
+        prefixes = tuple(SAID + w for w in ((what,) if isinstance(what, str) else what))
         end = time.monotonic() + timeout
         while True:
             with self.lock:
-                got = [l for l in self.said[since:] if l.startswith(SAID + what)]
+                got = [l for l in self.said[since:] if l.startswith(prefixes)]
             if got or time.monotonic() >= end:
                 return got[0][len(SAID):] if got else None
             time.sleep(0.01)
@@ -505,8 +507,9 @@ def settings(mpx, ap, bridge, family, params):
         if got == want or time.monotonic() >= end:
             break
     check(got == want, f"camera params: every setting read, at the file's default {want}: {got}")
-    name, value, effect = (("IR_PALETTE", 10, "palette ice-blue") if family == "dual-light"
-                           else ("CAM_FOCUS", 1, "focusing +"))
+    # The value set and what the simulated gimbal says of it, then of the default again.
+    name, value, effect, back = (("IR_PALETTE", 10, "palette ice-blue", "palette black-hot")
+                                 if family == "dual-light" else ("CAM_FOCUS", 1, "focusing +", "focus held"))
     since, mark = ap.mark(), bridge.mark()
     mpx.send(f"camera param {name} {value}")
     ack = ap.wait_bridge(since, "PARAM_EXT_ACK", lambda m: m.param_id == name)
@@ -528,7 +531,8 @@ def settings(mpx, ap, bridge, family, params):
     mark = bridge.mark()
     default = dict(params)[name]
     mpx.send(f"camera param {name} {default}")
-    check(bridge.wait_said(mark, "") is not None, f"{name} back to {default}: the gimbal told")
+    said = bridge.wait_said(mark, back.split(" ")[0])
+    check(said == back, f"{name} back to {default}: the gimbal says {back!r}: {said!r}")
 
 
 def image_lines(mpx, since):
@@ -553,7 +557,8 @@ def capture(mpx, ap):
     check(st is not None, "CAMERA_CAPTURE_STATUS image_count 1")
 
     # Three at 0.5 s. The bridge stamps each image with its own clock (time_boot_ms) in the
-    # tick it takes it (1 ms loop): 500 ms apart, ±20 ms for a late tick on a loaded machine.
+    # tick it takes it (1 ms loop): 500 ms apart, ±50 ms for a late tick (a starved process
+    # on a machine shared with builds wakes tens of ms late).
     since, msince = ap.mark(), mpx.mark()
     mpx.send("camera photo 0.5 3")
     ack, sent = ap.ack(since, mav.MAV_CMD_IMAGE_START_CAPTURE)
@@ -567,7 +572,7 @@ def capture(mpx, ap):
     check(image_lines(mpx, msince) == [1, 2, 3], f"MAVProxy prints images 1, 2, 3: {image_lines(mpx, msince)}")
     stamps = [m.time_boot_ms for _, m in ap.bridge(since, "CAMERA_IMAGE_CAPTURED")]
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    check(len(stamps) == 3 and all(abs(g - 500) <= 20 for g in gaps), f"three images 500 ms apart: gaps {gaps} ms")
+    check(len(stamps) == 3 and all(abs(g - 500) <= 50 for g in gaps), f"three images 500 ms apart: gaps {gaps} ms")
 
     # Until stopped, then none.
     since, msince = ap.mark(), mpx.mark()
@@ -579,19 +584,21 @@ def capture(mpx, ap):
     st = ap.wait_bridge(since, "CAMERA_CAPTURE_STATUS", lambda m: m.image_status == 3)
     check(st is not None and abs(st.image_interval - 0.5) < 1e-6,
           f"CAMERA_CAPTURE_STATUS: interval capture in progress, 0.5 s: {st and (st.image_status, st.image_interval)}")
-    time.sleep(1.2)
+    time.sleep(1.2)  # images at 0, 0.5 and 1.0 s
     since2 = ap.mark()
     mpx.send("camera stopphotos")
     ack, _ = ap.ack(since2, mav.MAV_CMD_IMAGE_STOP_CAPTURE)
     check(ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, f"camera stopphotos: ACK {result_name(ack and ack.result)}")
     st = ap.wait_bridge(since2, "CAMERA_CAPTURE_STATUS")
     check(st is not None and st.image_status == 0, f"CAMERA_CAPTURE_STATUS idle after the stop: {st and st.image_status}")
-    taken = len(image_lines(mpx, msince))
+    # The bridge sends an image before the ACK of a stop it handles after it, on one socket:
+    # none may come after the ACK.
+    acked = [t for t, a in ap.bridge(since2, "COMMAND_ACK") if a.command == mav.MAV_CMD_IMAGE_STOP_CAPTURE]
     time.sleep(1.2)
-    after = image_lines(mpx, msince)
-    check(3 <= taken <= 4 and after == list(range(4, 4 + taken)),
-          f"images 4, 5, 6 (and 7) at 0, 0.5, 1.0 (1.2) s, none after the stop: {after}")
-    return 4 + taken
+    late = [m.image_index for t, m in ap.bridge(since, "CAMERA_IMAGE_CAPTURED") if acked and t > acked[0]]
+    taken = image_lines(mpx, msince)
+    check(len(taken) >= 3 and taken == list(range(4, 4 + len(taken))) and not late,
+          f"images from 4 on, at least 3 in 1.2 s, none after the stop's ACK: {taken}, after: {late}")
 
 
 def record(mpx, ap):
@@ -662,7 +669,7 @@ def focus(mpx, ap, bridge):
         ack, sent = ap.ack(since, mav.MAV_CMD_SET_CAMERA_FOCUS)
         check(ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED,
               f"camera focus {word}: {sent and (sent.param1, sent.param2)} ACK {result_name(ack and ack.result)}")
-        said = bridge.wait_said(mark, "focus") or bridge.wait_said(mark, "auto-focus", 0.01)
+        said = bridge.wait_said(mark, ("focus", "auto-focus"))
         check(said == line, f"camera focus {word}: the gimbal says {line!r}: {said!r}")
     since, mark, msince = ap.mark(), bridge.mark(), mpx.mark()
     mpx.send("camera focus 50")
@@ -723,8 +730,10 @@ def tracking(mpx, ap, bridge, family):
           f"status CAMERA_TRACKING_IMAGE_STATUS: ACTIVE, point mode, at (0.5, 0.5), radius 0.02: {m and m.group(0)!r}")
     stamps = [t for t, _ in ap.bridge(since, "CAMERA_TRACKING_IMAGE_STATUS")]
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    # 200 ms on the bridge's clock; received here over loopback: ±60 ms on a loaded machine.
-    check(len(gaps) >= 2 and all(0.14 <= g <= 0.26 for g in gaps), f"the status every 200 ms: {[round(g, 3) for g in gaps]}")
+    # 200 ms on the bridge's clock, received here: on average within 10 %, each within
+    # ±150 ms (a late tick of the bridge or of this thread on a loaded machine).
+    check(len(gaps) >= 2 and abs(sum(gaps) / len(gaps) - 0.2) <= 0.02 and all(0.05 <= g <= 0.35 for g in gaps),
+          f"the status every 200 ms: {[round(g, 3) for g in gaps]}")
     since, mark = ap.mark(), bridge.mark()
     mpx.send(f"message COMMAND_LONG {AP_SYSTEM} {CAMERA} {mav.MAV_CMD_CAMERA_STOP_TRACKING} 0 0 0 0 0 0 0 0")
     ack, _ = ap.ack(since, mav.MAV_CMD_CAMERA_STOP_TRACKING)
@@ -805,7 +814,7 @@ def footprint(mpx, ap, family):
         mpx.send("camera for 1:100 discover")  # CAMERA_SETTINGS, the streams, ... again
         infos = {}
         end = time.monotonic() + REPLY_TIMEOUT
-        while len(infos) < (3 if family in ("dual-light", "x3") else 1) and time.monotonic() < end:
+        while len(infos) < 3 and time.monotonic() < end:  # both families have three streams
             infos = {m.stream_id: m for _, m in ap.bridge(since, "VIDEO_STREAM_INFORMATION")}
             time.sleep(0.02)
         since = ap.mark()
@@ -830,6 +839,8 @@ def footprint(mpx, ap, family):
         # What MAVProxy's _fov_attitude computes: the device's quaternion (vehicle frame)
         # with the vehicle's ATTITUDE yaw added. The last ones it received:
         gimbal = latest(ap, "GIMBAL_DEVICE_ATTITUDE_STATUS", GIMBAL)
+        if not check(gimbal is not None, "GIMBAL_DEVICE_ATTITUDE_STATUS from the gimbal"):
+            return
         roll, pitch, yaw = (math.degrees(a) for a in _quaternion_to_euler(gimbal.q))
         yaw = mp_util.wrap_180(yaw + VEHICLE_YAW)
         # Printed with one decimal: ±0.05, and the gimbal's few hundredths of a degree of
@@ -837,8 +848,8 @@ def footprint(mpx, ap, family):
         check(att is not None and all(abs(float(a) - b) <= 0.15 for a, b in zip(att.groups(), (roll, pitch, yaw))),
               f"camera projection: the camera's attitude (roll, pitch, earth yaw) "
               f"({roll:.2f}, {pitch:.2f}, {yaw:.2f}): {att and att.group(0)!r}")
-        check(m is not None and (float(m.group(1)), float(m.group(2)), float(m.group(3)), float(m.group(4)))
-              == (LAT * 1e-7, LON * 1e-7, ALT_MM / 1000, REL_ALT_MM / 1000),
+        check(m is not None and all(abs(float(a) - b) < 1e-9 for a, b in zip(
+                  m.groups(), (LAT * 1e-7, LON * 1e-7, ALT_MM / 1000, REL_ALT_MM / 1000))),
               f"camera projection: the vehicle's position: {m and m.group(0)!r}")
         if fov is None:
             check(False, "CAMERA_FOV_STATUS answered to MAV_CMD_REQUEST_MESSAGE")
