@@ -32,7 +32,8 @@ and in what the bridge and the simulated gimbal did (its stderr):
    0.5 0` then `camera stopphotos`; each image printed by MAVProxy, its CAMERA_IMAGE_CAPTURED
    at the vehicle's position, the count in CAMERA_CAPTURE_STATUS.
 5. Record: `camera record start|stop`, with `camera info` and CAMERA_CAPTURE_STATUS.
-6. Zoom: `camera zoom 50|in|stop`, the level in CAMERA_SETTINGS and `camera info`.
+6. Zoom and mode: `camera zoom 50|in|stop`, `camera mode video|photo`, in CAMERA_SETTINGS
+   and `camera info`.
 7. Focus: `camera focus out|stop|in|auto` reach the gimbal, `camera focus 50` is refused.
 8. Source: `camera source thermal|rgb`, accepted on the dual light, refused on a zoom camera.
 9. Tracking: the camera module has no tracking command, so MAVProxy's generic `message
@@ -317,6 +318,24 @@ class Autopilot(threading.Thread):
                 return got[0] if got else None
             time.sleep(0.01)
 
+    def after_ack(self, since, command, kind, timeout=REPLY_TIMEOUT):
+        """The first `kind` from the camera that follows its ACK of `command` (the reply a
+        command produces comes after its ACK; one MAVProxy asked for earlier may come
+        between the command and the ACK)."""
+        end = time.monotonic() + timeout
+        while True:
+            with self.lock:
+                msgs = [m for _, m in self.bridge_msgs[since[0]:] if m.get_srcComponent() == CAMERA]
+            acked = False
+            for m in msgs:
+                if m.get_type() == "COMMAND_ACK" and m.command == command:
+                    acked = True
+                elif acked and m.get_type() == kind:
+                    return m
+            if time.monotonic() >= end:
+                return None
+            time.sleep(0.01)
+
     def ack(self, since, command, timeout=REPLY_TIMEOUT):
         """The camera's COMMAND_ACK for `command` after `since`, and the COMMAND_LONG MAVProxy
         sent for it (the first after `since`)."""
@@ -589,7 +608,7 @@ def capture(mpx, ap):
     mpx.send("camera stopphotos")
     ack, _ = ap.ack(since2, mav.MAV_CMD_IMAGE_STOP_CAPTURE)
     check(ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, f"camera stopphotos: ACK {result_name(ack and ack.result)}")
-    st = ap.wait_bridge(since2, "CAMERA_CAPTURE_STATUS")
+    st = ap.after_ack(since2, mav.MAV_CMD_IMAGE_STOP_CAPTURE, "CAMERA_CAPTURE_STATUS")
     check(st is not None and st.image_status == 0, f"CAMERA_CAPTURE_STATUS idle after the stop: {st and st.image_status}")
     # The bridge sends an image before the ACK of a stop it handles after it, on one socket:
     # none may come after the ACK.
@@ -609,7 +628,7 @@ def record(mpx, ap):
         ack, sent = ap.ack(since, command)
         check(sent is not None and ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED,
               f"camera record {action}: {'VIDEO_START' if status else 'VIDEO_STOP'}_CAPTURE, ACK {result_name(ack and ack.result)}")
-        st = ap.wait_bridge(since, "CAMERA_CAPTURE_STATUS")
+        st = ap.after_ack(since, command, "CAMERA_CAPTURE_STATUS")
         check(st is not None and st.video_status == status,
               f"CAMERA_CAPTURE_STATUS video_status {status}: {st and st.video_status}")
         # MAVProxy asks for the status again 0.5 s after the command (recording_verify_at)
@@ -640,7 +659,7 @@ def zoom(mpx, ap):
           f"camera zoom 50: ZOOM_TYPE_RANGE 50: {sent and (sent.param1, sent.param2)}")
     check(ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, f"camera zoom 50: ACK {result_name(ack and ack.result)}")
     # The level is the share of the zoom range: 50 % of it, whatever the range (float32).
-    st = ap.wait_bridge(since, "CAMERA_SETTINGS")
+    st = ap.after_ack(since, mav.MAV_CMD_SET_CAMERA_ZOOM, "CAMERA_SETTINGS")
     check(st is not None and abs(st.zoomLevel - 50.0) < 1e-3, f"CAMERA_SETTINGS zoomLevel 50: {st and st.zoomLevel}")
     m = mpx.poll("camera info", r"mode=\d+ zoom=50\.0% focus=", REPLY_TIMEOUT)
     check(m is not None, "camera info: zoom=50.0%")
@@ -652,12 +671,25 @@ def zoom(mpx, ap):
               and ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED,
               f"camera zoom {word}: ZOOM_TYPE_CONTINUOUS {rate}, ACK {result_name(ack and ack.result)}")
         # Where a continuous zoom ends is not reported: the level is unknown (NaN) after.
-        st = ap.wait_bridge(since, "CAMERA_SETTINGS")
+        st = ap.after_ack(since, mav.MAV_CMD_SET_CAMERA_ZOOM, "CAMERA_SETTINGS")
         check(st is not None and math.isnan(st.zoomLevel), f"CAMERA_SETTINGS zoomLevel unknown: {st and st.zoomLevel}")
     since = ap.mark()
     mpx.send("camera zoom 0")
-    st = ap.wait_bridge(since, "CAMERA_SETTINGS")
+    st = ap.after_ack(since, mav.MAV_CMD_SET_CAMERA_ZOOM, "CAMERA_SETTINGS")
     check(st is not None and st.zoomLevel == 0.0, f"camera zoom 0: zoomLevel 0: {st and st.zoomLevel}")
+
+
+def mode(mpx, ap):
+    for word, want in (("video", mav.CAMERA_MODE_VIDEO), ("photo", mav.CAMERA_MODE_IMAGE)):
+        since = ap.mark()
+        mpx.send(f"camera mode {word}")
+        ack, sent = ap.ack(since, mav.MAV_CMD_SET_CAMERA_MODE)
+        check(sent is not None and sent.param2 == want and ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED,
+              f"camera mode {word}: SET_CAMERA_MODE {want}, ACK {result_name(ack and ack.result)}")
+        st = ap.after_ack(since, mav.MAV_CMD_SET_CAMERA_MODE, "CAMERA_SETTINGS")
+        check(st is not None and st.mode_id == want, f"CAMERA_SETTINGS mode_id {want}: {st and st.mode_id}")
+        m = mpx.poll("camera info", rf"mode={want} zoom=", REPLY_TIMEOUT)
+        check(m is not None, f"camera info: mode={want}")
 
 
 def focus(mpx, ap, bridge):
@@ -804,7 +836,7 @@ def footprint(mpx, ap, family):
     for zoom_percent in (0, 50):
         since = ap.mark()
         mpx.send(f"camera zoom {zoom_percent}")
-        st = ap.wait_bridge(since, "CAMERA_SETTINGS")
+        st = ap.after_ack(since, mav.MAV_CMD_SET_CAMERA_ZOOM, "CAMERA_SETTINGS")
         check(st is not None and abs(st.zoomLevel - zoom_percent) < 1e-3,
               f"camera zoom {zoom_percent}: zoomLevel {st and st.zoomLevel}")
         # The zoom range of the simulated gimbal's type: 30× (docs/mavlink.md, zoom_max_of).
@@ -930,6 +962,7 @@ def run_family(gimbalctl, family, fov):
         capture(mpx, ap)
         record(mpx, ap)
         zoom(mpx, ap)
+        mode(mpx, ap)
         focus(mpx, ap, bridge)
         source(mpx, ap, family)
         tracking(mpx, ap, bridge, family)
