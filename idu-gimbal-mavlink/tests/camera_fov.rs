@@ -49,20 +49,6 @@ fn postback(b: &mut Bridge<Link>, pitch_cdeg: i16, motor_cdeg: i16, ms: u32) {
     b.poll(t(ms));
 }
 
-fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPositionInt {
-    GlobalPositionInt {
-        time_boot_ms: 0,
-        lat,
-        lon,
-        alt: alt_mm,
-        relative_alt: relative_mm,
-        vx: 0,
-        vy: 0,
-        vz: 0,
-        hdg: 0,
-    }
-}
-
 /// `COMMAND_LONG` to the camera: its one ACK's result.
 fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResult {
     b.receive(&frame(GCS, 0, &command((AP.0, 100), cmd, p1, p2)), t(ms));

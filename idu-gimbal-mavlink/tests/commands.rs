@@ -9,8 +9,6 @@ use idu_gimbal::wire::control::{GimbalCommand, Photo};
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{MavCmd, MavFrame, MavResult};
-#[cfg(feature = "roi")]
-use mavio::dialects::common::messages::GlobalPositionInt;
 use mavio::dialects::common::messages::{
     CameraImageCaptured, CommandAck, CommandInt, GimbalDeviceInformation,
 };
@@ -70,21 +68,6 @@ fn acks_of(b: &mut Bridge<Link>, bytes: &[u8], ms: u32) -> (Vec<Ack>, Vec<Frame<
         })
         .collect();
     (acks, frames)
-}
-
-#[cfg(feature = "roi")]
-fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPositionInt {
-    GlobalPositionInt {
-        time_boot_ms: 0,
-        lat,
-        lon,
-        alt: alt_mm,
-        relative_alt: relative_mm,
-        vx: 0,
-        vy: 0,
-        vz: 0,
-        hdg: 0,
-    }
 }
 
 #[test]

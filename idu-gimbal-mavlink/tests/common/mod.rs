@@ -11,7 +11,9 @@ use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
-use mavio::dialects::common::messages::{AutopilotStateForGimbalDevice, CommandLong, Heartbeat};
+use mavio::dialects::common::messages::{
+    AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt, Heartbeat,
+};
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::protocol::{Frame, V2};
 use mavio::Message;
@@ -165,5 +167,20 @@ pub fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
         estimator_status: Default::default(),
         landed_state: Default::default(),
         angular_velocity_z: 0.0,
+    }
+}
+
+/// The autopilot's `GLOBAL_POSITION_INT`: 1e-7°, and altitudes in mm.
+pub fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPositionInt {
+    GlobalPositionInt {
+        time_boot_ms: 0,
+        lat,
+        lon,
+        alt: alt_mm,
+        relative_alt: relative_mm,
+        vx: 0,
+        vy: 0,
+        vz: 0,
+        hdg: 0,
     }
 }
