@@ -6,6 +6,19 @@ first on the path when it runs one of them."""
 
 import os
 
+DEFINITIONS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                           "idu-gimbal-mavlink", "camera-definitions")
+
+
+def served_definition(name, model):
+    """A camera definition as the bridge serves it: the file `name` of
+    idu-gimbal-mavlink/camera-definitions/ with its empty `<model>` filled with `model`
+    (CAMERA_INFORMATION's model_name), which QGroundControl renames the camera to."""
+    with open(os.path.join(DEFINITIONS, name), "rb") as f:
+        template = f.read()
+    assert template.count(b"<model></model>") == 1, f"{name}: one empty <model>"
+    return template.replace(b"<model></model>", b"<model>" + model.encode() + b"</model>")
+
 
 def sim_options():
     """`--sim-lock-holds WHAT` from the environment's GIMBALCTL_SIM_LOCK_HOLDS (`north` or

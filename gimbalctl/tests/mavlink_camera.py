@@ -61,7 +61,7 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 from pymavlink.mavftp import MAVFTP, FtpError  # noqa: E402
 
-from checks import Checks, raw_fields, sim_options  # noqa: E402
+from checks import Checks, raw_fields, served_definition, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
@@ -631,10 +631,13 @@ def camera_information(gcs):
                             mav.MAV_RESULT_ACCEPTED, "REQUEST_MESSAGE CAMERA_INFORMATION")
     info = gcs.wait(lambda m: m.get_type() == "CAMERA_INFORMATION" and m.get_srcComponent() == CAMERA,
                     ACK_TIMEOUT, since)
+    # The files' own version, which clients cache the definition under.
+    with open(os.path.join(DEFINITIONS, "idu-dual-light.xml"), "rb") as f:
+        version = int(re.search(rb'<definition version="(\d+)"', f.read()).group(1))
     check(info is not None and info.cam_definition_uri == "mftp://camera.xml"
-          and info.cam_definition_version == 1,
+          and info.cam_definition_version == version,
           f"CAMERA_INFORMATION: {info.cam_definition_uri if info else None!r} "
-          f"version {info.cam_definition_version if info else None}")
+          f"version {info.cam_definition_version if info else None} (the files' {version})")
     return info
 
 
@@ -917,13 +920,11 @@ def streams(gcs):
 
 
 def run(gimbalctl):
-    with open(os.path.join(DEFINITIONS, "idu-dual-light.xml"), "rb") as f:
-        xml = f.read()
-    # The files as they are, before any bridge: their own version (no CAMERA_INFORMATION yet).
+    # The files as they are served, before any bridge: their own version (no
+    # CAMERA_INFORMATION yet), a model filled in.
     files = {}
     for name in ("idu-zoom.xml", "idu-dual-light.xml"):
-        with open(os.path.join(DEFINITIONS, name), "rb") as f:
-            files[name] = validate_definition(f.read(), name, None)
+        files[name] = validate_definition(served_definition(name, "X30-X30GT"), name, None)
 
     bridge = None
     ap = None
@@ -954,6 +955,10 @@ def run(gimbalctl):
 
         info = camera_information(gcs)
         version = info.cam_definition_version if info else 1
+        # Served with CAMERA_INFORMATION's model in its <model>, which QGroundControl renames
+        # the camera to (VehicleCameraControl.cc _loadConstants).
+        model = bytes(info.model_name).rstrip(b"\0").decode() if info else ""
+        xml = served_definition("idu-dual-light.xml", model)
         ftp, oldest, idle_since = ftp_raw_tests(gcs, xml)
 
         params = files["idu-dual-light.xml"]

@@ -70,7 +70,7 @@ import xml.etree.ElementTree as ET
 os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
-from checks import Checks, sim_options  # noqa: E402
+from checks import Checks, served_definition, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GIMBAL, CAMERA = 154, 100
@@ -443,10 +443,10 @@ class MAVProxy:
 # --- expectations from the definition files ------------------------------------------------
 
 
-def definition_file(family):
+def definition_file(family, model):
+    """The definition served: the family's file with CAMERA_INFORMATION's model filled in."""
     name = "idu-dual-light.xml" if family == "dual-light" else "idu-zoom.xml"
-    with open(os.path.join(DEFINITIONS, name), "rb") as f:
-        data = f.read()
+    data = served_definition(name, model)
     params = [(p.get("name"), int(p.get("default"))) for p in ET.fromstring(data).iter("parameter")]
     return data, params
 
@@ -471,14 +471,18 @@ def discovery(mpx, ap, family):
             | mav.CAMERA_CAP_FLAGS_HAS_TRACKING_RECTANGLE)
     check(flags & want == want and not flags & thermal,
           f"camera info flags 0x{flags:x}: capture, video, stream, zoom, focus, tracking; no thermal range")
+    # The files' own version.
+    with open(os.path.join(DEFINITIONS, "idu-zoom.xml"), "rb") as f:
+        version = re.search(rb'<definition version="(\d+)"', f.read()).group(1).decode()
     m = mpx.ask("camera info", r"definition: (\S+) \(version (\d+)\)")
-    check(m is not None and m.groups() == ("mftp://camera.xml", "1"),
-          f"camera info: definition mftp://camera.xml version 1: {m and m.group(0)!r}")
-    return info is not None
+    check(m is not None and m.groups() == ("mftp://camera.xml", version),
+          f"camera info: definition mftp://camera.xml version {version}: {m and m.group(0)!r}")
+    # The label is "<vendor> <model>" (mavproxy_camera/__init__.py CameraDevice.label).
+    return info.group(1)[len("IDU "):] if info else None
 
 
-def definition(mpx, ap, family, since):
-    data, params = definition_file(family)
+def definition(mpx, ap, family, model, since):
+    data, params = definition_file(family, model)
     m = mpx.wait(0, r"Camera .*\(1:100\): (loaded (\d+) settings|Definition load failed: .*)", DEFINITION_TIMEOUT)
     check(m is not None and m.group(2) == str(len(params)),
           f"definition over MAVLink FTP: MAVProxy loaded {len(params)} settings: {m and m.group(0)!r}")
@@ -955,9 +959,10 @@ def run_family(gimbalctl, family, fov):
     mpx = MAVProxy(ap.gcs_port)
     try:
         since = (0, 0)
-        if not discovery(mpx, ap, family):
+        model = discovery(mpx, ap, family)
+        if model is None:
             return  # no camera: every case after would only time out
-        params = definition(mpx, ap, family, since)
+        params = definition(mpx, ap, family, model, since)
         settings(mpx, ap, bridge, family, params)
         capture(mpx, ap)
         record(mpx, ap)

@@ -44,7 +44,7 @@ os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
-from checks import Checks, raw_fields, sim_options  # noqa: E402
+from checks import Checks, raw_fields, served_definition, sim_options  # noqa: E402
 
 FAMILIES = ["a2000", "x3", "argus", "dual-light", "f10"]
 # QGroundControl's ids: MAVLinkProtocol's system 255 and MAV_COMP_ID_MISSIONPLANNER (190).
@@ -547,8 +547,18 @@ def get_definition(qgc, info, family):
     r = ftp.reset_reply
     check(r is not None and r["opcode"] == ACK, f"ResetSessions after the download: ACK (FTPManager.cc:677-707): {r}")
     name = "idu-dual-light.xml" if family == "dual-light" else "idu-zoom.xml"
-    with open(os.path.join(DEFINITIONS, name), "rb") as f:
-        check(data == f.read(), f"the bytes downloaded are {name}'s")
+    model, _ = cstr(info.model_name)
+    check(data == served_definition(name, model),
+          f"the bytes downloaded are {name}'s, its <model> CAMERA_INFORMATION's {model!r}")
+    # _loadConstants renames the camera to the definition's <model> and <vendor>
+    # (VehicleCameraControl.cc:835-848, 5.0); the camera list keeps the name it was added
+    # under (QGCCameraManager.cc:217) and removes the camera by its name now when its
+    # heartbeat stops (:274): the two must be the same, or a stale entry stays.
+    d = ET.fromstring(data).find(".//definition")
+    xml_ids = (d.findtext("vendor"), d.findtext("model")) if d is not None else None
+    check(xml_ids == (cstr(info.vendor_name)[0], model),
+          f"the definition's vendor and model {xml_ids} are CAMERA_INFORMATION's, under which QGC "
+          "lists the camera (QGCCameraManager.cc:217, 274; VehicleCameraControl.cc:835-848, 5.0)")
     params, problems = load_definition(data)
     check(params is not None and not problems,
           f"_loadCameraDefinitionFile takes it: {len(params or {})} parameters {list(params or {})} "

@@ -10,6 +10,8 @@ use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
 use idu_gimbal::wire::control::{
     Command, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, Palette,
 };
+use idu_gimbal::wire::ids;
+use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{definition, CameraConfig};
 use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{
@@ -395,12 +397,23 @@ const READ: u8 = 5;
 const BURST: u8 = 15;
 const ACK: u8 = 128;
 
+/// A definition file as the bridge serves it: its empty `<model>` filled with `model`.
+fn served(template: &[u8], model: &str) -> Vec<u8> {
+    let text = std::str::from_utf8(template).unwrap();
+    assert_eq!(text.matches("<model></model>").count(), 1);
+    text.replace("<model></model>", &format!("<model>{model}</model>"))
+        .into_bytes()
+}
+
 #[test]
 fn the_definition_is_read_as_mavsdk_reads_it_and_as_pymavlink_bursts_it() {
-    for (family, file) in [
+    for (family, template) in [
         (Family::DualLight, definition::DUAL_LIGHT),
         (Family::X3, definition::ZOOM),
     ] {
+        // Served with the model filled in: no postback yet, so the unknown type's.
+        let file = served(template, "IDU camera");
+        let file = file.as_slice();
         let mut b = bridge(family);
         // MAVSDK: the path without a leading '/' and with its NUL.
         let r = ftp_ask(&mut b, &ftp(1, 0, OPEN, 0, b"camera.xml\0"));
@@ -453,6 +466,45 @@ fn the_definition_is_read_as_mavsdk_reads_it_and_as_pymavlink_bursts_it() {
 }
 
 #[test]
+fn the_definitions_model_is_the_camera_informations() {
+    // QGroundControl renames the camera to the definition's <model> and lists it under
+    // CAMERA_INFORMATION's: they must be one name (camera::definition).
+    for (gimbal_type, model) in [
+        (GimbalType::X30, "X30-X30GT"),
+        (GimbalType::DualLight30x, "30x dual light"),
+    ] {
+        let mut b = bridge(Family::DualLight);
+        let p = Postback {
+            gimbal_type,
+            ..Postback::default()
+        };
+        for data in p.to_can_frames() {
+            b.gimbal_mut().receive(ids::POSTBACK, &data, t(5));
+        }
+        let r = ftp_ask(&mut b, &ftp(1, 0, OPEN, 0, b"/camera.xml"));
+        let size = u32::from_le_bytes(r[0].payload[12..16].try_into().unwrap()) as usize;
+        let want = served(definition::DUAL_LIGHT, model);
+        assert_eq!(size, want.len());
+        let mut got = Vec::new();
+        while got.len() < size {
+            let mut m = ftp(
+                2 + got.len() as u16,
+                r[0].payload[2],
+                READ,
+                got.len() as u32,
+                &[],
+            );
+            m.payload[4] = 239;
+            let p = &ftp_ask(&mut b, &m)[0].payload;
+            got.extend_from_slice(&p[12..12 + p[4] as usize]);
+        }
+        assert_eq!(got, want);
+        let text = String::from_utf8(got).unwrap();
+        assert!(text.contains(&format!("<model>{model}</model>")), "{model}");
+    }
+}
+
+#[test]
 fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     let mut b = bridge(Family::DualLight);
     let other: (u8, u8) = (GCS.0, GCS.1 + 1);
@@ -477,7 +529,8 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     assert_eq!(to_other.len(), 1);
     assert_eq!(to_other[0].payload[5], 0, "the None request's ACK");
     let burst: Vec<_> = replies.iter().filter(|r| r.payload[5] == BURST).collect();
-    assert_eq!(burst.len(), definition::DUAL_LIGHT.len().div_ceil(80));
+    let file = served(definition::DUAL_LIGHT, "IDU camera");
+    assert_eq!(burst.len(), file.len().div_ceil(80));
     assert!(burst
         .iter()
         .all(|r| (r.target_system, r.target_component) == GCS));

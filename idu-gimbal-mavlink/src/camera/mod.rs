@@ -208,6 +208,9 @@ pub fn zoom_max_of(t: GimbalType) -> Option<f32> {
     }
 }
 
+/// The model name of a gimbal type the document does not list, or not known yet.
+const UNKNOWN_MODEL: &str = "IDU camera";
+
 /// The camera's model name for a gimbal type (`CAMERA_INFORMATION.model_name`): the
 /// document's name, with characters a file name cannot hold replaced by `-`, because
 /// QGroundControl names its cached definition `<vendor>_<model>_<version>.xml`
@@ -216,7 +219,7 @@ pub fn zoom_max_of(t: GimbalType) -> Option<f32> {
 pub fn camera_model(t: GimbalType) -> &'static str {
     match t {
         GimbalType::X30 => "X30-X30GT",
-        t => t.model_name().unwrap_or("IDU camera"),
+        t => t.model_name().unwrap_or(UNKNOWN_MODEL),
     }
 }
 
@@ -341,7 +344,7 @@ impl Camera {
             tracking: Tracking::default(),
             fov_status: fov::Schedule::default(),
             settings: Settings::new(config.has_thermal()),
-            ftp: FtpServer::new(definition::files(config.has_thermal())),
+            ftp: FtpServer::new(),
             burst_client: (0, 0),
         }
     }
@@ -647,7 +650,8 @@ impl Camera {
         self.settings.send_pending(config.component, tx);
         while self.ftp.burst_pending() && tx.room() >= MAX_FRAME_LEN {
             let mut payload = [0u8; PAYLOAD_LEN];
-            if !self.ftp.burst_next(now, &mut payload) {
+            let files = [self.definition(config, tx)];
+            if !self.ftp.burst_next(&files, now, &mut payload) {
                 break;
             }
             self.send_ftp(config, payload, self.burst_client, tx);
@@ -685,7 +689,8 @@ impl Camera {
         match message {
             Message::Ftp(request) => {
                 let mut reply = [0u8; PAYLOAD_LEN];
-                if self.ftp.request(from, &request, now, &mut reply) {
+                let files = [self.definition(config, tx)];
+                if self.ftp.request(&files, from, &request, now, &mut reply) {
                     // The burst's packets go to whoever asked for it, even with another
                     // client's requests answered between them.
                     if request.get(3) == Some(&BURST_READ_FILE) {
@@ -699,6 +704,12 @@ impl Camera {
             Message::ParamSet(set) => self.settings.set(gimbal, &set, config.component, tx),
         }
         self.settings.send_pending(config.component, tx);
+    }
+
+    /// The camera definition served: the family's, its model `CAMERA_INFORMATION`'s.
+    fn definition(&self, config: &CameraConfig, tx: &Tx<'_>) -> crate::ftp::File<'static> {
+        let model = tx.gimbal_type.map_or(UNKNOWN_MODEL, camera_model);
+        definition::file(config.has_thermal(), model)
     }
 
     fn send_ftp(

@@ -20,7 +20,7 @@ pub(super) fn trim_slashes(mut path: &[u8]) -> &[u8] {
 }
 
 /// The index of the file at `path`.
-pub(super) fn find_file(files: &[File], path: &[u8]) -> Option<usize> {
+pub(super) fn find_file(files: &[File<'_>], path: &[u8]) -> Option<usize> {
     let path = trim_slashes(path);
     if path.is_empty() {
         return None;
@@ -39,7 +39,7 @@ pub(super) fn under<'p>(dir: &[u8], path: &'p [u8]) -> Option<&'p [u8]> {
 }
 
 /// The sub-directory of `dir` that `file` lies in, if it lies deeper than `dir`.
-pub(super) fn subdirectory<'p>(dir: &[u8], file: &'p File) -> Option<&'p [u8]> {
+pub(super) fn subdirectory<'p>(dir: &[u8], file: &File<'p>) -> Option<&'p [u8]> {
     let rest = under(dir, trim_slashes(file.path.as_bytes()))?;
     let slash = rest.iter().position(|&b| b == b'/')?;
     rest.get(..slash)
@@ -47,21 +47,21 @@ pub(super) fn subdirectory<'p>(dir: &[u8], file: &'p File) -> Option<&'p [u8]> {
 
 /// A directory entry.
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Entry {
-    File { name: &'static [u8], size: usize },
-    Directory { name: &'static [u8] },
+pub(super) enum Entry<'f> {
+    File { name: &'f [u8], size: usize },
+    Directory { name: &'f [u8] },
 }
 
 /// The entries directly under a directory, in file-table order; a sub-directory where
 /// the first file under it is.
-pub(super) struct Entries<'d> {
-    pub(super) files: &'static [File],
+pub(super) struct Entries<'s, 'f, 'd> {
+    pub(super) files: &'s [File<'f>],
     pub(super) dir: &'d [u8],
     pub(super) next: usize,
 }
 
-impl<'d> Entries<'d> {
-    pub(super) fn new(files: &'static [File], dir: &'d [u8]) -> Self {
+impl<'s, 'f, 'd> Entries<'s, 'f, 'd> {
+    pub(super) fn new(files: &'s [File<'f>], dir: &'d [u8]) -> Self {
         Entries {
             files,
             dir,
@@ -70,10 +70,10 @@ impl<'d> Entries<'d> {
     }
 }
 
-impl Iterator for Entries<'_> {
-    type Item = Entry;
+impl<'f> Iterator for Entries<'_, 'f, '_> {
+    type Item = Entry<'f>;
 
-    fn next(&mut self) -> Option<Entry> {
+    fn next(&mut self) -> Option<Entry<'f>> {
         loop {
             let index = self.next;
             let file = self.files.get(index)?;
@@ -90,7 +90,7 @@ impl Iterator for Entries<'_> {
                 if !name.is_empty() {
                     return Some(Entry::File {
                         name,
-                        size: file.bytes.len(),
+                        size: file.len(),
                     });
                 }
             }

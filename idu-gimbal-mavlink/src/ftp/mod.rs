@@ -124,14 +124,36 @@ enum ErrorCode {
     FileNotFound = 10,
 }
 
-/// A file in flash, served read-only.
+/// A file served read-only: its contents are its parts one after the other, so that a file
+/// kept in flash can have a piece filled in as it is served (the camera definition's model
+/// name) without a copy in RAM.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub struct File {
+pub struct File<'a> {
     /// Its absolute path, such as `"/camera/idu-x30.xml"`: components separated by `/`;
     /// the directories are those the paths name.
-    pub path: &'static str,
-    /// Its contents.
-    pub bytes: &'static [u8],
+    pub path: &'a str,
+    /// Its contents, in parts.
+    pub parts: [&'a [u8]; 3],
+}
+
+impl<'a> File<'a> {
+    /// A file of one part.
+    pub const fn new(path: &'a str, bytes: &'a [u8]) -> Self {
+        File {
+            path,
+            parts: [bytes, &[], &[]],
+        }
+    }
+
+    /// Its length, bytes.
+    pub fn len(&self) -> usize {
+        self.parts.iter().map(|p| p.len()).sum()
+    }
+
+    /// Whether it is empty.
+    pub fn is_empty(&self) -> bool {
+        self.parts.iter().all(|p| p.is_empty())
+    }
 }
 
 /// Counters of the FTP server, each wrapping at `u32::MAX`.
@@ -296,24 +318,28 @@ fn data_mut(packet: &mut [u8; PAYLOAD_LEN]) -> &mut [u8; MAX_DATA_LEN] {
     data
 }
 
-/// A read-only MAVLink FTP server over `files`, with `SESSIONS` read sessions (at most
-/// 256); see the [module docs](self).
+/// A read-only MAVLink FTP server with `SESSIONS` read sessions (at most 256), over the
+/// files each call is given; see the [module docs](self).
 #[derive(Clone, Debug)]
 pub struct FtpServer<const SESSIONS: usize = 2> {
-    files: &'static [File],
     sessions: [Option<Session>; SESSIONS],
     burst: Option<Burst>,
     last: Option<LastRequest>,
     stats: FtpStats,
 }
 
+impl<const SESSIONS: usize> Default for FtpServer<SESSIONS> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl<const SESSIONS: usize> FtpServer<SESSIONS> {
-    /// A server over `files`, no session open.
-    pub const fn new(files: &'static [File]) -> Self {
+    /// A server, no session open.
+    pub const fn new() -> Self {
         // Session ids are one byte.
         const { assert!(SESSIONS >= 1 && SESSIONS <= 256) };
         FtpServer {
-            files,
             sessions: [None; SESSIONS],
             burst: None,
             last: None,
@@ -345,10 +371,13 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     }
 
     /// Handles one request packet (`FILE_TRANSFER_PROTOCOL.payload`) from `client` at
-    /// `now`. Returns whether to send `reply` (then written in full, to `client`); `false`
-    /// only for an ACK or NAK received as a request, with `reply` untouched.
+    /// `now`, over `files` (the same files, in the same order, at every call: a session
+    /// knows its file by its index). Returns whether to send `reply` (then written in
+    /// full, to `client`); `false` only for an ACK or NAK received as a request, with
+    /// `reply` untouched.
     pub fn request(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         request: &[u8; PAYLOAD_LEN],
         now: Instant,
@@ -377,11 +406,11 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
                 Some(Replay::Ack) => Ok(Ack::new(0, header.session)),
                 Some(Replay::Nak(code)) => Err(code),
                 Some(Replay::Opened { file }) => {
-                    self.reopened(client, header.session, file, now, data_mut(reply))
+                    self.reopened(files, client, header.session, file, now, data_mut(reply))
                 }
                 Some(Replay::Execute) | None => {
                     let (result, replay) =
-                        self.execute(client, &header, data, now, data_mut(reply));
+                        self.execute(files, client, &header, data, now, data_mut(reply));
                     self.last = Some(LastRequest {
                         seq_number: header.seq_number,
                         key,
@@ -427,20 +456,25 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         true
     }
 
-    /// Writes the next packet of the burst in progress at `now`; `false` (and `reply`
-    /// untouched) when there is none.
-    pub fn burst_next(&mut self, now: Instant, reply: &mut [u8; PAYLOAD_LEN]) -> bool {
+    /// Writes the next packet of the burst in progress at `now`, over the files
+    /// [`FtpServer::request`] was given; `false` (and `reply` untouched) when there is none.
+    pub fn burst_next(
+        &mut self,
+        files: &[File<'_>],
+        now: Instant,
+        reply: &mut [u8; PAYLOAD_LEN],
+    ) -> bool {
         let Some(burst) = self.burst else {
             return false;
         };
-        let Ok(bytes) = self.slot_file(burst.slot, now) else {
+        let Ok(file) = self.slot_file(files, burst.slot, now) else {
             // Not reached: whatever closes the session ends its burst.
             self.burst = None;
             return false;
         };
         let mut packet = [0; PAYLOAD_LEN];
         let Some((size, complete)) =
-            read_chunk(bytes, burst.offset, burst.chunk, data_mut(&mut packet))
+            read_chunk(&file, burst.offset, burst.chunk, data_mut(&mut packet))
         else {
             // Not reached: a burst is kept only while its offset is inside the file.
             self.burst = None;
@@ -470,6 +504,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     /// outcome and how to answer its re-transmission.
     fn execute(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         header: &Header,
         data: &[u8; MAX_DATA_LEN],
@@ -493,20 +528,21 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
                 Ok(Ack::new(0, session))
             }
             LIST_DIRECTORY => self
-                .list(path(data, header.size), header.offset, reply)
+                .list(files, path(data, header.size), header.offset, reply)
                 .map(|size| Ack::new(size, session)),
             OPEN_FILE_RO => {
-                return match self.open(client, session, path(data, header.size), now, reply) {
+                let path = path(data, header.size);
+                return match self.open(files, client, session, path, now, reply) {
                     Ok((ack, file)) => (Ok(ack), Replay::Opened { file }),
                     Err(code) => (Err(code), Replay::Nak(code)),
                 };
             }
-            READ_FILE => self.read(client, header, now, reply),
-            BURST_READ_FILE => self.start_burst(client, header, now, reply),
-            CALC_FILE_CRC32 => find_file(self.files, path(data, header.size))
-                .and_then(|index| self.files.get(index))
+            READ_FILE => self.read(files, client, header, now, reply),
+            BURST_READ_FILE => self.start_burst(files, client, header, now, reply),
+            CALC_FILE_CRC32 => find_file(files, path(data, header.size))
+                .and_then(|index| files.get(index))
                 .map(|file| {
-                    put_u32(reply, crc32(0, file.bytes));
+                    put_u32(reply, file.parts.iter().fold(0, |crc, p| crc32(crc, p)));
                     Ack::new(4, session)
                 })
                 .ok_or(ErrorCode::FileNotFound),
@@ -555,13 +591,14 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     /// number (re-opened), a free one, or one reclaimed; the ACK and the file's index.
     fn open(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         id: u8,
         path: &[u8],
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<(Ack, usize), ErrorCode> {
-        let file = find_file(self.files, path).ok_or(ErrorCode::FileNotFound)?;
+        let file = find_file(files, path).ok_or(ErrorCode::FileNotFound)?;
         let slot = match self.slot_of(client, id) {
             Some(own) => {
                 self.close(own);
@@ -583,7 +620,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             last_used: now,
         });
         self.stats.sessions_opened = self.stats.sessions_opened.wrapping_add(1);
-        Ok((self.file_size_ack(id, file, reply), file))
+        Ok((file_size_ack(files, id, file, reply), file))
     }
 
     /// Closes the session idle longest if idle more than [`SESSION_IDLE_TIMEOUT_MS`];
@@ -606,6 +643,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     /// The ACK of an `OpenFileRO` re-transmitted: the same session and size again.
     fn reopened(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         id: u8,
         file: usize,
@@ -620,54 +658,57 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         {
             session.last_used = now;
         }
-        Ok(self.file_size_ack(id, file, reply))
-    }
-
-    fn file_size_ack(&self, id: u8, file: usize, reply: &mut [u8; MAX_DATA_LEN]) -> Ack {
-        let len = self.files.get(file).map_or(0, |f| f.bytes.len());
-        // Offsets are u32: a file in a 32-bit MCU's flash is shorter.
-        put_u32(reply, u32::try_from(len).unwrap_or(u32::MAX));
-        Ack::new(4, id)
+        Ok(file_size_ack(files, id, file, reply))
     }
 
     /// The file of the session in `slot`, marked used at `now`.
-    fn slot_file(&mut self, slot: usize, now: Instant) -> Result<&'static [u8], ErrorCode> {
-        let files = self.files;
+    fn slot_file<'f>(
+        &mut self,
+        files: &[File<'f>],
+        slot: usize,
+        now: Instant,
+    ) -> Result<File<'f>, ErrorCode> {
         let session = self
             .sessions
             .get_mut(slot)
             .and_then(Option::as_mut)
             .ok_or(ErrorCode::InvalidSession)?;
         session.last_used = now;
-        Ok(files.get(session.file).map_or(&[][..], |f| f.bytes))
+        Ok(files
+            .get(session.file)
+            .copied()
+            .unwrap_or(File::new("", &[])))
     }
 
     /// `client`'s session `id`'s slot and file, marked used at `now`.
-    fn session_file(
+    fn session_file<'f>(
         &mut self,
+        files: &[File<'f>],
         client: Client,
         id: u8,
         now: Instant,
-    ) -> Result<(usize, &'static [u8]), ErrorCode> {
+    ) -> Result<(usize, File<'f>), ErrorCode> {
         let slot = self.slot_of(client, id).ok_or(ErrorCode::InvalidSession)?;
-        Ok((slot, self.slot_file(slot, now)?))
+        Ok((slot, self.slot_file(files, slot, now)?))
     }
 
     fn read(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         header: &Header,
         now: Instant,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<Ack, ErrorCode> {
-        let (_, bytes) = self.session_file(client, header.session, now)?;
+        let (_, file) = self.session_file(files, client, header.session, now)?;
         let (size, _) =
-            read_chunk(bytes, header.offset, header.size, reply).ok_or(ErrorCode::Eof)?;
+            read_chunk(&file, header.offset, header.size, reply).ok_or(ErrorCode::Eof)?;
         Ok(Ack::new(size, header.session))
     }
 
     fn start_burst(
         &mut self,
+        files: &[File<'_>],
         client: Client,
         header: &Header,
         now: Instant,
@@ -675,14 +716,14 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     ) -> Result<Ack, ErrorCode> {
         // One burst at a time: a new request replaces the one in progress.
         self.end_burst();
-        let (slot, bytes) = self.session_file(client, header.session, now)?;
+        let (slot, file) = self.session_file(files, client, header.session, now)?;
         // Size 0 would never advance.
         let chunk = match header.size {
             0 => MAX_DATA,
             size => size,
         };
         let (size, complete) =
-            read_chunk(bytes, header.offset, chunk, reply).ok_or(ErrorCode::Eof)?;
+            read_chunk(&file, header.offset, chunk, reply).ok_or(ErrorCode::Eof)?;
         self.stats.bursts = self.stats.bursts.wrapping_add(1);
         self.burst = (!complete).then_some(Burst {
             slot,
@@ -701,19 +742,20 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     /// Lists the directory `dir` from entry `offset`; the data's size.
     fn list(
         &mut self,
+        files: &[File<'_>],
         dir: &[u8],
         offset: u32,
         reply: &mut [u8; MAX_DATA_LEN],
     ) -> Result<u8, ErrorCode> {
         let dir = trim_slashes(dir);
-        if !dir.is_empty() && Entries::new(self.files, dir).next().is_none() {
+        if !dir.is_empty() && Entries::new(files, dir).next().is_none() {
             return Err(ErrorCode::FileNotFound);
         }
         let first = usize::try_from(offset).unwrap_or(usize::MAX);
         let mut out = Writer { buf: reply, len: 0 };
         let mut listed = 0u32;
         let mut digits = [0; 20];
-        for entry in Entries::new(self.files, dir).skip(first) {
+        for entry in Entries::new(files, dir).skip(first) {
             let fits = match entry {
                 Entry::File { name, size } => {
                     out.put_all(&[b"F", name, b"\t", decimal(size, &mut digits), b"\0"])
@@ -740,26 +782,43 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     }
 }
 
-/// Copies up to `max` bytes of `bytes` from `offset` into `data`; the count and whether
+/// The ACK of an `OpenFileRO`: the file's size.
+fn file_size_ack(files: &[File<'_>], id: u8, file: usize, reply: &mut [u8; MAX_DATA_LEN]) -> Ack {
+    let len = files.get(file).map_or(0, File::len);
+    // Offsets are u32: a file in a 32-bit MCU's flash is shorter.
+    put_u32(reply, u32::try_from(len).unwrap_or(u32::MAX));
+    Ack::new(4, id)
+}
+
+/// Copies up to `max` bytes of `file` from `offset` into `data`; the count and whether
 /// they reach the end. `None` at or past the end.
 fn read_chunk(
-    bytes: &[u8],
+    file: &File<'_>,
     offset: u32,
     max: u8,
     data: &mut [u8; MAX_DATA_LEN],
 ) -> Option<(u8, bool)> {
-    let rest = bytes.get(usize::try_from(offset).ok()?..)?;
-    if rest.is_empty() {
-        return None;
+    let mut skip = usize::try_from(offset).ok()?;
+    let rest = file.len().checked_sub(skip).filter(|&r| r > 0)?;
+    let size = u8::try_from(rest).unwrap_or(u8::MAX).min(max).min(MAX_DATA);
+    // Part by part, a slice at a time.
+    let mut out = data.get_mut(..usize::from(size)).unwrap_or(&mut []);
+    for part in file.parts {
+        let Some(from) = part.get(skip..) else {
+            skip = skip.saturating_sub(part.len());
+            continue;
+        };
+        skip = 0;
+        let n = from.len().min(out.len());
+        let Some((to, later)) = core::mem::take(&mut out).split_at_mut_checked(n) else {
+            break;
+        };
+        for (to, from) in to.iter_mut().zip(from) {
+            *to = *from;
+        }
+        out = later;
     }
-    let size = u8::try_from(rest.len())
-        .unwrap_or(u8::MAX)
-        .min(max)
-        .min(MAX_DATA);
-    for (to, from) in data.iter_mut().zip(rest).take(usize::from(size)) {
-        *to = *from;
-    }
-    Some((size, rest.len() <= usize::from(size)))
+    Some((size, rest <= usize::from(size)))
 }
 
 fn put_u32(data: &mut [u8; MAX_DATA_LEN], value: u32) {

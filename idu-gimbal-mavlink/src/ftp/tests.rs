@@ -17,31 +17,13 @@ static BIG: [u8; 1000] = pattern();
 /// Two packets exactly.
 static EXACT: [u8; 478] = pattern();
 
-static FILES: [File; 6] = [
-    File {
-        path: "/camera/idu-x30.xml",
-        bytes: &BIG,
-    },
-    File {
-        path: "/camera/idu-x30t.xml",
-        bytes: b"<x30t/>",
-    },
-    File {
-        path: "/camera/lenses/wide.json",
-        bytes: b"{}",
-    },
-    File {
-        path: "/readme.txt",
-        bytes: b"hello",
-    },
-    File {
-        path: "/params/exact.bin",
-        bytes: &EXACT,
-    },
-    File {
-        path: "/empty.bin",
-        bytes: b"",
-    },
+static FILES: [File<'static>; 6] = [
+    File::new("/camera/idu-x30.xml", &BIG),
+    File::new("/camera/idu-x30t.xml", b"<x30t/>"),
+    File::new("/camera/lenses/wide.json", b"{}"),
+    File::new("/readme.txt", b"hello"),
+    File::new("/params/exact.bin", &EXACT),
+    File::new("/empty.bin", b""),
 ];
 
 // Opcodes and error codes as numbers, from mavlink.io's tables, not the module's.
@@ -58,8 +40,44 @@ const E_UNKNOWN: u8 = 7;
 const E_PROTECTED: u8 = 9;
 const E_NOT_FOUND: u8 = 10;
 
-fn server() -> FtpServer {
-    FtpServer::new(&FILES)
+/// A server and the files its calls are given.
+struct Served<const S: usize = 2> {
+    server: FtpServer<S>,
+    files: &'static [File<'static>],
+}
+
+impl<const S: usize> Served<S> {
+    fn new(files: &'static [File<'static>]) -> Self {
+        Served {
+            server: FtpServer::new(),
+            files,
+        }
+    }
+
+    fn request(
+        &mut self,
+        client: Client,
+        request: &[u8; 251],
+        now: Instant,
+        reply: &mut [u8; 251],
+    ) -> bool {
+        self.server.request(self.files, client, request, now, reply)
+    }
+
+    fn burst_next(&mut self, now: Instant, reply: &mut [u8; 251]) -> bool {
+        self.server.burst_next(self.files, now, reply)
+    }
+}
+
+impl<const S: usize> core::ops::Deref for Served<S> {
+    type Target = FtpServer<S>;
+    fn deref(&self) -> &FtpServer<S> {
+        &self.server
+    }
+}
+
+fn server() -> Served {
+    Served::new(&FILES)
 }
 
 fn at(ms: u32) -> Instant {
@@ -127,7 +145,7 @@ fn parse(p: &[u8; 251]) -> Reply {
     }
 }
 
-fn send(s: &mut FtpServer, request: &[u8; 251], now: u32) -> Reply {
+fn send(s: &mut Served, request: &[u8; 251], now: u32) -> Reply {
     let mut reply = [0xAA; 251];
     assert!(s.request(GCS, request, at(now), &mut reply), "no reply");
     let r = parse(&reply);
@@ -147,12 +165,12 @@ fn assert_nak(r: &Reply, error: u8) {
     assert_eq!((r.opcode, r.data.as_slice()), (129, &[error][..]), "{r:?}");
 }
 
-fn open(s: &mut FtpServer, seq: u16, path: &str, now: u32) -> Reply {
+fn open(s: &mut Served, seq: u16, path: &str, now: u32) -> Reply {
     open_in(s, 0, seq, path, now)
 }
 
 /// `OpenFileRO` in the client's session `session`.
-fn open_in(s: &mut FtpServer, session: u8, seq: u16, path: &str, now: u32) -> Reply {
+fn open_in(s: &mut Served, session: u8, seq: u16, path: &str, now: u32) -> Reply {
     let r = send(s, &with_path(seq, session, OPEN, 0, path), now);
     // The client's session, echoed.
     assert_eq!(r.session, session);
@@ -160,7 +178,7 @@ fn open_in(s: &mut FtpServer, session: u8, seq: u16, path: &str, now: u32) -> Re
 }
 
 /// Every packet of a burst: the reply to the request, then `burst_next`'s.
-fn burst(s: &mut FtpServer, request: &[u8; 251], now: u32) -> Vec<Reply> {
+fn burst(s: &mut Served, request: &[u8; 251], now: u32) -> Vec<Reply> {
     let mut packets = vec![send(s, request, now)];
     let mut reply = [0; 251];
     while s.burst_pending() {
@@ -331,7 +349,7 @@ fn too_many_sessions() {
     let r = send(&mut s, &packet(6, 0, READ, 3, 0, &[]), 100);
     assert_eq!(r.data, EXACT[..3]);
     // More sessions, more files open.
-    let mut four: FtpServer<4> = FtpServer::new(&FILES);
+    let mut four: Served<4> = Served::new(&FILES);
     for seq in 0..4u16 {
         let mut reply = [0; 251];
         assert!(four.request(
@@ -524,8 +542,8 @@ fn list_root_and_subdirectories() {
 
 #[test]
 fn list_of_an_empty_table_is_eof() {
-    static NO_FILES: [File; 0] = [];
-    let mut s: FtpServer = FtpServer::new(&NO_FILES);
+    static NO_FILES: [File<'static>; 0] = [];
+    let mut s: Served = Served::new(&NO_FILES);
     assert_nak(&send(&mut s, &with_path(0, 0, 3, 0, "/"), 0), E_EOF);
     assert_nak(&send(&mut s, &with_path(1, 0, 3, 0, "/x"), 0), E_NOT_FOUND);
     assert_nak(
@@ -536,7 +554,7 @@ fn list_of_an_empty_table_is_eof() {
 
 /// Files whose entries are 41 bytes (five fit in 239, not six), one whose entry fits in
 /// no packet, and a short one.
-static MANY: [File; 13] = {
+static MANY: [File<'static>; 13] = {
     const NAMES: [&str; 13] = [
         "/logs/flight-log-number-000000000001.bin",
         "/logs/flight-log-number-000000000002.bin",
@@ -552,16 +570,10 @@ static MANY: [File; 13] = {
         "/logs/a-name-so-long-that-its-entry-cannot-fit-in-any-packet-of-two-hundred-and-thirty-nine-bytes-of-data-not-even-alone-in-an-otherwise-empty-packet-which-is-what-this-test-checks-the-server-survives-by-listing-it-as-skipped-xxxxxxxxxxxxxxxxxxx.bin",
         "/logs/last.bin",
     ];
-    let mut files = [File {
-        path: "",
-        bytes: b"",
-    }; 13];
+    let mut files = [File::new("", b""); 13];
     let mut i = 0;
     while i < 13 {
-        files[i] = File {
-            path: NAMES[i],
-            bytes: &BIG,
-        };
+        files[i] = File::new(NAMES[i], &BIG);
         i += 1;
     }
     files
@@ -569,7 +581,7 @@ static MANY: [File; 13] = {
 
 #[test]
 fn list_packs_whole_entries_and_skips_one_too_long() {
-    let mut s: FtpServer = FtpServer::new(&MANY);
+    let mut s: Served = Served::new(&MANY);
     let mut all = Vec::new();
     let mut seq = 0;
     // pymavlink's loop: the next offset is the count of entries received.
@@ -958,6 +970,37 @@ fn calc_file_crc32() {
     assert_eq!(r.data, [0, 0, 0, 0]);
     // No session is involved.
     assert_eq!(s.stats().sessions_opened, 0);
+}
+
+#[test]
+fn a_file_in_parts_is_served_as_their_concatenation() {
+    // BIG in three parts, cut inside packets: a read, a burst, the size, the listing and
+    // the CRC see one file.
+    let (head, rest) = BIG.split_at(100);
+    let (middle, tail) = rest.split_at(600);
+    let files: &'static [File<'static>] = Box::leak(Box::new([File {
+        path: "/parts.bin",
+        parts: [head, middle, tail],
+    }]));
+    let mut s: Served = Served::new(files);
+    let r = open(&mut s, 0, "/parts.bin", 0);
+    assert_eq!(r.data, 1000u32.to_le_bytes());
+    // 20 bytes across the first cut, and across the second.
+    let r = send(&mut s, &packet(1, 0, READ, 20, 90, &[]), 0);
+    assert_eq!(r.data, &BIG[90..110]);
+    let r = send(&mut s, &packet(2, 0, READ, 20, 690, &[]), 0);
+    assert_eq!(r.data, &BIG[690..710]);
+    let mut whole = Vec::new();
+    for p in burst(&mut s, &packet(3, 0, BURST, 0, 0, &[]), 0) {
+        assert_ack(&p);
+        whole.extend_from_slice(&p.data);
+    }
+    assert_eq!(whole, BIG);
+    let r = send(&mut s, &with_path(4, 0, 14, 0, "/parts.bin"), 0);
+    assert_eq!(r.data, crc32_bitwise(&BIG).to_le_bytes());
+    let r = send(&mut s, &with_path(5, 0, 3, 0, "/"), 0);
+    assert_eq!(r.data, b"Fparts.bin\t1000\0");
+    assert_nak(&send(&mut s, &packet(6, 0, READ, 1, 1000, &[]), 0), E_EOF);
 }
 
 #[test]
