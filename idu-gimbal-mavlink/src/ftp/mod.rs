@@ -59,7 +59,7 @@
 //! mavlink.io: "If the drone receives a message with the same sequence number then it
 //! assumes that its ACK/NAK response was lost. In this case it should resend the
 //! response". Keeping the last reply would cost 251 bytes of RAM (more than the rest of
-//! the server: 108 bytes with two sessions on a Cortex-M); instead the server keeps a
+//! the server: 100 bytes with two sessions on a Cortex-M); instead the server keeps a
 //! record of the last request (its `seq_number`, a CRC-32 of its content and, for the two
 //! requests that change state, their outcome: a few bytes) and rebuilds the reply. A request is a re-transmission when its `seq_number` and those bytes (`session`,
 //! `opcode`, `size`, `offset`, `data[..size]`) are the last request's: a new client
