@@ -422,6 +422,67 @@ fn video_start_and_stop_with_the_capture_status() {
     );
 }
 
+#[test]
+fn while_recording_the_capture_status_comes_at_the_rate_asked() {
+    let mut b = bridge();
+    // Statuses (their time and recording time) sent unasked between two instants.
+    let unasked = |b: &mut Bridge<Link>, from: u32, to: u32| {
+        let mut got = Vec::new();
+        for ms in from..to {
+            b.poll(t(ms));
+            got.extend(
+                of::<CameraCaptureStatus>(&sent(b))
+                    .iter()
+                    .map(|s| (s.time_boot_ms, s.video_status, s.recording_time_ms)),
+            );
+        }
+        got
+    };
+    // common.xml: param2 the status's frequency while recording, Hz (MAVProxy sends 1).
+    let (ack, _) = ask(
+        &mut b,
+        100,
+        MavCmd::VideoStartCapture,
+        [0.0, 2.0, 0.0],
+        1_000,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(
+        unasked(&mut b, 1_001, 2_600),
+        [(1_500, 1, 500), (2_000, 1, 1_000), (2_500, 1, 1_500)]
+    );
+    // Stopped: the stop's own status, then none.
+    let (_, frames) = ask(&mut b, 100, MavCmd::VideoStopCapture, [0.0; 3], 2_600);
+    assert_eq!(of::<CameraCaptureStatus>(&frames)[0].video_status, 0);
+    assert!(unasked(&mut b, 2_601, 5_000).is_empty());
+    // 0 (and NaN, a parameter left out): no status unasked.
+    for hz in [0.0, f32::NAN] {
+        let (ack, _) = ask(
+            &mut b,
+            100,
+            MavCmd::VideoStartCapture,
+            [0.0, hz, 0.0],
+            5_000,
+        );
+        assert_eq!(ack.result, MavResult::Accepted);
+        assert!(unasked(&mut b, 5_001, 7_000).is_empty(), "{hz}");
+    }
+    // A negative rate, more than 1 kHz, or a period over 1000 s (beyond the tick's half
+    // range at the smallest rates): refused, and the gimbal not told.
+    let _ = queued(b.gimbal_mut());
+    for hz in [-1.0, 1_000.5, f32::INFINITY, 0.000_9, 1e-30] {
+        let (ack, _) = ask(
+            &mut b,
+            100,
+            MavCmd::VideoStartCapture,
+            [0.0, hz, 0.0],
+            7_000,
+        );
+        assert_eq!(ack.result, MavResult::Denied, "{hz}");
+    }
+    assert!(queued(b.gimbal_mut()).is_empty());
+}
+
 /// A postback from a gimbal of type `gimbal_type` into the bridge's link.
 fn postback(b: &mut Bridge<Link>, gimbal_type: GimbalType, ms: u32) {
     let p = Postback {

@@ -46,6 +46,7 @@ use crate::bridge::Tx;
 use crate::capture::Vantage;
 use crate::command::Interval;
 
+use super::periodic::Periodic;
 use super::CameraConfig;
 
 /// A field of view angle outside `(0, 180)` degrees.
@@ -131,38 +132,15 @@ pub(crate) fn stream_hfov(config: &CameraConfig, zoom: f32) -> u16 {
     libm::roundf(h) as u16
 }
 
-/// When `CAMERA_FOV_STATUS` is sent unasked.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Schedule {
-    /// The interval set, ms; 0: none.
-    interval_ms: u32,
-    next: Option<Instant>,
-}
-
-impl Schedule {
-    /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the status: µs; −1 and 0 (the default: none)
-    /// stop it. Below 1 ms or above a minute is out of range.
-    pub(crate) fn set_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
-        self.interval_ms = match Interval::from_us(interval_us) {
-            Some(Interval::Stop | Interval::Default) => 0,
-            Some(Interval::Every(ms)) => ms,
-            None => return MavResult::Denied,
-        };
-        self.next = Some(now);
-        MavResult::Accepted
+/// `MAV_CMD_SET_MESSAGE_INTERVAL` for the status: µs; −1 and 0 (the default: none) stop
+/// it. Below 1 ms or above a minute is out of range.
+pub(crate) fn set_interval(schedule: &mut Periodic, interval_us: f32, now: Instant) -> MavResult {
+    match Interval::from_us(interval_us) {
+        Some(Interval::Stop | Interval::Default) => schedule.set(0, now),
+        Some(Interval::Every(ms)) => schedule.set(ms, now),
+        None => return MavResult::Denied,
     }
-
-    /// Whether the status is due at `now`.
-    pub(crate) fn due(&self, now: Instant) -> bool {
-        self.interval_ms > 0 && self.next.is_none_or(|t| now.is_at_or_after(t))
-    }
-
-    /// The status was sent at `now`: the next is an interval on.
-    fn sent(&mut self, now: Instant) {
-        if self.interval_ms > 0 {
-            self.next = Some(now.add_millis(self.interval_ms));
-        }
-    }
+    MavResult::Accepted
 }
 
 /// Where the image centre meets the ground: latitude, longitude (1e-7°) and altitude (mm)
@@ -217,7 +195,7 @@ fn image_centre(vantage: &Vantage) -> [i32; 3] {
 /// Sends `CAMERA_FOV_STATUS` now (asked for, or due).
 pub(crate) fn send_status(
     config: &CameraConfig,
-    schedule: &mut Schedule,
+    schedule: &mut Periodic,
     zoom: f32,
     now: Instant,
     tx: &mut Tx<'_>,

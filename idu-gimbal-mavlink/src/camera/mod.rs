@@ -9,7 +9,8 @@
 //!   by the bridge with the gimbal's single shot and reported one `CAMERA_IMAGE_CAPTURED`
 //!   per image when it is taken, with consecutive indexes; the latest are kept for
 //!   re-requests (see [`crate::capture`]). `MAV_CMD_IMAGE_STOP_CAPTURE` stops it;
-//! - video: `MAV_CMD_VIDEO_START_CAPTURE` / `STOP_CAPTURE`;
+//! - video: `MAV_CMD_VIDEO_START_CAPTURE` / `STOP_CAPTURE`, with `CAMERA_CAPTURE_STATUS`
+//!   while recording at the rate the start's param2 asks (Hz: 0 or NaN none, 0.001 to 1000);
 //! - zoom and focus (`MAV_CMD_SET_CAMERA_ZOOM`, `MAV_CMD_SET_CAMERA_FOCUS`): see [`lens`].
 //!   The zoom range follows the gimbal type in the postback (30× on the X30, X30T and 30×
 //!   dual light, 3.5× on the 3.5× models) unless configured;
@@ -35,6 +36,7 @@
 pub mod definition;
 pub mod fov;
 pub mod lens;
+mod periodic;
 pub mod settings;
 pub mod stream;
 pub mod tracking;
@@ -62,6 +64,7 @@ use crate::framing::MAX_FRAME_LEN;
 use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
 use crate::gimbal::GimbalControl;
 use fov::FieldOfView;
+use periodic::Periodic;
 use settings::Settings;
 use stream::{VideoStream, MAX_STREAMS};
 use tracking::{Source, Tracking};
@@ -265,7 +268,9 @@ pub(crate) struct Camera {
     recording_since: Option<Instant>,
     streams: stream::Pending,
     tracking: Tracking,
-    fov_status: fov::Schedule,
+    fov_status: Periodic,
+    /// `CAMERA_CAPTURE_STATUS` while recording, at the rate `VIDEO_START_CAPTURE` asked.
+    recording_status: Periodic,
     settings: Settings,
     ftp: FtpServer<FTP_SESSIONS>,
     /// Who the burst read in progress is for.
@@ -342,7 +347,8 @@ impl Camera {
             recording_since: None,
             streams: stream::Pending::default(),
             tracking: Tracking::default(),
-            fov_status: fov::Schedule::default(),
+            fov_status: Periodic::default(),
+            recording_status: Periodic::default(),
             settings: Settings::new(config.has_thermal()),
             ftp: FtpServer::new(),
             burst_client: (0, 0),
@@ -423,7 +429,7 @@ impl Camera {
             MavCmd::SetMessageInterval => {
                 let [message, interval, ..] = cmd.params;
                 let result = if message == id_of::<CameraFovStatus>() as f32 {
-                    self.fov_status.set_interval(interval, now)
+                    fov::set_interval(&mut self.fov_status, interval, now)
                 } else {
                     self.tracking.set_interval(interval, now)
                 };
@@ -436,6 +442,19 @@ impl Camera {
             }
             MavCmd::VideoStartCapture | MavCmd::VideoStopCapture => {
                 let start = cmd.command == MavCmd::VideoStartCapture;
+                // common.xml: VIDEO_START_CAPTURE's param2 is how often (Hz) to send
+                // CAMERA_CAPTURE_STATUS while recording, 0 for never (NaN taken so).
+                let hz = cmd.params[1];
+                // 1 ms to 1000 s: a longer period would pass the tick's half range.
+                if !(hz.is_nan() || hz == 0.0 || (0.001..=1000.0).contains(&hz)) {
+                    return (MavResult::Denied, Reply::Nothing);
+                }
+                // 0 and NaN: none (0 ms); else the period truncated.
+                let period_ms = if start && hz > 0.0 {
+                    (1000.0 / hz) as u32
+                } else {
+                    0
+                };
                 let v = if start { Video::Start } else { Video::Stop };
                 if gimbal
                     .send(GimbalCmd::from(GimbalCommand::Video(v)))
@@ -444,6 +463,9 @@ impl Camera {
                     return (MavResult::TemporarilyRejected, Reply::Nothing);
                 }
                 self.recording_since = start.then_some(now);
+                // The status the ACK is followed by is the first.
+                self.recording_status
+                    .set(period_ms, now.add_millis(period_ms));
                 Reply::CaptureStatus
             }
             MavCmd::SetCameraZoom => {
@@ -634,6 +656,7 @@ impl Camera {
             || self.ftp.burst_pending()
             || self.tracking.due(now)
             || self.fov_status.due(now)
+            || self.recording_status.due(now)
     }
 
     /// Images as they fall due, what requests left waiting for room in the outbox, the
@@ -658,6 +681,10 @@ impl Camera {
         }
         if self.tracking.due(now) && tx.room() >= MAX_FRAME_LEN {
             self.tracking.send_status(gimbal, config.component, now, tx);
+        }
+        if self.recording_status.due(now) && tx.room() >= MAX_FRAME_LEN {
+            self.recording_status.sent(now);
+            self.send_capture_status(config, now, tx);
         }
         if self.fov_status.due(now) && tx.room() >= MAX_FRAME_LEN {
             fov::send_status(config, &mut self.fov_status, self.zoom, now, tx);

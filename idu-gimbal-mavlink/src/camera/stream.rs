@@ -93,7 +93,11 @@ impl Pending {
     /// Sends what waits, as far as the outbox has room; `zoom` the ratio now.
     pub(crate) fn send(&mut self, config: &CameraConfig, zoom: f32, tx: &mut Tx<'_>) {
         let count = config.streams().len() as u8;
+        // The main camera's horizontal angle at the zoom now, whole degrees; the infrared
+        // stream's lens is not configured: 0, unknown ([`super::fov`]).
+        let visible_hfov = super::fov::stream_hfov(config, zoom);
         for (i, stream) in config.streams().iter().enumerate() {
+            let hfov = if stream.is_thermal() { 0 } else { visible_hfov };
             let bit = 1u8 << i;
             // The index is below MAX_STREAMS: the id fits.
             let id = i as u8 + 1;
@@ -101,27 +105,17 @@ impl Pending {
                 if tx.room() < MAX_FRAME_LEN {
                     return;
                 }
-                send_information(config, stream, id, count, hfov(config, stream, zoom), tx);
+                send_information(config, stream, id, count, hfov, tx);
                 self.information &= !bit;
             }
             if self.status & bit != 0 {
                 if tx.room() < MAX_FRAME_LEN {
                     return;
                 }
-                send_status(config, stream, id, hfov(config, stream, zoom), tx);
+                send_status(config, stream, id, hfov, tx);
                 self.status &= !bit;
             }
         }
-    }
-}
-
-/// A stream's horizontal angle, whole degrees: the main camera's at the zoom now, 0
-/// (unknown) for the infrared stream, whose lens is not configured ([`super::fov`]).
-fn hfov(config: &CameraConfig, stream: &VideoStream, zoom: f32) -> u16 {
-    if stream.is_thermal() {
-        0
-    } else {
-        super::fov::stream_hfov(config, zoom)
     }
 }
 
