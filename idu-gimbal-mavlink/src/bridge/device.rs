@@ -67,10 +67,12 @@ impl State {
     /// stations read a camera's identity once, at its first heartbeat, and name its cached
     /// definition after it (QGroundControl's `QGCCameraManager`), so the camera is not
     /// announced under a provisional one.
-    pub(super) fn send_heartbeats(&mut self, now: Instant, camera_known: bool) {
+    pub(super) fn send_heartbeats<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
         if !self.next_heartbeat.is_none_or(|t| now.is_at_or_after(t)) {
             return;
         }
+        // The camera's identity is its gimbal type's: asked only when a heartbeat is due.
+        let camera_known = gimbal.gimbal_type().is_some();
         self.next_heartbeat = Some(now.add_millis(self.config.heartbeat_ms.max(1)));
         let hb = Heartbeat {
             type_: MavType::Gimbal,

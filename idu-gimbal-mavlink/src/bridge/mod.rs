@@ -457,7 +457,7 @@ impl State {
 
     fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant) {
         self.note_postback(gimbal, now);
-        self.send_heartbeats(now, gimbal.gimbal_type().is_some());
+        self.send_heartbeats(gimbal, now);
         if self.camera.as_ref().is_some_and(|c| c.has_work(now)) {
             self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
                 camera.poll(config, gimbal, now, tx)
