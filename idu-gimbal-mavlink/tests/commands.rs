@@ -247,6 +247,34 @@ fn a_relative_roi_waits_for_home_s_height() {
     assert!(b.gimbal().pointing_target().is_none());
 }
 
+#[cfg(feature = "roi")]
+#[test]
+fn home_s_height_from_extreme_altitudes_is_refused_never_wrapped() {
+    // alt − relative_alt beyond i32: in i32 it overflowed (a debug build panicked, a
+    // release build wrapped to a home 4,295 km up and accepted it).
+    for (alt, relative) in [(i32::MAX, -1), (i32::MIN, 1), (i32::MIN, i32::MAX)] {
+        let mut b = bridge();
+        b.receive(
+            &frame(AP, 1, &position(473_977_420, 85_455_940, alt, relative)),
+            t(5),
+        );
+        let c = int(
+            (AP.0, 154),
+            MavCmd::DoSetRoiLocation,
+            MavFrame::GlobalRelativeAltInt,
+            [0.0; 4],
+            (473_987_420, 85_465_940, 20.0),
+        );
+        let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
+        assert_eq!(
+            acks,
+            [(154, MavCmd::DoSetRoiLocation, MavResult::Denied)],
+            "{alt} {relative}"
+        );
+        assert!(b.gimbal().pointing_target().is_none());
+    }
+}
+
 #[cfg(not(feature = "roi"))]
 #[test]
 fn without_the_roi_feature_a_region_of_interest_is_unsupported() {

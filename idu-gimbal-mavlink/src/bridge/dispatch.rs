@@ -334,7 +334,8 @@ impl State {
                     // Home's height comes with the position: not yet.
                     return MavResult::TemporarilyRejected;
                 };
-                f64::from(cmd.z) + f64::from(alt_mm - rel_mm) / 1000.0
+                // In f64, exact: an autopilot's two i32s can differ by more than an i32.
+                f64::from(cmd.z) + (f64::from(alt_mm) - f64::from(rel_mm)) / 1000.0
             }
             _ => return MavResult::Denied,
         };
