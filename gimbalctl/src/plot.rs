@@ -248,19 +248,35 @@ pub struct Trace {
     last_rate: Option<(f64, f64)>,
     /// When the last rate command came (a rate not repeated within 250 ms has stopped).
     last_rate_t: f64,
+    /// Lines whose timestamp was not a finite time (kept at the time before them).
+    pub bad_timestamps: u64,
 }
 
 impl Trace {
-    /// The time of a line: its timestamp from the first, else the current time.
-    fn clock(&mut self, ts: Option<&[u8]>) -> f64 {
-        if let Some(abs) = ts
+    /// The time of a line: its timestamp from the first, else the current time. `frame`:
+    /// the line's own frame record (a line's messages read the same time again), which
+    /// counts a bad timestamp.
+    fn clock(&mut self, ts: Option<&[u8]>, frame: bool) -> f64 {
+        let abs = ts
             .and_then(|t| std::str::from_utf8(t).ok())
-            .and_then(|t| t.parse::<f64>().ok())
-        {
-            let t0 = *self.t0.get_or_insert(abs);
+            .and_then(|t| t.parse::<f64>().ok());
+        // Only a finite time from the first: "inf", "nan", 309 digits or a span beyond
+        // f64 would put the time axis at infinity, whose tick search never ends. Such a
+        // line keeps the time where it was, and is counted.
+        let since_first = abs.and_then(|abs| {
+            let t = abs - *self.t0.get_or_insert(abs);
+            (abs.is_finite() && t.is_finite()).then_some(t)
+        });
+        if abs.is_some() && since_first.is_none() {
+            self.bad_timestamps += u64::from(frame);
+            if self.t0.is_some_and(|t0| !t0.is_finite()) {
+                self.t0 = None;
+            }
+        }
+        if let Some(t) = since_first {
             self.timed = true;
             // A timestamp going backwards keeps the time where it was.
-            self.end = self.end.max(abs - t0);
+            self.end = self.end.max(t);
         } else if !self.timed {
             self.end = self.postbacks as f64 * UNTIMED_PERIOD_S;
         }
@@ -385,28 +401,28 @@ impl Sink for Trace {
         match record {
             // Every frame moves the clock, whether or not it completes a message.
             Record::Frame(at) => {
-                self.clock(at.ts);
+                self.clock(at.ts, true);
             }
             Record::Postback(at, pb) => {
-                let t = self.clock(at.ts);
+                let t = self.clock(at.ts, false);
                 self.postback(t, &pb);
             }
             Record::Command(at, cmd) => {
-                let t = self.clock(at.ts);
+                let t = self.clock(at.ts, false);
                 self.command(t, &cmd);
             }
             Record::Vehicle(at, VehicleFrame::Attitude(a)) => {
-                let t = self.clock(at.ts);
+                let t = self.clock(at.ts, false);
                 self.vehicle_heading
                     .push(t, f64::from(a.heading_deg()).rem_euclid(360.0));
             }
             Record::Vehicle(..) | Record::Text(..) => {}
             Record::CrcError(at) => {
-                let t = self.clock(at.ts);
+                let t = self.clock(at.ts, false);
                 self.crc.push(t, 1.0);
             }
             Record::Lost(at) => {
-                let t = self.clock(at.ts);
+                let t = self.clock(at.ts, false);
                 self.lost.push(t, 1.0);
             }
         }
@@ -781,6 +797,13 @@ pub fn run(file: Option<&str>, stream: bool, output: &str) -> Result<(), Failure
         trace.crc.count,
         trace.lost.count,
     );
+    if trace.bad_timestamps > 0 {
+        let _ = writeln!(
+            summary,
+            "{output}: {} lines with a timestamp that is not a finite time, drawn at the time before them",
+            trace.bad_timestamps
+        );
+    }
     crate::print(&summary)
 }
 

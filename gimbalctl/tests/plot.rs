@@ -463,6 +463,45 @@ fn plot_errors() {
     );
 }
 
+#[test]
+fn timestamps_that_are_not_finite_times_are_counted_not_drawn() {
+    // A candump timestamp of 309 digits or more parses to infinity: the time axis went to
+    // infinity and the plot never finished. Each such line keeps the time before it. (The
+    // log reader takes only digits[.digits]: no "inf", "nan" or sign reaches the plot.)
+    let (log, _) = flight_log();
+    let mut lines: Vec<String> = log.lines().map(str::to_owned).collect();
+    let n = lines.len();
+    for (at, ts) in [
+        (n / 3, "9".repeat(309)),
+        (n / 2, format!("{}.5", "1".repeat(400))),
+        (2 * n / 3, "9".repeat(309)),
+    ] {
+        let (_, rest) = lines[at].split_once(')').unwrap();
+        lines[at] = format!("({ts}){rest}");
+    }
+    let (out, svg) = render(&(lines.join("\n") + "\n"));
+    assert_eq!(out.code, 0, "{out:?}");
+    assert!(svg.contains("<svg"), "an SVG written");
+    assert!(
+        out.stdout
+            .contains("3 lines with a timestamp that is not a finite time"),
+        "{}",
+        out.stdout
+    );
+    // The rest of the log's time is its own: the flight's END seconds.
+    let secs: f64 = out
+        .stdout
+        .split(": ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((secs - END).abs() < 1.0, "{}", out.stdout);
+}
+
 /// A serial capture (no timestamps): estimated time, 0.5 s per postback; a CRC error and
 /// line noise marked where they were.
 #[test]
