@@ -371,6 +371,8 @@ fn serve<S: Pump>(
     let mut was_up = false;
     let mut splitter = FrameReader::new();
     let mut notes_at = start + NOTE_EVERY;
+    // Said at most once a NOTE_EVERY, as the count grows.
+    let mut other_autopilots = 0;
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
             eprintln!(
@@ -400,6 +402,15 @@ fn serve<S: Pump>(
         if clock >= notes_at {
             for note in S::notes(&mut bridge) {
                 eprintln!("gimbalctl mavlink: warning: {note}");
+            }
+            let others = bridge.stats().other_autopilots;
+            if others != other_autopilots {
+                eprintln!(
+                    "gimbalctl mavlink: warning: {} heartbeats of another autopilot ignored: following system {} (--system-id pins it)",
+                    others.wrapping_sub(other_autopilots),
+                    bridge.system_id()
+                );
+                other_autopilots = others;
             }
             notes_at = clock + NOTE_EVERY;
         }

@@ -165,6 +165,7 @@ class Autopilot:
     on UDP `port`, with a ground station beside it, or on `link` (a PtyLink) alone."""
 
     def __init__(self, port, persona, results, link=None):
+        self.port = port
         self.persona = persona
         self.r = results
         if link is None:
@@ -500,6 +501,21 @@ def ardupilot(ap):
     ap.wait("settle", lambda: False, timeout=0.5)
     indexes = [m.image_index for m in ap.find_all("CAMERA_IMAGE_CAPTURED", since)]
     ap.check(indexes == [0, 1], f"sequence 1, 1 again, 2: images {indexes}")
+    # Another system's component 1 beating (a second autopilot, a multi-vehicle network or
+    # a forged heartbeat): the gimbal keeps the autopilot it follows, which it hears.
+    rogue = mavutil.mavlink_connection(f"udpout:127.0.0.1:{ap.port}", source_system=42,
+                                       source_component=1, dialect="common")
+    since = ap.now()
+    for _ in range(4):
+        rogue.mav.heartbeat_send(mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0,
+                                 mav.MAV_STATE_ACTIVE)
+        ap.wait("a second", lambda: False, timeout=0.5)
+    systems = sorted({m.get_srcSystem() for m in ap.find_all("HEARTBEAT", since)
+                      if m.get_srcComponent() == GIMBAL})
+    ap.check(systems == [AP_SYSTEM], f"system 42's heartbeats do not take the system id: the gimbal's "
+             f"heartbeats from {systems}")
+    ap.command(GIMBAL, mav.MAV_CMD_REQUEST_MESSAGE, 283, expect=mav.MAV_RESULT_ACCEPTED)
+    rogue.close()
 
 
 def session(gimbalctl, persona, run, results):

@@ -12,7 +12,8 @@
 //! # What it does
 //!
 //! - HEARTBEAT at 1 Hz as `MAV_TYPE_GIMBAL`, `MAV_AUTOPILOT_INVALID`, component 154
-//!   (configurable); system id configured, or the autopilot's from its HEARTBEAT.
+//!   (configurable); system id configured, or the first autopilot's from its HEARTBEAT,
+//!   kept while it is heard (see [`BridgeConfig::system_id`]).
 //! - `MAV_CMD_REQUEST_MESSAGE` → `GIMBAL_DEVICE_INFORMATION` (model from the postback's
 //!   gimbal type; pitch and yaw axes, no roll; limits in radians) or an attitude status;
 //!   `MAV_CMD_SET_MESSAGE_INTERVAL` for the attitude status. Every `COMMAND_LONG` and
@@ -93,6 +94,6 @@ pub mod gimbal;
 mod setpoint;
 pub mod status;
 
-pub use bridge::{Bridge, BridgeConfig, BridgeStats};
+pub use bridge::{Bridge, BridgeConfig, BridgeStats, AUTOPILOT_SILENCE_MS};
 pub use gimbal::GimbalControl;
 pub use mavio;

@@ -10,7 +10,7 @@ use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal_mavlink::attitude::YawPitch;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::{Bridge, BridgeConfig, AUTOPILOT_SILENCE_MS};
 use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
@@ -69,6 +69,75 @@ fn heartbeats_at_1_hz_with_the_autopilots_system_id() {
         && h.2.autopilot == MavAutopilot::Invalid));
     // System 1 until the autopilot's heartbeat, then the autopilot's.
     assert_eq!(hbs.iter().map(|h| h.0).collect::<Vec<_>>(), [1, 1, 7]);
+}
+
+/// The system id of the next gimbal heartbeat after `ms`.
+fn system_id_after(b: &mut Bridge<Link>, ms: u32) -> u8 {
+    for ms in ms..ms + 1_100 {
+        b.poll(t(ms));
+        if let Some(f) = sent(b).iter().find(|f| f.message_id() == 0) {
+            return f.system_id();
+        }
+    }
+    panic!("no heartbeat");
+}
+
+#[test]
+fn the_first_autopilot_is_kept_until_it_falls_silent() {
+    let mut b = fresh();
+    let hb_at = |b: &mut Bridge<Link>, from: (u8, u8), ms: u32| {
+        b.receive(&frame(from, 0, &heartbeat()), t(ms));
+    };
+    hb_at(&mut b, AP, 0);
+    assert_eq!(system_id_after(&mut b, 0), AP.0);
+    // Another autopilot, a forged heartbeat, system 0, or a component-1 heartbeat that says
+    // it is no autopilot: the one followed is heard, so none moves the system id.
+    hb_at(&mut b, (42, 1), 1_500);
+    hb_at(&mut b, (0, 1), 1_600);
+    let invalid = Heartbeat {
+        autopilot: MavAutopilot::Invalid,
+        ..heartbeat()
+    };
+    b.receive(&frame((43, 1), 0, &invalid), t(1_700));
+    assert_eq!(system_id_after(&mut b, 1_800), AP.0);
+    assert_eq!(b.stats().other_autopilots, 3);
+    // The autopilot heard every second: system 42 keeps being ignored.
+    for s in 2..10 {
+        hb_at(&mut b, AP, s * 1_000);
+        hb_at(&mut b, (42, 1), s * 1_000 + 500);
+    }
+    assert_eq!(system_id_after(&mut b, 10_000), AP.0);
+    assert_eq!(b.stats().other_autopilots, 3 + 8);
+    // Silent for AUTOPILOT_SILENCE_MS (last heard at 9 s): then another autopilot is taken.
+    hb_at(&mut b, (42, 1), 9_000 + AUTOPILOT_SILENCE_MS - 1);
+    assert_eq!(system_id_after(&mut b, 14_000), AP.0);
+    hb_at(&mut b, (42, 1), 9_000 + AUTOPILOT_SILENCE_MS);
+    assert_eq!(system_id_after(&mut b, 15_000), 42);
+}
+
+#[test]
+fn a_configured_system_id_follows_only_its_own_autopilot() {
+    let mut b = Bridge::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            system_id: Some(9),
+            ..BridgeConfig::default()
+        },
+    );
+    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    assert_eq!(system_id_after(&mut b, 0), 9);
+    assert_eq!(b.stats().other_autopilots, 1);
+    // System 9's autopilot is followed: its streams asked of it.
+    b.receive(&frame((9, 1), 0, &heartbeat()), t(2_000));
+    let asks = (2_000..3_000)
+        .flat_map(|ms| {
+            b.poll(t(ms));
+            of::<CommandLong>(&sent(&mut b))
+        })
+        .filter(|c| c.command == MavCmd::SetMessageInterval)
+        .map(|c| c.target_system)
+        .collect::<Vec<_>>();
+    assert!(!asks.is_empty() && asks.iter().all(|&s| s == 9), "{asks:?}");
 }
 
 #[test]

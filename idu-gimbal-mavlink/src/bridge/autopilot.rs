@@ -10,7 +10,7 @@ use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt,
 };
 
-use super::{bump, push_counted, State, AUTOPILOT_COMPONENT};
+use super::{bump, push_counted, State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
 use crate::attitude;
 use crate::gimbal::GimbalControl;
 
@@ -129,6 +129,19 @@ impl State {
         if component != AUTOPILOT_COMPONENT {
             return;
         }
+        // Who may be the autopilot (see `BridgeConfig::system_id`).
+        let live = self
+            .autopilot_heard
+            .is_some_and(|t| now.millis_since(t) < AUTOPILOT_SILENCE_MS);
+        if system == 0
+            || autopilot == MavAutopilot::Invalid as u8
+            || self.config.system_id.is_some_and(|id| id != system)
+            || (live && self.autopilot != Some((system, component)))
+        {
+            bump(&mut self.stats.other_autopilots);
+            return;
+        }
+        self.autopilot_heard = Some(now);
         if self.autopilot != Some((system, component)) {
             // A new autopilot: ask it for the streams at once.
             self.position_stream.asked = None;

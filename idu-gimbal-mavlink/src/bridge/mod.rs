@@ -35,11 +35,21 @@ pub const GIMBAL_COMPONENT: u8 = 154;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
 
+/// How long the autopilot followed must be silent (no heartbeat, ms) before another
+/// autopilot's heartbeat is taken instead: 5 missed heartbeats at MAVLink's 1 Hz, longer
+/// than QGroundControl's 3.5 s link loss, shorter than a flight controller's restart.
+pub const AUTOPILOT_SILENCE_MS: u32 = 5_000;
+
 /// How the bridge presents itself and paces what it sends.
 #[derive(Clone, PartialEq, Debug)]
 pub struct BridgeConfig {
-    /// System id; `None`: the autopilot's, from its HEARTBEAT (component 1), and 1 until one
-    /// arrives.
+    /// System id; `None`: the autopilot's, from its HEARTBEAT (component 1, an autopilot
+    /// type other than `MAV_AUTOPILOT_INVALID`, a system other than 0), and 1 until one
+    /// arrives. The first autopilot heard is kept while it is heard: another one's
+    /// heartbeats (a second autopilot, a multi-vehicle network, a forged heartbeat) are
+    /// ignored and counted (`BridgeStats::other_autopilots`) until the one followed has
+    /// been silent [`AUTOPILOT_SILENCE_MS`]. `Some(id)` pins it: only system `id`'s
+    /// autopilot is followed.
     pub system_id: Option<u8>,
     /// The gimbal device's component id (default [`GIMBAL_COMPONENT`], 154).
     pub gimbal_component: u8,
@@ -90,6 +100,10 @@ pub struct BridgeStats {
     pub outbox_full: u32,
     /// Vehicle attitude and position updates passed to the core.
     pub vehicle_updates: u32,
+    /// Component-1 heartbeats not taken as the autopilot's: another autopilot's while the
+    /// one followed is heard ([`AUTOPILOT_SILENCE_MS`]), another system's than the
+    /// configured [`BridgeConfig::system_id`], system 0's, or `MAV_AUTOPILOT_INVALID`'s.
+    pub other_autopilots: u32,
 }
 
 /// A MAVLink Gimbal Device (gimbal protocol v2) in front of an IDU gimbal; see the crate
@@ -110,8 +124,10 @@ pub(crate) struct State {
     pub(crate) config: BridgeConfig,
     out: Outbox<OUTBOX_LEN>,
     system_id: u8,
-    /// The autopilot's (system, component), from its heartbeat.
+    /// The autopilot's (system, component), from its heartbeat, and when it was last heard
+    /// (see [`AUTOPILOT_SILENCE_MS`]).
     autopilot: Option<(u8, u8)>,
+    autopilot_heard: Option<Instant>,
     next_heartbeat: Option<Instant>,
     next_status: Option<Instant>,
     status_ms: u32,
@@ -253,6 +269,7 @@ impl<G: GimbalControl> Bridge<G> {
                 out: Outbox::new(),
                 system_id,
                 autopilot: None,
+                autopilot_heard: None,
                 next_heartbeat: None,
                 next_status: None,
                 status_ms,
