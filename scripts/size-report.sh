@@ -34,7 +34,7 @@ RAM_BEYOND_SLOTS_BUDGET=288
 # and whether the frame ends its text). src/link/queue.rs checks this size in a test.
 TX_SLOTS=136
 # The MAVLink bridge, everything beyond the plain CAN driver.
-BRIDGE_FLASH_BUDGET=44032
+BRIDGE_FLASH_BUDGET=45056
 BRIDGE_RAM_BUDGET=4096
 
 ensure_bench_toolchain

@@ -8,12 +8,12 @@ use idu_gimbal_mavlink::codec;
 use idu_gimbal_mavlink::framing::Outbox;
 use mavio::dialects::common::enums::{
     CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, EstimatorStatusFlags,
-    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavLandedState, MavModeFlag,
-    MavSeverity, MavState, MavType,
+    GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavLandedState, MavModeFlag,
+    MavResult, MavSeverity, MavState, MavType,
 };
 use mavio::dialects::common::messages::{
-    AutopilotStateForGimbalDevice, CameraTrackingImageStatus, GimbalDeviceAttitudeStatus,
-    GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat, Statustext,
+    AutopilotStateForGimbalDevice, CameraTrackingImageStatus, CommandAck,
+    GimbalDeviceAttitudeStatus, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat, Statustext,
 };
 use mavio::mavspec::rust::spec::{MavLinkVersion, MessageSpecStatic};
 use mavio::protocol::{Frame, V2};
@@ -176,6 +176,26 @@ proptest! {
             |p| codec::tracking_image_status::encode(&m, p),
         );
         prop_assert_eq!(ours, mavio_frame(2, 1, 100, &m));
+    }
+
+    #[test]
+    fn the_command_ack_frame_is_mavios(
+        command in prop::sample::select(vec![
+            MavCmd::RequestMessage, MavCmd::SetMessageInterval, MavCmd::DoSetRoiLocation,
+            MavCmd::ImageStartCapture, MavCmd::SetCameraZoom, MavCmd::CameraTrackPoint,
+        ]),
+        result in 0u8..7, to in any::<(u8, u8)>(),
+    ) {
+        let result = MavResult::try_from(result).unwrap();
+        let m = CommandAck {
+            command, result, progress: 0, result_param2: 0,
+            target_system: to.0, target_component: to.1,
+        };
+        let ours = codec_frame::<CommandAck>(
+            2, 1, 154, codec::command_ack::LEN,
+            |p| codec::command_ack::encode(command as u16, result, to, p),
+        );
+        prop_assert_eq!(ours, mavio_frame(2, 1, 154, &m));
     }
 
     #[test]

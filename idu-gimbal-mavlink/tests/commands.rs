@@ -10,7 +10,7 @@ use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{MavCmd, MavFrame, MavResult};
 use mavio::dialects::common::messages::{
-    CameraImageCaptured, CommandAck, CommandInt, GimbalDeviceInformation,
+    CameraImageCaptured, CommandAck, CommandInt, CommandLong, GimbalDeviceInformation,
 };
 use mavio::protocol::{Frame, V2};
 
@@ -293,4 +293,94 @@ fn without_the_roi_feature_a_region_of_interest_is_unsupported() {
         );
         assert!(b.gimbal().pointing_target().is_none());
     }
+}
+
+/// A MAVLink 2 frame of message `id` with `payload` as given, its checksum computed here
+/// (CRC-16/MCRF4XX bit by bit, then `crc_extra`): what a sender whose dialect `mavio` does
+/// not share puts on the wire.
+fn raw_frame(from: (u8, u8), id: u32, crc_extra: u8, payload: &[u8]) -> Vec<u8> {
+    let mut f = vec![0xFD, payload.len() as u8, 0, 0, 0, from.0, from.1];
+    f.extend_from_slice(&id.to_le_bytes()[..3]);
+    f.extend_from_slice(payload);
+    let mut crc: u16 = 0xFFFF;
+    for &b in f[1..].iter().chain([crc_extra].iter()) {
+        crc ^= u16::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0x8408
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    f.extend_from_slice(&crc.to_le_bytes());
+    f
+}
+
+/// The ACKs (from component, raw command id, result byte) among the bridge's frames.
+fn raw_acks(b: &mut Bridge<Link>) -> Vec<(u8, u16, u8)> {
+    sent(b)
+        .iter()
+        .filter(|f| f.message_id() == 77)
+        .map(|f| {
+            let p = f.payload().bytes();
+            (f.component_id(), u16::from_le_bytes([p[0], p[1]]), p[2])
+        })
+        .collect()
+}
+
+#[test]
+fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
+    let mut b = bridge();
+    let unsupported = MavResult::Unsupported as u8;
+    // Ids outside mavio's common.xml, and ones a newer common.xml has.
+    for command in [
+        1u16, 2, 35, 36, 12_345, 29_999, 40_000, 43_000, 43_002, 65_535,
+    ] {
+        for component in [154u8, 100] {
+            // COMMAND_LONG: params 0..28, command 28, target 30 and 31, confirmation 32.
+            let mut long = vec![0u8; 33];
+            long[28..30].copy_from_slice(&command.to_le_bytes());
+            (long[30], long[31]) = (AP.0, component);
+            b.receive(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
+            assert_eq!(
+                raw_acks(&mut b),
+                [(component, command, unsupported)],
+                "LONG {command}"
+            );
+            // COMMAND_INT: the same offsets, then frame 32, current 33, autocontinue 34.
+            let mut int = vec![0u8; 35];
+            int[28..30].copy_from_slice(&command.to_le_bytes());
+            (int[30], int[31], int[32]) = (AP.0, component, 6);
+            b.receive(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
+            assert_eq!(
+                raw_acks(&mut b),
+                [(component, command, unsupported)],
+                "INT {command}"
+            );
+        }
+        // Broadcast, or another system's: not ours to answer.
+        for target in [(AP.0, 0u8), (AP.0 + 1, 154)] {
+            let mut long = vec![0u8; 33];
+            long[28..30].copy_from_slice(&command.to_le_bytes());
+            (long[30], long[31]) = target;
+            b.receive(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
+            assert!(raw_acks(&mut b).is_empty(), "{command} to {target:?}");
+        }
+    }
+    // A known command in a frame outside MAV_FRAME (200): its ACK carries its id.
+    let mut int = vec![0u8; 35];
+    int[28..30].copy_from_slice(&(MavCmd::DoSetRoiLocation as u16).to_le_bytes());
+    (int[30], int[31], int[32]) = (AP.0, 154, 200);
+    b.receive(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
+    assert_eq!(
+        raw_acks(&mut b),
+        [(154, MavCmd::DoSetRoiLocation as u16, unsupported)]
+    );
+    // A checksum that does not hold: nothing (it is no command at all).
+    let mut bad = raw_frame(GCS, 76, CommandLong::crc_extra(), &[0u8; 33]);
+    let n = bad.len();
+    bad[n - 1] ^= 1;
+    b.receive(&bad, t(10));
+    assert!(raw_acks(&mut b).is_empty());
 }

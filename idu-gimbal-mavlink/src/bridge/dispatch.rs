@@ -16,7 +16,7 @@ use mavio::dialects::common::messages::{
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use super::{ack_of, bump, id_of, State, AUTOPILOT_COMPONENT};
+use super::{bump, id_of, State, AUTOPILOT_COMPONENT};
 use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
@@ -80,12 +80,12 @@ impl State {
             self.heartbeat(from.0, from.1, autopilot, now);
         } else if id == id_of::<CommandLong>() {
             let Some(cmd) = decode::<CommandLong>(frame) else {
-                return Check::Bad;
+                return self.undecodable_command(frame, CommandLong::crc_extra(), from);
             };
             self.command(gimbal, from, &Command::from(&cmd), now);
         } else if id == id_of::<CommandInt>() {
             let Some(cmd) = decode::<CommandInt>(frame) else {
-                return Check::Bad;
+                return self.undecodable_command(frame, CommandInt::crc_extra(), from);
             };
             self.command(gimbal, from, &Command::from(&cmd), now);
         } else if id == id_of::<GlobalPositionInt>() {
@@ -165,9 +165,31 @@ impl State {
         Check::Handled
     }
 
-    pub(super) fn ack(&mut self, me: u8, to: (u8, u8), command: MavCmd, result: MavResult) {
-        bump(&mut self.stats.acks);
-        self.send(me, &ack_of(command, result, to));
+    /// A `COMMAND_LONG` or `COMMAND_INT` whose checksum holds but that `mavio` cannot
+    /// decode: a command id or (`COMMAND_INT`) a frame its dialect does not know. Addressed
+    /// to the gimbal or the camera, it is answered `UNSUPPORTED`, as PX4 answers, so that
+    /// the sender does not wait out its timeouts; broadcast, it may be another's.
+    #[inline(never)]
+    fn undecodable_command(
+        &mut self,
+        frame: &ReceivedFrame<'_>,
+        crc_extra: u8,
+        from: (u8, u8),
+    ) -> Check {
+        if !frame.checksum_holds(crc_extra) {
+            return Check::Bad;
+        }
+        // Both messages: `command` at 28 (u16), `target_system` at 30, `target_component`
+        // at 31 (MAVLink's wire order); MAVLink 2's dropped trailing zeros read as 0.
+        let byte = |at: usize| frame.payload().get(at).copied().unwrap_or(0);
+        let command = u16::from_le_bytes([byte(28), byte(29)]);
+        let (system, component) = (byte(30), byte(31));
+        if component == 0 || !self.for_us(system, component) {
+            bump(&mut self.stats.not_for_us);
+        } else {
+            self.ack(component, from, command, MavResult::Unsupported);
+        }
+        Check::Handled
     }
 
     pub(super) fn command<G: GimbalControl>(
@@ -198,12 +220,12 @@ impl State {
             c => (c, camera_owns),
         };
         if !owner {
-            self.ack(me, from, cmd.command, MavResult::Unsupported);
+            self.ack(me, from, cmd.command as u16, MavResult::Unsupported);
             return;
         }
         if me == gimbal_id {
             let result = self.gimbal_command(gimbal, cmd, now);
-            self.ack(me, from, cmd.command, result);
+            self.ack(me, from, cmd.command as u16, result);
             // The information follows the ACK.
             if result == MavResult::Accepted && cmd.command == MavCmd::RequestMessage {
                 if cmd.requests(id_of::<GimbalDeviceInformation>()) {
@@ -217,7 +239,7 @@ impl State {
             let acked = self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
                 let (result, reply) = camera.command(config, gimbal, cmd, now, vantage);
                 // The ACK first, then what the command produced.
-                tx.send(me, &ack_of(cmd.command, result, from));
+                tx.ack(me, cmd.command as u16, result, from);
                 camera.reply(config, gimbal, reply, now, tx);
             });
             if acked.is_some() {

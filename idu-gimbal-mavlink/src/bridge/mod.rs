@@ -10,7 +10,7 @@
 use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand};
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
-use mavio::dialects::common::enums::{MavCmd, MavResult};
+use mavio::dialects::common::enums::MavResult;
 use mavio::dialects::common::messages::CommandAck;
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::Message;
@@ -205,19 +205,43 @@ fn push_encoded<M: MessageSpecStatic>(
     }
 }
 
-/// The `COMMAND_ACK` of `command` with `result`, to its sender `to`.
-fn ack_of(command: MavCmd, result: MavResult, to: (u8, u8)) -> CommandAck {
-    CommandAck {
-        command,
-        result,
-        progress: 0,
-        result_param2: 0,
-        target_system: to.0,
-        target_component: to.1,
-    }
+/// Queues `me`'s `COMMAND_ACK` of `command` with `result` to `to`: the one way ACKs go out.
+/// Out of line: three callers, one copy of the codec.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn push_ack(
+    out: &mut Outbox<OUTBOX_LEN>,
+    system_id: u8,
+    full: &mut u32,
+    me: u8,
+    command: u16,
+    result: MavResult,
+    to: (u8, u8),
+) {
+    push_encoded::<CommandAck>(
+        out,
+        system_id,
+        full,
+        me,
+        crate::codec::command_ack::LEN,
+        |p| crate::codec::command_ack::encode(command, result, to, p),
+    );
 }
 
 impl Tx<'_> {
+    /// Queues `me`'s ACK of `command` to `to`.
+    pub(crate) fn ack(&mut self, me: u8, command: u16, result: MavResult, to: (u8, u8)) {
+        push_ack(
+            self.out,
+            self.system_id,
+            self.outbox_full,
+            me,
+            command,
+            result,
+            to,
+        );
+    }
+
     /// Queues `message` from `component`; a full outbox is counted.
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
         push_counted(
@@ -409,6 +433,20 @@ impl State {
             component,
             len,
             encode,
+        );
+    }
+
+    /// Queues `me`'s ACK of `command` to `to`, counted.
+    pub(super) fn ack(&mut self, me: u8, to: (u8, u8), command: u16, result: MavResult) {
+        bump(&mut self.stats.acks);
+        push_ack(
+            &mut self.out,
+            self.system_id,
+            &mut self.stats.outbox_full,
+            me,
+            command,
+            result,
+            to,
         );
     }
 

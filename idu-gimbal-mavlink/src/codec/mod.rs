@@ -1,7 +1,8 @@
 //! Payload codecs written out for the messages on the bridge's hot paths: the ones received
 //! many times a second (`GIMBAL_DEVICE_SET_ATTITUDE`, `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE`,
 //! `GLOBAL_POSITION_INT`) and the ones sent on a period (`GIMBAL_DEVICE_ATTITUDE_STATUS`,
-//! `HEARTBEAT`, `CAMERA_TRACKING_IMAGE_STATUS`), and `STATUSTEXT` (written in a few stores
+//! `HEARTBEAT`, `CAMERA_TRACKING_IMAGE_STATUS`), `COMMAND_ACK` (for any command id, known to
+//! `mavio` or not), and `STATUSTEXT` (written in a few stores
 //! where `mavio`'s generic encoder took 272 bytes of flash).
 //!
 //! Why not `mavio`'s generated code for these: it builds a `Payload` (a zeroed 255-byte
@@ -25,6 +26,7 @@
 
 pub mod attitude_status;
 pub mod autopilot_state;
+pub mod command_ack;
 pub mod global_position;
 pub mod heartbeat;
 pub mod set_attitude;
