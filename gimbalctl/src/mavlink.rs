@@ -12,10 +12,12 @@
 //! datagram, which may come from another sender. A source address becomes a peer when one
 //! of its datagrams held a frame the bridge handles with a good CRC (garbage never takes a
 //! slot); any datagram keeps it; it is dropped after [`peers::PEER_TIMEOUT`] (10 s, ten
-//! missed heartbeats) of silence. At most [`peers::PEER_CAPACITY`] (16) peers are kept: a new
-//! one replaces the peer heard least recently, so no client is ever locked out. What the
-//! bridge sends goes, one frame a datagram, to every peer and to each `--to` address (those
-//! are permanent and outside the table). Joins, departures and replacements go to stderr.
+//! missed heartbeats) of silence. At most [`peers::PEER_CAPACITY`] (64) peers are kept, and
+//! a live one is never evicted: when all slots hold live peers a new address is refused
+//! (said once per address, and counted). What the bridge sends goes, one frame a datagram,
+//! to every peer and to each `--to` address (those are permanent and outside the table).
+//! Joins, departures and refusals go to stderr, at most [`PEER_LINES`] lines a second; the
+//! lines held back are summed up after.
 //!
 //! On a serial port (`--autopilot-serial PATH[:BAUD]`, 921600 baud by default as the firmware
 //! runs its TELEM port) the autopilot's bytes go to [`Bridge::receive`] as a stream, in any
@@ -365,7 +367,10 @@ fn serve<S: Pump>(
     exit_after_ms: Option<u64>,
 ) -> Result<(), Failure> {
     let start = StdInstant::now();
-    let mut peers = Peers::new(PEER_CAPACITY, PEER_TIMEOUT);
+    let mut clients = Clients {
+        peers: Peers::new(PEER_CAPACITY, PEER_TIMEOUT),
+        log: PeerLog::new(start),
+    };
     // Allocated once; see DATAGRAM_BUFFER.
     let mut buf = vec![0u8; DATAGRAM_BUFFER];
     let mut was_up = false;
@@ -385,7 +390,7 @@ fn serve<S: Pump>(
         let clock = StdInstant::now();
         let drained = match &mut port {
             Port::Udp { socket, to } => {
-                receive_udp(&mut bridge, socket, to, &mut peers, &mut buf, t, clock)?
+                receive_udp(&mut bridge, socket, to, &mut clients, &mut buf, t, clock)?
             }
             Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, t)?,
         };
@@ -423,7 +428,7 @@ fn serve<S: Pump>(
                 }
                 bridge.transmit_written(bytes.len());
                 splitter.feed(&bytes, |frame| {
-                    for peer in peers.addrs().chain(to.iter()) {
+                    for peer in clients.peers.addrs().chain(to.iter()) {
                         // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
                         let _ = socket.send_to(frame.bytes(), peer);
                     }
@@ -451,22 +456,97 @@ fn serve<S: Pump>(
     }
 }
 
+/// Lines about peers written to stderr a second at most: churn (sockets joining, leaving,
+/// refused) once wrote a thousand lines in five seconds.
+pub const PEER_LINES: u32 = 10;
+
+/// Addresses remembered as refused, so that each is said once (forgotten all at once when
+/// there are more: said again, never unbounded).
+const REFUSED_REMEMBERED: usize = 1024;
+
+/// The UDP peers and what is said of them.
+struct Clients {
+    peers: Peers,
+    log: PeerLog,
+}
+
+/// What a peer line says.
+#[derive(Clone, Copy)]
+enum PeerEvent {
+    Joined,
+    Left,
+    Refused,
+}
+
+/// The peer table's lines on stderr, at most [`PEER_LINES`] a second.
+struct PeerLog {
+    window: StdInstant,
+    said: u32,
+    /// Lines held back this second: joined, left, refused.
+    held: [u32; 3],
+    refused: std::collections::HashSet<SocketAddr>,
+}
+
+impl PeerLog {
+    fn new(now: StdInstant) -> Self {
+        PeerLog {
+            window: now,
+            said: 0,
+            held: [0; 3],
+            refused: std::collections::HashSet::new(),
+        }
+    }
+
+    /// Starts a new second when the last is over, summing up what it held back.
+    fn tick(&mut self, now: StdInstant) {
+        if now.saturating_duration_since(self.window) >= Duration::from_secs(1) {
+            let [joined, left, refused] = self.held;
+            if joined + left + refused > 0 {
+                eprintln!(
+                    "gimbalctl mavlink: peer lines held back (at most {PEER_LINES} a second): \
+                     {joined} joined, {left} left, {refused} refused"
+                );
+            }
+            (self.window, self.said, self.held) = (now, 0, [0; 3]);
+        }
+    }
+
+    fn say(&mut self, now: StdInstant, event: PeerEvent, line: impl FnOnce() -> String) {
+        self.tick(now);
+        if self.said < PEER_LINES {
+            eprintln!("gimbalctl mavlink: {}", line());
+            self.said += 1;
+        } else if let Some(n) = self.held.get_mut(event as usize) {
+            *n += 1;
+        }
+    }
+
+    /// Whether `addr` is refused for the first time (to be said).
+    fn first_refusal(&mut self, addr: SocketAddr) -> bool {
+        if self.refused.len() >= REFUSED_REMEMBERED {
+            self.refused.clear();
+        }
+        self.refused.insert(addr)
+    }
+}
+
 /// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
 /// the peer table; whether the socket was emptied.
 fn receive_udp<G: GimbalControl>(
     bridge: &mut Bridge<G>,
     socket: &UdpSocket,
     to: &[SocketAddr],
-    peers: &mut Peers,
+    clients: &mut Clients,
     buf: &mut [u8],
     t: Instant,
     clock: StdInstant,
 ) -> Result<bool, Failure> {
+    let Clients { peers, log } = clients;
+    log.tick(clock);
     peers.expire(clock, |gone| {
-        eprintln!(
-            "gimbalctl mavlink: peer {gone} left (silent {} s)",
-            PEER_TIMEOUT.as_secs()
-        );
+        log.say(clock, PeerEvent::Left, || {
+            format!("peer {gone} left (silent {} s)", PEER_TIMEOUT.as_secs())
+        });
     });
     for _ in 0..DATAGRAMS_PER_TICK {
         match socket.recv_from(buf) {
@@ -475,18 +555,24 @@ fn receive_udp<G: GimbalControl>(
                 if to.contains(&from) {
                     continue;
                 }
+                let (len, capacity) = (peers.len(), peers.capacity());
                 match peers.heard(from, good, clock) {
-                    Some(Change::Joined(new)) => eprintln!(
-                        "gimbalctl mavlink: peer {new} joined ({} of {})",
-                        peers.len(),
-                        peers.capacity()
-                    ),
-                    Some(Change::Replaced { old, new }) => eprintln!(
-                        "gimbalctl mavlink: peer {new} joined, replacing {old} \
-                         (all {} slots taken; {old} heard least recently)",
-                        peers.capacity()
-                    ),
-                    None => {}
+                    Some(Change::Joined(new)) => log.say(clock, PeerEvent::Joined, || {
+                        format!("peer {new} joined ({} of {capacity})", len + 1)
+                    }),
+                    Some(Change::Replaced { old, new }) => log.say(clock, PeerEvent::Joined, || {
+                        format!(
+                            "peer {new} joined, replacing {old} (silent {} s)",
+                            PEER_TIMEOUT.as_secs()
+                        )
+                    }),
+                    Some(Change::Refused(new)) if log.first_refusal(new) => log.say(clock, PeerEvent::Refused, || {
+                        format!(
+                            "warning: peer {new} refused: all {capacity} slots hold live peers (a peer is dropped after {} s of silence)",
+                            PEER_TIMEOUT.as_secs()
+                        )
+                    }),
+                    Some(Change::Refused(_)) | None => {}
                 }
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),

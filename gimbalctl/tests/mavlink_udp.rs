@@ -190,9 +190,9 @@ impl Answers {
     }
 }
 
-/// The table holds 16 peers and keeps a silent one 10 s: 20 clients in a row, each from a
-/// new port and gone after its answer, fill it and go beyond. Each must still be answered
-/// (the old fixed list of 8 ignored the ninth on).
+/// The table holds 64 peers and keeps a silent one 10 s: 20 clients in a row, each from a
+/// new port and gone after its answer, each answered (the old fixed list of 8 ignored the
+/// ninth on).
 #[test]
 fn twenty_clients_in_a_row_from_new_ports_are_all_answered() {
     let bridge = Bridge::start();
@@ -216,13 +216,96 @@ fn twenty_clients_in_a_row_from_new_ports_are_all_answered() {
     let stderr = bridge.stop();
     assert_eq!(waits.len(), 20, "{waits:?}");
     // The kernel may hand a closed port out again; only with 20 distinct ports are the
-    // joins exactly countable: 16 into free slots, 4 replacing the least recently heard.
+    // joins exactly countable: 20 into free slots, none refused, none left (all within the
+    // 10 s a silent peer is kept).
     if ports.iter().collect::<HashSet<_>>().len() == ports.len() {
         assert_eq!(stderr.matches(" joined").count(), 20, "{stderr}");
-        assert_eq!(stderr.matches("replacing").count(), 4, "{stderr}");
-        // All within the 10 s a silent peer is kept.
+        assert_eq!(stderr.matches("refused").count(), 0, "{stderr}");
         assert_eq!(stderr.matches(" left").count(), 0, "{stderr}");
     }
+}
+
+/// A ground station beating at 1 Hz among 70 sockets beating at 2 Hz, more than the 64
+/// slots: it joined first and is live, so it is never evicted and hears the gimbal every
+/// second (it once heard nothing for 6 s, and QGroundControl drops a link after 3.5 s);
+/// the sockets beyond the table are refused, said once each, the lines at most 10 a second.
+#[test]
+fn a_live_ground_station_keeps_its_slot_in_a_crowd() {
+    let bridge = Bridge::start();
+    let gcs = socket();
+    gcs.send_to(&frame(GCS, 0, &gcs_heartbeat()), bridge.addr)
+        .expect("send");
+    assert!(hears_gimbal(&gcs, Instant::now() + TRAFFIC));
+    let crowd: Vec<UdpSocket> = (0..70)
+        .map(|_| {
+            let s = socket();
+            s.set_nonblocking(true).expect("non-blocking");
+            s
+        })
+        .collect();
+    let start = Instant::now();
+    let mut heard_at = Vec::new();
+    let mut next_gcs = start;
+    let mut next_crowd = start;
+    while start.elapsed() < Duration::from_secs(6) {
+        let now = Instant::now();
+        if now >= next_crowd {
+            for (i, s) in crowd.iter().enumerate() {
+                let from = (200, 10 + (i % 100) as u8);
+                let _ = s.send_to(&frame(from, 0, &gcs_heartbeat()), bridge.addr);
+                // Drain what the bridge sends them, so their buffers never fill.
+                let mut buf = [0u8; 300];
+                while s.recv_from(&mut buf).is_ok() {}
+            }
+            next_crowd += Duration::from_millis(500);
+        }
+        if now >= next_gcs {
+            gcs.send_to(&frame(GCS, 0, &gcs_heartbeat()), bridge.addr)
+                .expect("send");
+            next_gcs += Duration::from_secs(1);
+        }
+        if let Some(f) = recv_frame(&gcs, now + Duration::from_millis(20)) {
+            if f.component_id() == GIMBAL && f.message_id() == 0 {
+                heard_at.push(start.elapsed());
+            }
+        }
+    }
+    let stderr = bridge.stop();
+    // The gimbal's heartbeat is 1 Hz: at least 5 in 6 s, none more than 1.5 s apart.
+    assert!(heard_at.len() >= 5, "{heard_at:?}\n{stderr}");
+    let gaps = heard_at.windows(2).map(|w| w[1] - w[0]);
+    assert!(
+        gaps.clone().all(|g| g < Duration::from_millis(1_500)),
+        "{heard_at:?}"
+    );
+    // 63 of the crowd joined beside it; 7 were refused, once each. At most 10 peer lines a
+    // second: the rest summed up by kind.
+    let said = |what: &str| stderr.matches(what).count();
+    let held = |kind: &str| -> usize {
+        stderr
+            .lines()
+            .filter(|l| l.contains("peer lines held back (at most 10 a second)"))
+            .map(|l| {
+                let n = l.split(&format!(" {kind}")).next().unwrap();
+                n.rsplit(' ').next().unwrap().parse::<usize>().unwrap()
+            })
+            .sum()
+    };
+    assert_eq!(said(" joined (") + held("joined"), 64, "{stderr}");
+    assert_eq!(
+        said(" refused: all 64 slots hold live peers") + held("refused"),
+        7,
+        "{stderr}"
+    );
+    assert_eq!(said("replacing"), 0, "{stderr}");
+    let per_second = stderr
+        .lines()
+        .filter(|l| l.contains("gimbalctl mavlink: peer "))
+        .count();
+    assert!(
+        per_second <= 10 * 7,
+        "{per_second} peer lines in 6 s\n{stderr}"
+    );
 }
 
 /// A tiny deterministic generator (xorshift64*): the flood is the same on every run.

@@ -1,5 +1,6 @@
 //! The UDP peers `gimbalctl mavlink` answers: source addresses that sent MAVLink the bridge
-//! understood, dropped when they fall silent or when a newer peer needs the room.
+//! understood, dropped when they fall silent. A live peer is never dropped for a newcomer:
+//! when the table is full of live peers, the newcomer is refused.
 //!
 //! The table takes the time as a parameter (`now`) rather than reading the clock, so that
 //! expiry and eviction are tested without sleeping.
@@ -14,17 +15,22 @@ use std::time::{Duration, Instant};
 pub const PEER_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// Peers kept at once. Every frame the bridge sends goes to each, so the table is bounded;
-/// when it is full a new peer takes the slot of the one heard least recently.
-pub const PEER_CAPACITY: usize = 16;
+/// a host has room for many more than a link has ground stations and autopilots. When it is
+/// full of live peers a newcomer is refused: evicting a live ground station (16 sockets
+/// beating at 2 Hz once left a 1 Hz one without a heartbeat for 6 s) is worse than turning
+/// away the 65th address.
+pub const PEER_CAPACITY: usize = 64;
 
 /// What one datagram changed in the table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Change {
     /// `0` became a peer.
     Joined(SocketAddr),
-    /// `new` became a peer in the slot of `old`, the peer heard least recently, the table
-    /// being full.
+    /// `new` became a peer in the slot of `old`, silent for the timeout (a table whose
+    /// silent peers were not yet expired).
     Replaced { old: SocketAddr, new: SocketAddr },
+    /// `0` was not taken: every slot holds a live peer.
+    Refused(SocketAddr),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -56,8 +62,8 @@ impl Peers {
     /// A datagram from `from` arrived at `now` holding `good_frames` frames the bridge
     /// handled with a good CRC. A peer is kept by any datagram (it may send messages the
     /// bridge does not handle); a stranger joins only with at least one good frame, so
-    /// garbage never takes a slot. A stranger is never refused: when the table is full it
-    /// replaces the peer heard least recently.
+    /// garbage never takes a slot. When the table is full, the stranger takes the slot of
+    /// a peer silent for the timeout, or is refused: a live peer is never evicted.
     pub fn heard(&mut self, from: SocketAddr, good_frames: u32, now: Instant) -> Option<Change> {
         if let Some(peer) = self.slots.iter_mut().find(|p| p.addr == from) {
             peer.heard = peer.heard.max(now);
@@ -74,11 +80,16 @@ impl Peers {
             self.slots.push(new);
             return Some(Change::Joined(from));
         }
-        // Full (capacity >= 1, so there is a slot): the first of the least recently heard.
-        let oldest = self
+        // Full (capacity >= 1, so there is a slot): the least recently heard, if silent.
+        let timeout = self.timeout;
+        let Some(oldest) = self
             .slots
             .iter_mut()
-            .reduce(|a, b| if b.heard < a.heard { b } else { a })?;
+            .reduce(|a, b| if b.heard < a.heard { b } else { a })
+            .filter(|p| now.saturating_duration_since(p.heard) >= timeout)
+        else {
+            return Some(Change::Refused(from));
+        };
         let old = std::mem::replace(oldest, new).addr;
         Some(Change::Replaced { old, new: from })
     }
@@ -204,52 +215,55 @@ mod tests {
     }
 
     #[test]
-    fn a_full_table_evicts_the_least_recently_heard() {
+    fn a_full_table_of_live_peers_refuses_the_newcomer() {
         let t0 = Instant::now();
         let mut peers = Peers::new(3, PEER_TIMEOUT);
         peers.heard(addr(1), 1, t0);
         peers.heard(addr(2), 1, t0 + S);
         peers.heard(addr(3), 1, t0 + 2 * S);
-        // 1 joined first but is heard again: 2 is now the least recently heard.
-        peers.heard(addr(1), 1, t0 + 3 * S);
+        // All live: the newcomer is refused, whoever was heard least recently.
         assert_eq!(
-            peers.heard(addr(4), 1, t0 + 4 * S),
+            peers.heard(addr(4), 1, t0 + 3 * S),
+            Some(Change::Refused(addr(4)))
+        );
+        assert_eq!(sorted(&peers), [addr(1), addr(2), addr(3)]);
+        // Still refused while they keep talking, however often it asks.
+        for s in 4..30 {
+            let now = t0 + s * S;
+            for p in 1..=3 {
+                peers.heard(addr(p), 1, now);
+            }
+            expired(&mut peers, now);
+            assert_eq!(peers.heard(addr(4), 1, now), Some(Change::Refused(addr(4))));
+        }
+        // One falls silent: its slot goes to the newcomer, once expired or not yet.
+        let last = t0 + 29 * S;
+        peers.heard(addr(1), 1, last + PEER_TIMEOUT);
+        peers.heard(addr(3), 1, last + PEER_TIMEOUT);
+        assert_eq!(
+            peers.heard(addr(4), 1, last + PEER_TIMEOUT),
             Some(Change::Replaced {
                 old: addr(2),
                 new: addr(4)
             })
         );
         assert_eq!(sorted(&peers), [addr(1), addr(3), addr(4)]);
-        assert_eq!(peers.len(), peers.capacity());
-        // The next stranger replaces 3, then 1: a new peer is never refused.
-        assert_eq!(
-            peers.heard(addr(5), 1, t0 + 5 * S),
-            Some(Change::Replaced {
-                old: addr(3),
-                new: addr(5)
-            })
-        );
-        assert_eq!(
-            peers.heard(addr(6), 1, t0 + 5 * S),
-            Some(Change::Replaced {
-                old: addr(1),
-                new: addr(6)
-            })
-        );
-        assert_eq!(sorted(&peers), [addr(4), addr(5), addr(6)]);
     }
 
     #[test]
     fn many_reconnections_never_lock_a_client_out() {
-        // A ground station reconnecting from a new port every second, far more often than
-        // the table holds and faster than the timeout: each new port is answered.
+        // A ground station reconnecting from a new port every second, more often than the
+        // timeout: each new port is answered, its old ones expiring as it goes.
         let t0 = Instant::now();
         let mut peers = Peers::new(PEER_CAPACITY, PEER_TIMEOUT);
         for i in 0..200u16 {
             let now = t0 + u32::from(i) * S;
             expired(&mut peers, now);
             assert!(
-                peers.heard(addr(10_000 + i), 1, now).is_some(),
+                matches!(
+                    peers.heard(addr(10_000 + i), 1, now),
+                    Some(Change::Joined(_) | Change::Replaced { .. })
+                ),
                 "client {i}"
             );
             assert!(has(&peers, addr(10_000 + i)));
@@ -271,11 +285,13 @@ mod tests {
             expired(&mut peers, t0 + 10 * S + Duration::from_millis(50)),
             [addr(1)]
         );
-        // A capacity of 0 is taken as 1: a good stranger is still answered.
+        // A capacity of 0 is taken as 1: a good stranger is answered, the next refused
+        // while the first is live, and given its slot once it is not.
         let mut one = Peers::new(0, PEER_TIMEOUT);
         assert_eq!(one.heard(addr(1), 1, t0), Some(Change::Joined(addr(1))));
+        assert_eq!(one.heard(addr(2), 1, t0), Some(Change::Refused(addr(2))));
         assert_eq!(
-            one.heard(addr(2), 1, t0),
+            one.heard(addr(2), 1, t0 + PEER_TIMEOUT),
             Some(Change::Replaced {
                 old: addr(1),
                 new: addr(2)
