@@ -4,8 +4,11 @@
 //! `--serial`; see [`crate::transport`]).
 //!
 //! One thread, non-blocking sockets, a 1 ms tick on the host's monotonic clock. Each tick
-//! reads at most [`DATAGRAMS_PER_TICK`] datagrams, then moves the gimbal side, polls the
-//! bridge and sends, so a flood of datagrams cannot starve the bridge's own traffic.
+//! reads at most [`DATAGRAMS_PER_TICK`] datagrams, sending each one's answers before the
+//! next is read (so a burst of requests never piles up in the bridge's outbox), then moves
+//! the gimbal side, polls the bridge and sends, so a flood of datagrams cannot starve the
+//! bridge's own traffic. Requests in one datagram beyond what the outbox holds at once are
+//! answered `TEMPORARILY_REJECTED` ([`idu_gimbal_mavlink::ANSWER_ROOM`]).
 //!
 //! Each datagram is parsed on its own ([`Bridge::receive_datagram`]): MAVLink on UDP carries
 //! whole frames, so a frame cut at a datagram's end is dropped rather than joined to the next
@@ -61,9 +64,9 @@ use sim_watch::SimWatch;
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(1);
-/// Datagrams read at most per tick before the bridge is polled and its frames sent: a
-/// flood delays the bridge's own output (heartbeats, status, answers) by one such batch,
-/// never indefinitely.
+/// Datagrams read at most per tick before the bridge is polled (each one's answers sent
+/// before the next is read): a flood delays the bridge's own output (heartbeats, status) by
+/// one such batch, never indefinitely.
 pub const DATAGRAMS_PER_TICK: usize = 256;
 /// The receive buffer: the largest UDP payload (65,507 bytes over IPv4) fits, so no datagram
 /// is cut short, whatever number of frames it holds.
@@ -370,11 +373,11 @@ fn serve<S: Pump>(
     let mut clients = Clients {
         peers: Peers::new(PEER_CAPACITY, PEER_TIMEOUT),
         log: PeerLog::new(start),
+        splitter: FrameReader::new(),
     };
     // Allocated once; see DATAGRAM_BUFFER.
     let mut buf = vec![0u8; DATAGRAM_BUFFER];
     let mut was_up = false;
-    let mut splitter = FrameReader::new();
     let mut notes_at = start + NOTE_EVERY;
     // Said at most once a NOTE_EVERY, as the count grows.
     let mut other_autopilots = 0;
@@ -420,21 +423,7 @@ fn serve<S: Pump>(
             notes_at = clock + NOTE_EVERY;
         }
         match &mut port {
-            // One frame a datagram, as MAVLink on UDP goes.
-            Port::Udp { socket, to } => loop {
-                let bytes = bridge.transmit_bytes().to_vec();
-                if bytes.is_empty() {
-                    break;
-                }
-                bridge.transmit_written(bytes.len());
-                splitter.feed(&bytes, |frame| {
-                    for peer in clients.peers.addrs().chain(to.iter()) {
-                        // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
-                        let _ = socket.send_to(frame.bytes(), peer);
-                    }
-                    Check::Unhandled
-                });
-            },
+            Port::Udp { socket, to } => send_udp(&mut bridge, socket, to, &mut clients),
             // A byte stream: what the port takes now; the rest waits in the bridge.
             Port::Serial(serial) => loop {
                 let bytes = bridge.transmit_bytes();
@@ -464,10 +453,39 @@ pub const PEER_LINES: u32 = 10;
 /// there are more: said again, never unbounded).
 const REFUSED_REMEMBERED: usize = 1024;
 
-/// The UDP peers and what is said of them.
+/// The UDP peers, what is said of them, and the frames going to them.
 struct Clients {
     peers: Peers,
     log: PeerLog,
+    /// Splits the bridge's bytes into frames, one a datagram.
+    splitter: FrameReader,
+}
+
+/// Sends what the bridge has queued, one frame a datagram (as MAVLink on UDP goes), to
+/// every peer and `--to` address.
+fn send_udp<G: GimbalControl>(
+    bridge: &mut Bridge<G>,
+    socket: &UdpSocket,
+    to: &[SocketAddr],
+    clients: &mut Clients,
+) {
+    let Clients {
+        peers, splitter, ..
+    } = clients;
+    loop {
+        let bytes = bridge.transmit_bytes().to_vec();
+        if bytes.is_empty() {
+            break;
+        }
+        bridge.transmit_written(bytes.len());
+        splitter.feed(&bytes, |frame| {
+            for peer in peers.addrs().chain(to.iter()) {
+                // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
+                let _ = socket.send_to(frame.bytes(), peer);
+            }
+            Check::Unhandled
+        });
+    }
 }
 
 /// What a peer line says.
@@ -530,6 +548,31 @@ impl PeerLog {
     }
 }
 
+/// A datagram from `from` with `good` frames the bridge handled: the peer table kept, and
+/// what changed said.
+fn heard(clients: &mut Clients, from: SocketAddr, good: u32, clock: StdInstant) {
+    let Clients { peers, log, .. } = clients;
+    let (len, capacity) = (peers.len(), peers.capacity());
+    let silent = PEER_TIMEOUT.as_secs();
+    match peers.heard(from, good, clock) {
+        Some(Change::Joined(new)) => log.say(clock, PeerEvent::Joined, || {
+            format!("peer {new} joined ({} of {capacity})", len + 1)
+        }),
+        Some(Change::Replaced { old, new }) => log.say(clock, PeerEvent::Joined, || {
+            format!("peer {new} joined, replacing {old} (silent {silent} s)")
+        }),
+        Some(Change::Refused(new)) if log.first_refusal(new) => {
+            log.say(clock, PeerEvent::Refused, || {
+                format!(
+                    "warning: peer {new} refused: all {capacity} slots hold live peers \
+                     (a peer is dropped after {silent} s of silence)"
+                )
+            })
+        }
+        Some(Change::Refused(_)) | None => {}
+    }
+}
+
 /// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
 /// the peer table; whether the socket was emptied.
 fn receive_udp<G: GimbalControl>(
@@ -541,7 +584,7 @@ fn receive_udp<G: GimbalControl>(
     t: Instant,
     clock: StdInstant,
 ) -> Result<bool, Failure> {
-    let Clients { peers, log } = clients;
+    let Clients { peers, log, .. } = clients;
     log.tick(clock);
     peers.expire(clock, |gone| {
         log.say(clock, PeerEvent::Left, || {
@@ -552,28 +595,12 @@ fn receive_udp<G: GimbalControl>(
         match socket.recv_from(buf) {
             Ok((n, from)) => {
                 let good = bridge.receive_datagram(&buf[..n], t);
-                if to.contains(&from) {
-                    continue;
+                if !to.contains(&from) {
+                    heard(clients, from, good, clock);
                 }
-                let (len, capacity) = (peers.len(), peers.capacity());
-                match peers.heard(from, good, clock) {
-                    Some(Change::Joined(new)) => log.say(clock, PeerEvent::Joined, || {
-                        format!("peer {new} joined ({} of {capacity})", len + 1)
-                    }),
-                    Some(Change::Replaced { old, new }) => log.say(clock, PeerEvent::Joined, || {
-                        format!(
-                            "peer {new} joined, replacing {old} (silent {} s)",
-                            PEER_TIMEOUT.as_secs()
-                        )
-                    }),
-                    Some(Change::Refused(new)) if log.first_refusal(new) => log.say(clock, PeerEvent::Refused, || {
-                        format!(
-                            "warning: peer {new} refused: all {capacity} slots hold live peers (a peer is dropped after {} s of silence)",
-                            PEER_TIMEOUT.as_secs()
-                        )
-                    }),
-                    Some(Change::Refused(_)) | None => {}
-                }
+                // Its answers at once: a burst of datagrams never piles up in the outbox
+                // behind it, and each request's answer finds room.
+                send_udp(bridge, socket, to, clients);
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
             // A peer that went away (ICMP port unreachable) must not stop the bridge.

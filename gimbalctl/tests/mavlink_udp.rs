@@ -522,3 +522,51 @@ fn each_datagram_is_parsed_on_its_own() {
     let stderr = bridge.stop();
     assert_eq!(stderr.matches(" joined").count(), 2, "{stderr}");
 }
+
+/// Requests back to back, as a ground station starting up sends them: every one answered,
+/// and every ACCEPTED followed by its message. (Each tick once read up to 256 datagrams
+/// into the 1,024-byte outbox before sending: 16 requests got 11 ACKs and 9 messages.)
+#[test]
+fn a_burst_of_requests_is_answered_in_full() {
+    let bridge = Bridge::start();
+    let client = socket();
+    // The bridge's system id: the autopilot's, 1 until one is heard.
+    let burst: Vec<Vec<u8>> = (0..16)
+        .map(|seq| frame(GCS, seq, &request_information(1)))
+        .collect();
+    for d in &burst {
+        client.send_to(d, bridge.addr).expect("send");
+    }
+    // Six in one datagram: as many messages as ACCEPTEDs, the rest TEMPORARILY_REJECTED.
+    let six: Vec<u8> = (16..22)
+        .flat_map(|seq| frame(GCS, seq, &request_information(1)))
+        .collect();
+    client.send_to(&six, bridge.addr).expect("send");
+    let (mut accepted, mut rejected, mut information) = (0, 0, 0);
+    let deadline = Instant::now() + ANSWERS;
+    while let Some(f) = recv_frame(&client, deadline) {
+        if f.component_id() != GIMBAL {
+            continue;
+        }
+        match f.decode::<Common>() {
+            Ok(Common::CommandAck(a)) if a.result == MavResult::Accepted => accepted += 1,
+            Ok(Common::CommandAck(a)) if a.result == MavResult::TemporarilyRejected => {
+                rejected += 1
+            }
+            Ok(Common::GimbalDeviceInformation(_)) => information += 1,
+            _ => {}
+        }
+    }
+    let stderr = bridge.stop();
+    assert_eq!(accepted + rejected, 22, "every request one ACK\n{stderr}");
+    assert_eq!(
+        information, accepted,
+        "every ACCEPTED its message\n{stderr}"
+    );
+    // The sixteen came one a datagram, each answered before the next was read; of the six
+    // in one, at least the first.
+    assert!(
+        accepted > 16,
+        "{accepted} accepted, {rejected} rejected\n{stderr}"
+    );
+}

@@ -94,6 +94,6 @@ pub mod gimbal;
 mod setpoint;
 pub mod status;
 
-pub use bridge::{Bridge, BridgeConfig, BridgeStats, AUTOPILOT_SILENCE_MS};
+pub use bridge::{Bridge, BridgeConfig, BridgeStats, ANSWER_ROOM, AUTOPILOT_SILENCE_MS};
 pub use gimbal::GimbalControl;
 pub use mavio;

@@ -16,7 +16,7 @@ use mavio::dialects::common::messages::{
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use super::{bump, id_of, State, AUTOPILOT_COMPONENT};
+use super::{bump, id_of, State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
 use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
@@ -221,6 +221,14 @@ impl State {
         };
         if !owner {
             self.ack(me, from, cmd.command as u16, MavResult::Unsupported);
+            return;
+        }
+        // An ACK that says ACCEPTED promises what follows it (the message asked for, the
+        // settings, an image's report): with no room for the most that follows, the command
+        // is refused before it is acted on, never promised and then dropped.
+        if self.room() < ANSWER_ROOM {
+            bump(&mut self.stats.rejected_no_room);
+            self.ack(me, from, cmd.command as u16, MavResult::TemporarilyRejected);
             return;
         }
         if me == gimbal_id {

@@ -17,7 +17,7 @@ use mavio::Message;
 
 use crate::camera::{Camera, CameraConfig};
 use crate::capture::Vantage;
-use crate::framing::{Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
+use crate::framing::{self, Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
 use crate::status::Pose;
 
@@ -34,6 +34,13 @@ pub const AUTOPILOT_COMPONENT: u8 = 1;
 pub const GIMBAL_COMPONENT: u8 = 154;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
+
+/// Outbox room a command needs to be acted on: its ACK and the most that follows one (two
+/// messages: an image's report and the capture status), 582 bytes of the 1,024.
+pub const ANSWER_ROOM: usize = framing::HEADER_LEN
+    + crate::codec::command_ack::LEN
+    + framing::CHECKSUM_LEN
+    + 2 * framing::MAX_FRAME_LEN;
 
 /// How long the autopilot followed must be silent (no heartbeat, ms) before another
 /// autopilot's heartbeat is taken instead: 5 missed heartbeats at MAVLink's 1 Hz, longer
@@ -104,6 +111,10 @@ pub struct BridgeStats {
     /// one followed is heard ([`AUTOPILOT_SILENCE_MS`]), another system's than the
     /// configured [`BridgeConfig::system_id`], system 0's, or `MAV_AUTOPILOT_INVALID`'s.
     pub other_autopilots: u32,
+    /// Commands answered `TEMPORARILY_REJECTED` because the outbox had no room for their
+    /// ACK and what it would promise ([`ANSWER_ROOM`]): a burst of requests faster than
+    /// the link drains.
+    pub rejected_no_room: u32,
 }
 
 /// A MAVLink Gimbal Device (gimbal protocol v2) in front of an IDU gimbal; see the crate
@@ -434,6 +445,11 @@ impl State {
             len,
             encode,
         );
+    }
+
+    /// Bytes the outbox has room for.
+    fn room(&self) -> usize {
+        OUTBOX_LEN - self.out.len()
     }
 
     /// Queues `me`'s ACK of `command` to `to`, counted.
