@@ -535,3 +535,55 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
         .iter()
         .all(|r| (r.target_system, r.target_component) == GCS));
 }
+
+#[test]
+fn a_set_of_a_type_the_dialect_does_not_know_is_answered() {
+    // PARAM_EXT_SET: target 0 and 1, param_id 2..18, param_value 18..146, param_type 146.
+    let raw_set = |name: &str, value: u8, ty: u8| {
+        let mut p = vec![0u8; 147];
+        (p[0], p[1]) = (AP.0, CAMERA);
+        p[2..18].copy_from_slice(&param_id(name));
+        p[18] = value;
+        p[146] = ty;
+        raw_frame(GCS, 323, ParamExtSet::crc_extra(), &p)
+    };
+    // PARAM_EXT_ACK: param_id 0..16, param_value 16..144, param_type 144, result 145.
+    let raw_acks = |b: &mut Bridge<Link>| -> Vec<Vec<u8>> {
+        sent(b)
+            .iter()
+            .filter(|f| f.message_id() == 324)
+            .map(|f| {
+                let mut p = f.payload().bytes().to_vec();
+                p.resize(146, 0);
+                p
+            })
+            .collect()
+    };
+    let mut b = bridge(Family::DualLight);
+    let unsupported = ParamAck::ValueUnsupported as u8;
+    // A type past MAV_PARAM_EXT_TYPE's (11 is its last): answered, once, VALUE_UNSUPPORTED,
+    // with the value in effect and its type for a parameter there is.
+    for ty in [0u8, 12, 200, 255] {
+        b.receive(&raw_set("IR_PALETTE", 3, ty), t(10));
+        let acks = raw_acks(&mut b);
+        assert_eq!(acks.len(), 1, "type {ty}");
+        let a = &acks[0];
+        assert_eq!(&a[..16], &param_id("IR_PALETTE"));
+        assert_eq!(
+            (a[16], a[144], a[145]),
+            (0, MavParamExtType::Uint8 as u8, unsupported)
+        );
+        // And an unknown name: echoed, its type as sent.
+        b.receive(&raw_set("NO_SUCH", 3, ty), t(10));
+        let acks = raw_acks(&mut b);
+        assert_eq!(acks.len(), 1, "type {ty}");
+        assert_eq!(
+            (acks[0][16], acks[0][144], acks[0][145]),
+            (3, ty, unsupported)
+        );
+    }
+    assert!(
+        queued(b.gimbal_mut()).is_empty(),
+        "nothing sent to the gimbal"
+    );
+}

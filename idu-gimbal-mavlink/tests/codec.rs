@@ -9,11 +9,12 @@ use idu_gimbal_mavlink::framing::Outbox;
 use mavio::dialects::common::enums::{
     CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, EstimatorStatusFlags,
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavLandedState, MavModeFlag,
-    MavResult, MavSeverity, MavState, MavType,
+    MavParamExtType, MavResult, MavSeverity, MavState, MavType, ParamAck,
 };
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CameraTrackingImageStatus, CommandAck,
-    GimbalDeviceAttitudeStatus, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat, Statustext,
+    GimbalDeviceAttitudeStatus, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat, ParamExtAck,
+    ParamExtSet, Statustext,
 };
 use mavio::mavspec::rust::spec::{MavLinkVersion, MessageSpecStatic};
 use mavio::protocol::{Frame, V2};
@@ -196,6 +197,37 @@ proptest! {
             |p| codec::command_ack::encode(command as u16, result, to, p),
         );
         prop_assert_eq!(ours, mavio_frame(2, 1, 154, &m));
+    }
+
+    #[test]
+    fn the_param_ext_ack_frame_and_set_decoding_are_mavios(
+        id in prop::array::uniform16(any::<u8>()),
+        value in prop::collection::vec(any::<u8>(), 128),
+        ty in 1u8..=11, result in 0u8..=3, target in any::<(u8, u8)>(),
+    ) {
+        let value: [u8; 128] = value.try_into().unwrap();
+        let param_type = MavParamExtType::try_from(ty).unwrap();
+        let ack = ParamExtAck {
+            param_id: id, param_value: value, param_type,
+            param_result: ParamAck::try_from(result).unwrap(),
+        };
+        let ours = codec_frame::<ParamExtAck>(
+            2, 1, 100, codec::param_ext::ACK_LEN,
+            |p| codec::param_ext::encode_ack(&id, &value, ty, result, p),
+        );
+        prop_assert_eq!(ours, mavio_frame(2, 1, 100, &ack));
+        // A set as mavio writes it (trailing zeros dropped) reads back field for field.
+        let set = ParamExtSet {
+            target_system: target.0, target_component: target.1,
+            param_id: id, param_value: value, param_type,
+        };
+        let bytes = mavio_frame(2, 1, 100, &set);
+        // MAVLink 2: a 10-byte header, its second byte the payload's length.
+        let got = codec::param_ext::decode_set(&bytes[10..10 + usize::from(bytes[1])]);
+        prop_assert_eq!(
+            (got.target, got.param_id, got.param_value, got.param_type),
+            (target, id, value, ty)
+        );
     }
 
     #[test]

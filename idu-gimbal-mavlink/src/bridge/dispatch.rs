@@ -127,11 +127,13 @@ impl State {
             let target = (m.target_system, m.target_component);
             (camera::Message::Ftp(m.payload), target, false)
         } else if id == id_of::<ParamExtSet>() {
-            let Some(m) = decode::<ParamExtSet>(frame) else {
+            // Decoded here whatever its type (mavio's refuses a type its dialect does not
+            // know): a set of an unknown type is still answered.
+            if !frame.checksum_holds(ParamExtSet::crc_extra()) {
                 return Check::Bad;
-            };
-            let target = (m.target_system, m.target_component);
-            (camera::Message::ParamSet(m), target, false)
+            }
+            let m = codec::param_ext::decode_set(frame.payload());
+            (camera::Message::ParamSet(m), m.target, false)
         } else if id == id_of::<ParamExtRequestRead>() {
             let Some(m) = decode::<ParamExtRequestRead>(frame) else {
                 return Check::Bad;

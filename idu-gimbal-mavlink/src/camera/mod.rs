@@ -250,7 +250,7 @@ pub(crate) enum Message {
     ParamList,
     /// `PARAM_EXT_REQUEST_READ`: the name and the index.
     ParamRead([u8; 16], i16),
-    ParamSet(ParamExtSet),
+    ParamSet(crate::codec::param_ext::ParamSet),
 }
 
 /// The camera's state.

@@ -31,9 +31,10 @@ use idu_gimbal::wire::control::{
     Command as GimbalCmd, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, Palette,
 };
 use mavio::dialects::common::enums::{MavParamExtType, MavResult, ParamAck};
-use mavio::dialects::common::messages::{ParamExtAck, ParamExtSet, ParamExtValue};
+use mavio::dialects::common::messages::{ParamExtAck, ParamExtValue};
 
 use crate::bridge::{name, Tx};
+use crate::codec::param_ext::{self, ParamSet};
 use crate::framing::MAX_FRAME_LEN;
 use crate::gimbal::GimbalControl;
 
@@ -191,28 +192,25 @@ impl Settings {
     pub(crate) fn set<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,
-        set: &ParamExtSet,
+        set: &ParamSet,
         component: u8,
         tx: &mut Tx<'_>,
     ) {
         let result = self.apply(gimbal, set);
         // The value in effect and its type, accepted or not: QGroundControl shows what the
-        // ACK says (QGCCameraIO::handleParamAck). An unknown name is echoed.
+        // ACK says (QGCCameraIO::handleParamAck). An unknown name is echoed, its type as
+        // sent, known to the dialect or not.
         let (param_value, param_type) =
             match self.index_of(&set.param_id).and_then(|i| self.value(i)) {
-                Some(v) => (value_field(v), MavParamExtType::Uint8),
+                Some(v) => (value_field(v), MavParamExtType::Uint8 as u8),
                 None => (set.param_value, set.param_type),
             };
-        let ack = ParamExtAck {
-            param_id: set.param_id,
-            param_value,
-            param_type,
-            param_result: result,
-        };
-        tx.send(component, &ack);
+        tx.send_encoded::<ParamExtAck>(component, param_ext::ACK_LEN, |p| {
+            param_ext::encode_ack(&set.param_id, &param_value, param_type, result as u8, p)
+        });
     }
 
-    fn apply<G: GimbalControl>(&mut self, gimbal: &mut G, set: &ParamExtSet) -> ParamAck {
+    fn apply<G: GimbalControl>(&mut self, gimbal: &mut G, set: &ParamSet) -> ParamAck {
         let Some(i) = self.index_of(&set.param_id) else {
             return ParamAck::ValueUnsupported;
         };
@@ -223,7 +221,8 @@ impl Settings {
         let Some(p) = PARAMETERS.get(i) else {
             return ParamAck::ValueUnsupported;
         };
-        if set.param_type != MavParamExtType::Uint8 || v > p.max {
+        // Any other type, known to the dialect or not, is not this parameter's.
+        if set.param_type != MavParamExtType::Uint8 as u8 || v > p.max {
             return ParamAck::ValueUnsupported;
         }
         self.put(gimbal, i, v)

@@ -2,7 +2,7 @@
 //! many times a second (`GIMBAL_DEVICE_SET_ATTITUDE`, `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE`,
 //! `GLOBAL_POSITION_INT`) and the ones sent on a period (`GIMBAL_DEVICE_ATTITUDE_STATUS`,
 //! `HEARTBEAT`, `CAMERA_TRACKING_IMAGE_STATUS`), `COMMAND_ACK` (for any command id, known to
-//! `mavio` or not), and `STATUSTEXT` (written in a few stores
+//! `mavio` or not), `PARAM_EXT_SET` and `PARAM_EXT_ACK` (for any parameter type), and `STATUSTEXT` (written in a few stores
 //! where `mavio`'s generic encoder took 272 bytes of flash).
 //!
 //! Why not `mavio`'s generated code for these: it builds a `Payload` (a zeroed 255-byte
@@ -29,6 +29,7 @@ pub mod autopilot_state;
 pub mod command_ack;
 pub mod global_position;
 pub mod heartbeat;
+pub mod param_ext;
 pub mod set_attitude;
 pub mod statustext;
 pub mod tracking_image_status;

@@ -184,3 +184,25 @@ pub fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPosi
         hdg: 0,
     }
 }
+
+/// A MAVLink 2 frame of message `id` with `payload` as given, its checksum computed here
+/// (CRC-16/MCRF4XX bit by bit, then `crc_extra`): what a sender whose dialect `mavio` does
+/// not share puts on the wire.
+pub fn raw_frame(from: (u8, u8), id: u32, crc_extra: u8, payload: &[u8]) -> Vec<u8> {
+    let mut f = vec![0xFD, payload.len() as u8, 0, 0, 0, from.0, from.1];
+    f.extend_from_slice(&id.to_le_bytes()[..3]);
+    f.extend_from_slice(payload);
+    let mut crc: u16 = 0xFFFF;
+    for &b in f[1..].iter().chain([crc_extra].iter()) {
+        crc ^= u16::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0x8408
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    f.extend_from_slice(&crc.to_le_bytes());
+    f
+}
