@@ -5,6 +5,7 @@ then a last line "NAME: N passed, M failed"), and the simulated gimbal's behavio
 first on the path when it runs one of them."""
 
 import os
+import time
 
 DEFINITIONS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
                            "idu-gimbal-mavlink", "camera-definitions")
@@ -37,6 +38,56 @@ def raw_fields(msg):
     u = msg.unpacker
     values = u.unpack(payload.ljust(u.size, b"\0")[:u.size])
     return dict(zip(msg.ordered_fieldnames, values))
+
+
+class Inbox:
+    """What a pymavlink connection (`self.m`) has received, each message with the monotonic
+    time it was read; `bad` holds what did not parse. Subclasses may send on each pump
+    (`on_pump`), as a ground station's heartbeat."""
+
+    def __init__(self, m):
+        self.m = m
+        self.messages = []  # (monotonic time, message)
+        self.bad = []
+
+    def on_pump(self):
+        pass
+
+    def pump(self):
+        self.on_pump()
+        while True:
+            msg = self.m.recv_match(blocking=False)
+            if msg is None:
+                return
+            if msg.get_type() == "BAD_DATA":
+                self.bad.append(msg)
+                continue
+            self.messages.append((time.monotonic(), msg))
+
+    def mark(self):
+        """The index to look from for what arrives next."""
+        self.pump()
+        return len(self.messages)
+
+    def wait(self, pred, timeout, since):
+        """The first message since the mark `since` for which `pred` holds, waiting up to
+        `timeout` seconds; None after that."""
+        end = time.monotonic() + timeout
+        while True:
+            self.pump()
+            for _, msg in self.messages[since:]:
+                if pred(msg):
+                    return msg
+            if time.monotonic() >= end:
+                return None
+            time.sleep(0.001)
+
+    def idle(self, seconds):
+        """Keeps receiving for `seconds`."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.pump()
+            time.sleep(0.002)
 
 
 class Checks:

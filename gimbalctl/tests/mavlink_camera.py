@@ -61,7 +61,7 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 from pymavlink.mavftp import MAVFTP, FtpError  # noqa: E402
 
-from checks import Checks, raw_fields, served_definition, sim_options  # noqa: E402
+from checks import Checks, Inbox, raw_fields, served_definition, sim_options  # noqa: E402
 
 AP_SYSTEM, AP_COMPONENT = 1, 1
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
@@ -198,45 +198,13 @@ class Autopilot(threading.Thread):
             time.sleep(0.005)
 
 
-class Gcs:
+class Gcs(Inbox):
     """The ground station: everything the script sends and reads, in this thread."""
 
     def __init__(self, bridge_port):
-        self.m = mavutil.mavlink_connection(f"udpout:127.0.0.1:{bridge_port}", source_system=GCS_SYSTEM,
-                                            source_component=GCS_COMPONENT, dialect="common")
-        self.messages = []  # (monotonic time, message)
-        self.bad = []
-
-    def pump(self):
-        while True:
-            msg = self.m.recv_match(blocking=False)
-            if msg is None:
-                return
-            if msg.get_type() == "BAD_DATA":
-                self.bad.append(msg)
-                continue
-            self.messages.append((time.monotonic(), msg))
-
-    def mark(self):
-        self.pump()
-        return len(self.messages)
-
-    def wait(self, pred, timeout, since):
-        end = time.monotonic() + timeout
-        while True:
-            self.pump()
-            for _, msg in self.messages[since:]:
-                if pred(msg):
-                    return msg
-            if time.monotonic() >= end:
-                return None
-            time.sleep(0.001)
-
-    def idle(self, seconds):
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.pump()
-            time.sleep(0.002)
+        super().__init__(mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{bridge_port}", source_system=GCS_SYSTEM,
+            source_component=GCS_COMPONENT, dialect="common"))
 
     def since(self, since, kind, component=CAMERA):
         self.pump()

@@ -44,7 +44,7 @@ os.environ["MAVLINK20"] = "1"  # before pymavlink is imported: MAVLink 2 framing
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mav  # noqa: E402
 
-from checks import Checks, raw_fields, served_definition, sim_options  # noqa: E402
+from checks import Checks, Inbox, raw_fields, served_definition, sim_options  # noqa: E402
 
 FAMILIES = ["a2000", "x3", "argus", "dual-light", "f10"]
 # QGroundControl's ids: MAVLinkProtocol's system 255 and MAV_COMP_ID_MISSIONPLANNER (190).
@@ -153,50 +153,20 @@ def start_bridge(gimbalctl, family, to_port, extra=()):
 # --- QGroundControl's Vehicle: its link, heartbeat, command queue and message requests -----
 
 
-class Qgc:
+class Qgc(Inbox):
     def __init__(self, port, ack_timeout=ACK_TIMEOUT_5):
-        self.m = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=QGC_SYSTEM,
-                                            source_component=QGC_COMPONENT, dialect="common")
+        super().__init__(mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{port}", source_system=QGC_SYSTEM,
+            source_component=QGC_COMPONENT, dialect="common"))
         self.ack_timeout = ack_timeout
-        self.messages = []  # (monotonic time, message)
-        self.bad = 0
         self.next_hb = 0.0
         self.retried = []  # commands that needed more than one try
 
-    def pump(self):
+    def on_pump(self):
         now = time.monotonic()
         if now >= self.next_hb:  # QGroundControl's own heartbeat, every second
             self.next_hb = now + 1.0
             self.m.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, mav.MAV_STATE_ACTIVE)
-        while True:
-            msg = self.m.recv_match(blocking=False)
-            if msg is None:
-                return
-            if msg.get_type() == "BAD_DATA":
-                self.bad += 1
-                continue
-            self.messages.append((time.monotonic(), msg))
-
-    def mark(self):
-        self.pump()
-        return len(self.messages)
-
-    def wait(self, pred, timeout, since):
-        end = time.monotonic() + timeout
-        while True:
-            self.pump()
-            for _, msg in self.messages[since:]:
-                if pred(msg):
-                    return msg
-            if time.monotonic() >= end:
-                return None
-            time.sleep(0.001)
-
-    def idle(self, seconds):
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.pump()
-            time.sleep(0.002)
 
     def camera(self, since, kind):
         """Messages of `kind` from the vehicle's camera (QGCCameraManager.cc:100-101: system
@@ -908,7 +878,7 @@ def run_family(gimbalctl, family):
         pinch_zoom(qgc, info)
         tracking(qgc, info)
         fov_status(qgc, info, None)
-        check(qgc.bad == 0, f"no malformed frame ({qgc.bad})")
+        check(not qgc.bad, f"no malformed frame ({len(qgc.bad)})")
     except Exception as e:  # a crash is a failure with its reason
         import traceback
         traceback.print_exc()
