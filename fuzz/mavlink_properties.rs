@@ -9,20 +9,48 @@ use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
-/// Any bytes from the autopilot, split where the first byte says, with time passing: the
-/// bridge never panics, and everything it sends is whole MAVLink 2 frames (an independent
-/// reader skips nothing and is left with nothing pending).
-pub fn mavlink_bridge(data: &[u8]) {
-    // The dual light: every camera message has something to act on (three streams, the
-    // thermal settings, the infrared tracking source).
+/// Everything the bridge has to send, read by `out`, an independent frame reader.
+fn drain(bridge: &mut Bridge<Link<3, 4>>, out: &mut FrameReader) {
+    loop {
+        let bytes = bridge.transmit_bytes();
+        if bytes.is_empty() {
+            break;
+        }
+        let n = bytes.len();
+        out.feed(bytes, |_| Check::Unhandled);
+        bridge.transmit_written(n);
+    }
+}
+
+/// What the bridge sent was whole MAVLink 2 frames: `out` skipped nothing and is left with
+/// nothing pending.
+fn assert_whole_frames(out: &FrameReader) {
+    let s = out.stats();
+    assert_eq!(
+        (s.skipped_bytes, s.bad_frames, out.pending()),
+        (0, 0, 0),
+        "the bridge sent something that is not whole MAVLink 2 frames"
+    );
+}
+
+/// A bridge with the dual light's camera: every camera message has something to act on
+/// (three streams, the thermal settings, the infrared tracking source).
+fn dual_light_bridge() -> Bridge<Link<3, 4>> {
     let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
-    let mut bridge = Bridge::new(
+    Bridge::new(
         Link::<3, 4>::new(Config::default()),
         BridgeConfig {
             camera,
             ..BridgeConfig::default()
         },
-    );
+    )
+}
+
+/// Any bytes from the autopilot, split where the first byte says, with time passing: the
+/// bridge never panics, and everything it sends is whole MAVLink 2 frames (an independent
+/// reader skips nothing and is left with nothing pending).
+pub fn mavlink_bridge(data: &[u8]) {
+    let mut bridge = dual_light_bridge();
     let cut = data
         .first()
         .map_or(0, |&n| usize::from(n) % (data.len() + 1));
@@ -33,20 +61,83 @@ pub fn mavlink_bridge(data: &[u8]) {
         bridge.receive(part, now);
         bridge.gimbal_mut().poll(now);
         bridge.poll(now);
-        loop {
-            let bytes = bridge.transmit_bytes();
-            if bytes.is_empty() {
-                break;
-            }
-            let n = bytes.len();
-            out.feed(bytes, |_| Check::Unhandled);
-            bridge.transmit_written(n);
+        drain(&mut bridge, &mut out);
+    }
+    assert_whole_frames(&out);
+}
+
+/// The messages the bridge acts on, as (id, CRC_EXTRA), so that [`mavlink_messages`]
+/// reaches what they do rather than stopping at the checksum.
+fn handled() -> [(u32, u8); 10] {
+    use idu_gimbal_mavlink::mavio::dialects::common::messages as m;
+    use idu_gimbal_mavlink::mavio::mavspec::rust::spec::MessageSpecStatic;
+    fn of<M: MessageSpecStatic>() -> (u32, u8) {
+        (M::message_id(), M::crc_extra())
+    }
+    [
+        of::<m::Heartbeat>(),
+        of::<m::GlobalPositionInt>(),
+        of::<m::CommandInt>(),
+        of::<m::CommandLong>(),
+        of::<m::FileTransferProtocol>(),
+        of::<m::GimbalDeviceSetAttitude>(),
+        of::<m::AutopilotStateForGimbalDevice>(),
+        of::<m::ParamExtRequestRead>(),
+        of::<m::ParamExtRequestList>(),
+        of::<m::ParamExtSet>(),
+    ]
+}
+
+/// MAVLink's checksum (CRC-16/MCRF4XX), bit by bit.
+fn x25<'a>(bytes: impl Iterator<Item = &'a u8>) -> u16 {
+    let mut crc: u16 = 0xFFFF;
+    for &b in bytes {
+        crc ^= u16::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0x8408
+            } else {
+                crc >> 1
+            };
         }
     }
-    let s = out.stats();
-    assert_eq!(
-        (s.skipped_bytes, s.bad_frames, out.pending()),
-        (0, 0, 0),
-        "the bridge sent something that is not whole MAVLink 2 frames"
-    );
+    crc
+}
+
+/// Any sequence of messages the bridge acts on, each whole with a good checksum, from any
+/// sender, with any payload (its length and bytes from the input), with time passing, to a
+/// bridge with every feature the build has (`roi` in the fuzz build): the bridge never
+/// panics (the fuzz build keeps overflow checks), and what it sends is whole MAVLink 2
+/// frames. Each message is `[which, len, system, component, payload...]`.
+pub fn mavlink_messages(data: &[u8]) {
+    let mut bridge = dual_light_bridge();
+    let handled = handled();
+    let mut out = FrameReader::new();
+    let mut rest = data;
+    let mut ms = 0u32;
+    let mut seq = 0u8;
+    while let [which, len, system, component, tail @ ..] = rest {
+        let (id, crc_extra) = handled[usize::from(*which) % handled.len()];
+        let len = usize::from(*len).min(tail.len());
+        let (payload, after) = tail.split_at(len);
+        rest = after;
+        let mut frame = vec![0xFD, len as u8, 0, 0, seq, *system, *component];
+        frame.extend_from_slice(&id.to_le_bytes()[..3]);
+        frame.extend_from_slice(payload);
+        let crc = x25(frame
+            .get(1..)
+            .unwrap_or(&[])
+            .iter()
+            .chain([crc_extra].iter()));
+        frame.extend_from_slice(&crc.to_le_bytes());
+        seq = seq.wrapping_add(1);
+        // Time passes by the first payload byte's worth of milliseconds, across the wrap.
+        ms = ms.wrapping_add(u32::from(payload.first().copied().unwrap_or(0)) * 16);
+        let now = Instant::from_millis(ms.wrapping_sub(1_000));
+        bridge.receive(&frame, now);
+        bridge.gimbal_mut().poll(now);
+        bridge.poll(now);
+        drain(&mut bridge, &mut out);
+    }
+    assert_whole_frames(&out);
 }

@@ -101,7 +101,8 @@ def mavlink_frames():
 
 def main():
     root = os.path.join(HERE, "seeds")
-    seeds = {t: {} for t in ("command_decode", "stream_parser", "assembler", "link", "serial_link", "mavlink_bridge")}
+    seeds = {t: {} for t in ("command_decode", "stream_parser", "assembler", "link", "serial_link", "mavlink_bridge",
+                             "mavlink_messages")}
     for name, data in CONTROL.items():
         seeds["command_decode"][name] = data
     # stream_parser: first byte chooses the split point (mod length + 1).
@@ -123,6 +124,26 @@ def main():
     for name, f in frames.items():
         seeds["mavlink_bridge"][name] = bytes([len(f) // 2]) + f
     seeds["mavlink_bridge"]["autopilot_session"] = bytes([77]) + b"".join(frames.values())
+    # mavlink_messages: records [which, len, system, component, payload], `which` the index
+    # in mavlink_properties.rs handled(); the checksum is the target's to compute.
+    handled = [0, 33, 75, 76, 110, 284, 286, 320, 321, 323]
+
+    def record(frame):
+        msgid = int.from_bytes(frame[7:10], "little")
+        n = frame[1]
+        return bytes([handled.index(msgid), n, frame[5], frame[6]]) + frame[10:10 + n]
+
+    kept = {k: f for k, f in frames.items() if int.from_bytes(f[7:10], "little") in handled}
+    for name, f in kept.items():
+        seeds["mavlink_messages"][name] = record(f)
+    seeds["mavlink_messages"]["autopilot_session"] = b"".join(record(f) for f in kept.values())
+    # A region of interest relative to home, home's altitudes at the ends of i32.
+    from pymavlink.dialects.v20 import common as mav
+    m = mav.MAVLink(None, srcSystem=1, srcComponent=1)
+    pos = m.global_position_int_encode(0, 473977420, 85455940, 2**31 - 1, -1, 0, 0, 0, 0).pack(m)
+    roi = m.command_int_encode(1, 154, mav.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, mav.MAV_CMD_DO_SET_ROI_LOCATION,
+                               0, 0, 0, 0, 0, 0, 473987420, 85465940, 20.0).pack(m)
+    seeds["mavlink_messages"]["roi_from_extreme_home"] = record(pos) + record(roi)
     for target, files in seeds.items():
         d = os.path.join(root, target)
         os.makedirs(d, exist_ok=True)

@@ -70,6 +70,14 @@ fn any_f32() -> impl Strategy<Value = f32> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1000))]
 
+    /// Messages the bridge acts on, whole with good checksums, from any sender, with any
+    /// payload (the fuzz target `mavlink_messages`; its ROI path when the `roi` feature is
+    /// on, with the overflow checks of a test build).
+    #[test]
+    fn mavlink_messages(data in proptest::collection::vec(any::<u8>(), 0..600)) {
+        mavlink_properties::mavlink_messages(&data);
+    }
+
     /// Garbage mixed with real frames (and real frames with a flipped bit), cut anywhere.
     #[test]
     fn mavlink_bridge(parts in proptest::collection::vec(

@@ -1,0 +1,7 @@
+//! See `fuzz/mavlink_properties.rs`: `mavlink_messages`.
+#![no_main]
+
+#[path = "../mavlink_properties.rs"]
+mod mavlink_properties;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| mavlink_properties::mavlink_messages(data));
