@@ -446,7 +446,7 @@ fn serve<S: Pump>(
 }
 
 /// Lines about peers written to stderr a second at most: churn (sockets joining, leaving,
-/// refused) once wrote a thousand lines in five seconds.
+/// refused) would otherwise write hundreds a second.
 pub const PEER_LINES: u32 = 10;
 
 /// Addresses remembered as refused, so that each is said once (forgotten all at once when

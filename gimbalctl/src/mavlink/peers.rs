@@ -17,8 +17,8 @@ pub const PEER_TIMEOUT: Duration = Duration::from_secs(10);
 /// Peers kept at once. Every frame the bridge sends goes to each, so the table is bounded;
 /// a host has room for many more than a link has ground stations and autopilots. When it is
 /// full of live peers a newcomer is refused: evicting a live ground station (16 sockets
-/// beating at 2 Hz once left a 1 Hz one without a heartbeat for 6 s) is worse than turning
-/// away the 65th address.
+/// beating at 2 Hz would leave a 1 Hz one without a heartbeat for seconds) is worse than
+/// turning away the 65th address.
 pub const PEER_CAPACITY: usize = 64;
 
 /// What one datagram changed in the table.
