@@ -19,7 +19,7 @@
 //! a live one is never evicted: when all slots hold live peers a new address is refused
 //! (said once per address, and counted). What the bridge sends goes, one frame a datagram,
 //! to every peer and to each `--to` address (those are permanent and outside the table).
-//! Joins, departures and refusals go to stderr, at most [`PEER_LINES`] lines a second; the
+//! Joins, departures and refusals go to stderr, at most [`peer_log::PEER_LINES`] lines a second; the
 //! lines held back are summed up after.
 //!
 //! On a serial port (`--autopilot-serial PATH[:BAUD]`, 921600 baud by default as the firmware
@@ -38,7 +38,7 @@
 //! `--tcp` or `--serial` it is the library's `SerialGimbal` (nose-referenced: the serial link
 //! carries no vehicle frames).
 
-use std::io::{ErrorKind, Write};
+use std::io::Write;
 use std::marker::PhantomData;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant as StdInstant};
@@ -50,17 +50,21 @@ use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::framing::{Check, FrameReader};
+use idu_gimbal_mavlink::framing::FrameReader;
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
 use crate::transport::{clock, Job, Mode, SerialSpec, Session, StreamPort, Target};
 
+mod peer_log;
 mod peers;
 mod sim_watch;
+mod udp;
 
-use peers::{Change, Peers, PEER_CAPACITY, PEER_TIMEOUT};
+use peer_log::PeerLog;
+use peers::{Peers, PEER_CAPACITY, PEER_TIMEOUT};
 use sim_watch::SimWatch;
+use udp::{receive_udp, send_udp, Clients};
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(1);
@@ -443,177 +447,6 @@ fn serve<S: Pump>(
             std::thread::sleep(TICK);
         }
     }
-}
-
-/// Lines about peers written to stderr a second at most: churn (sockets joining, leaving,
-/// refused) would otherwise write hundreds a second.
-pub const PEER_LINES: u32 = 10;
-
-/// Addresses remembered as refused, so that each is said once (forgotten all at once when
-/// there are more: said again, never unbounded).
-const REFUSED_REMEMBERED: usize = 1024;
-
-/// The UDP peers, what is said of them, and the frames going to them.
-struct Clients {
-    peers: Peers,
-    log: PeerLog,
-    /// Splits the bridge's bytes into frames, one a datagram.
-    splitter: FrameReader,
-}
-
-/// Sends what the bridge has queued, one frame a datagram (as MAVLink on UDP goes), to
-/// every peer and `--to` address.
-fn send_udp<G: GimbalControl>(
-    bridge: &mut Bridge<G>,
-    socket: &UdpSocket,
-    to: &[SocketAddr],
-    clients: &mut Clients,
-) {
-    let Clients {
-        peers, splitter, ..
-    } = clients;
-    loop {
-        let bytes = bridge.transmit_bytes().to_vec();
-        if bytes.is_empty() {
-            break;
-        }
-        bridge.transmit_written(bytes.len());
-        splitter.feed(&bytes, |frame| {
-            for peer in peers.addrs().chain(to.iter()) {
-                // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
-                let _ = socket.send_to(frame.bytes(), peer);
-            }
-            Check::Unhandled
-        });
-    }
-}
-
-/// What a peer line says.
-#[derive(Clone, Copy)]
-enum PeerEvent {
-    Joined,
-    Left,
-    Refused,
-}
-
-/// The peer table's lines on stderr, at most [`PEER_LINES`] a second.
-struct PeerLog {
-    window: StdInstant,
-    said: u32,
-    /// Lines held back this second: joined, left, refused.
-    held: [u32; 3],
-    refused: std::collections::HashSet<SocketAddr>,
-}
-
-impl PeerLog {
-    fn new(now: StdInstant) -> Self {
-        PeerLog {
-            window: now,
-            said: 0,
-            held: [0; 3],
-            refused: std::collections::HashSet::new(),
-        }
-    }
-
-    /// Starts a new second when the last is over, summing up what it held back.
-    fn tick(&mut self, now: StdInstant) {
-        if now.saturating_duration_since(self.window) >= Duration::from_secs(1) {
-            let [joined, left, refused] = self.held;
-            if joined + left + refused > 0 {
-                eprintln!(
-                    "gimbalctl mavlink: peer lines held back (at most {PEER_LINES} a second): \
-                     {joined} joined, {left} left, {refused} refused"
-                );
-            }
-            (self.window, self.said, self.held) = (now, 0, [0; 3]);
-        }
-    }
-
-    fn say(&mut self, now: StdInstant, event: PeerEvent, line: impl FnOnce() -> String) {
-        self.tick(now);
-        if self.said < PEER_LINES {
-            eprintln!("gimbalctl mavlink: {}", line());
-            self.said += 1;
-        } else if let Some(n) = self.held.get_mut(event as usize) {
-            *n += 1;
-        }
-    }
-
-    /// Whether `addr` is refused for the first time (to be said).
-    fn first_refusal(&mut self, addr: SocketAddr) -> bool {
-        if self.refused.len() >= REFUSED_REMEMBERED {
-            self.refused.clear();
-        }
-        self.refused.insert(addr)
-    }
-}
-
-/// A datagram from `from` with `good` frames the bridge handled: the peer table kept, and
-/// what changed said.
-fn heard(clients: &mut Clients, from: SocketAddr, good: u32, clock: StdInstant) {
-    let Clients { peers, log, .. } = clients;
-    let (len, capacity) = (peers.len(), peers.capacity());
-    let silent = PEER_TIMEOUT.as_secs();
-    match peers.heard(from, good, clock) {
-        Some(Change::Joined(new)) => log.say(clock, PeerEvent::Joined, || {
-            format!("peer {new} joined ({} of {capacity})", len + 1)
-        }),
-        Some(Change::Replaced { old, new }) => log.say(clock, PeerEvent::Joined, || {
-            format!("peer {new} joined, replacing {old} (silent {silent} s)")
-        }),
-        Some(Change::Refused(new)) if log.first_refusal(new) => {
-            log.say(clock, PeerEvent::Refused, || {
-                format!(
-                    "warning: peer {new} refused: all {capacity} slots hold live peers \
-                     (a peer is dropped after {silent} s of silence)"
-                )
-            })
-        }
-        Some(Change::Refused(_)) | None => {}
-    }
-}
-
-/// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
-/// the peer table; whether the socket was emptied.
-fn receive_udp<G: GimbalControl>(
-    bridge: &mut Bridge<G>,
-    socket: &UdpSocket,
-    to: &[SocketAddr],
-    clients: &mut Clients,
-    buf: &mut [u8],
-    t: Instant,
-    clock: StdInstant,
-) -> Result<bool, Failure> {
-    let Clients { peers, log, .. } = clients;
-    log.tick(clock);
-    peers.expire(clock, |gone| {
-        log.say(clock, PeerEvent::Left, || {
-            format!("peer {gone} left (silent {} s)", PEER_TIMEOUT.as_secs())
-        });
-    });
-    for _ in 0..DATAGRAMS_PER_TICK {
-        match socket.recv_from(buf) {
-            Ok((n, from)) => {
-                let good = bridge.receive_datagram(&buf[..n], t);
-                if !to.contains(&from) {
-                    heard(clients, from, good, clock);
-                }
-                // Its answers at once: a burst of datagrams never piles up in the outbox
-                // behind it, and each request's answer finds room.
-                send_udp(bridge, socket, to, clients);
-            }
-            Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
-            // A peer that went away (ICMP port unreachable) must not stop the bridge.
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused
-                ) => {}
-            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(Failure::io("UDP socket", e)),
-        }
-    }
-    Ok(false)
 }
 
 /// Reads what the serial port has (bounded) into the bridge as a byte stream; whether the
