@@ -658,27 +658,19 @@ impl<const TX: usize> Simulator<TX> {
     /// dropped. The postback grid and the counters run on.
     pub fn reboot(&mut self, now: Instant) {
         self.advance(now);
-        let stats = SimStats {
-            reboots: self.stats.reboots.wrapping_add(1),
-            ..self.stats
-        };
+        // A gimbal as at power-on, but its counters, clock, postback schedule and silence
+        // carried over, and starting up.
+        let fresh = Self::with_tx_capacity(self.config, now);
         *self = Simulator {
-            config: self.config,
-            state: SimState::initial(),
-            stats,
+            stats: SimStats {
+                reboots: self.stats.reboots.wrapping_add(1),
+                ..self.stats
+            },
             last: self.last,
             next_postback: self.next_postback,
             silent: self.silent,
-            rate_left_ms: 0,
-            attitude_age_ms: None,
-            photo_left_ms: 0,
-            track_target: None,
-            tracking_left_ms: 0,
-            calibration_left_ms: 0,
-            held_north: None,
             booting_left_ms: self.config.boot_ms,
-            text: TextAssembler::new(),
-            tx: Deque::new(),
+            ..fresh
         };
         self.refresh();
     }
