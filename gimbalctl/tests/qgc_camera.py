@@ -858,13 +858,28 @@ def fov_status(qgc, info, expect):
     return fov
 
 
-def run_family(gimbalctl, family):
+def with_bridge(gimbalctl, family, extra, session):
+    """A stand-in autopilot and `gimbalctl mavlink --sim --camera FAMILY EXTRA...` for
+    `session(port)`; a crash is a failure with its reason; both stopped after."""
     ap = Autopilot()
     ap.start()
-    proc, port = start_bridge(gimbalctl, family, ap.port)
+    proc, port = start_bridge(gimbalctl, family, ap.port, extra)
     try:
-        if not check(proc is not None, f"gimbalctl mavlink --sim --camera {family} starts"):
-            return
+        if check(proc is not None, f"gimbalctl mavlink --sim --camera {' '.join([family, *extra])} starts"):
+            session(port)
+    except Exception as e:  # a crash is a failure with its reason
+        import traceback
+        traceback.print_exc()
+        check(False, f"crashed: {e!r}")
+    finally:
+        ap.stopping.set()
+        if proc is not None:
+            proc.kill()
+            proc.wait()
+
+
+def run_family(gimbalctl, family):
+    def session(port):
         qgc = Qgc(port)
         info = discovery(qgc)
         if info is None:
@@ -879,28 +894,17 @@ def run_family(gimbalctl, family):
         tracking(qgc, info)
         fov_status(qgc, info, None)
         check(not qgc.bad, f"no malformed frame ({len(qgc.bad)})")
-    except Exception as e:  # a crash is a failure with its reason
-        import traceback
-        traceback.print_exc()
-        check(False, f"crashed: {e!r}")
-    finally:
-        ap.stopping.set()
-        if proc is not None:
-            proc.kill()
-            proc.wait()
+
+    with_bridge(gimbalctl, family, (), session)
 
 
 def run_fov(gimbalctl, family):
     """The field of view with a lens configured: at 1x (the bridge starts at its widest), the
     lens's angles; after zooming in, hfov(z) = 2 atan(tan(HFOV / 2) / z) for the zoom ratio z
     the visible streams' VIDEO_STREAM_INFORMATION.hfov (whole degrees) agrees with."""
-    ap = Autopilot()
-    ap.start()
     extra = ["--camera-fov", f"{FOV_H},{FOV_V:.6f}", "--camera-resolution", f"{FOV_RES[0]}x{FOV_RES[1]}"]
-    proc, port = start_bridge(gimbalctl, family, ap.port, extra)
-    try:
-        if not check(proc is not None, f"gimbalctl mavlink --sim --camera {family} {' '.join(extra)} starts"):
-            return
+
+    def session(port):
         qgc = Qgc(port, ACK_TIMEOUT_MASTER)
         since = qgc.mark()
         qgc.wait(lambda m: m.get_type() == "HEARTBEAT" and m.get_srcComponent() == CAMERA, 5.0, since)
@@ -927,15 +931,8 @@ def run_fov(gimbalctl, family):
         visible = [m for m in streams if not m.flags & mav.VIDEO_STREAM_STATUS_FLAGS_THERMAL]
         check(fov1 is not None and fov2 is not None and visible and all(m.hfov == int(h) for m in visible),
               f"at {z}x: VIDEO_STREAM_INFORMATION.hfov {[m.hfov for m in visible]} = {int(h)} whole degrees of {h:.3f}")
-    except Exception as e:
-        import traceback
-        traceback.print_exc()
-        check(False, f"crashed: {e!r}")
-    finally:
-        ap.stopping.set()
-        if proc is not None:
-            proc.kill()
-            proc.wait()
+
+    with_bridge(gimbalctl, family, extra, session)
 
 
 def main():

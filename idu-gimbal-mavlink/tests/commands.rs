@@ -51,6 +51,19 @@ fn int(
     }
 }
 
+/// `DO_SET_ROI_LOCATION` to the gimbal as `COMMAND_INT`: a target in `frame_`, 1e-7° and
+/// metres.
+#[cfg(feature = "roi")]
+fn roi(frame_: MavFrame, lat: i32, lon: i32, alt_m: f32) -> CommandInt {
+    int(
+        (AP.0, 154),
+        MavCmd::DoSetRoiLocation,
+        frame_,
+        [0.0; 4],
+        (lat, lon, alt_m),
+    )
+}
+
 /// An ACK as (from component, command, result).
 type Ack = (u8, MavCmd, MavResult);
 
@@ -137,13 +150,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         t(5),
     );
     // Absolute altitude (MAV_FRAME_GLOBAL_INT): as given.
-    let c = int(
-        (AP.0, 154),
-        MavCmd::DoSetRoiLocation,
-        MavFrame::GlobalInt,
-        [0.0; 4],
-        (473_987_420, 85_465_940, 420.5),
-    );
+    let c = roi(MavFrame::GlobalInt, 473_987_420, 85_465_940, 420.5);
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(acks, [(154, MavCmd::DoSetRoiLocation, MavResult::Accepted)]);
     let p = b.gimbal().pointing_target().unwrap();
@@ -228,12 +235,11 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
 #[test]
 fn a_relative_roi_waits_for_home_s_height() {
     let mut b = bridge();
-    let c = int(
-        (AP.0, 154),
-        MavCmd::DoSetRoiLocation,
+    let c = roi(
         MavFrame::GlobalRelativeAltInt,
-        [0.0; 4],
-        (473_987_420, 85_465_940, 20.0),
+        473_987_420,
+        85_465_940,
+        20.0,
     );
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(
@@ -258,12 +264,11 @@ fn home_s_height_from_extreme_altitudes_is_refused_never_wrapped() {
             &frame(AP, 1, &position(473_977_420, 85_455_940, alt, relative)),
             t(5),
         );
-        let c = int(
-            (AP.0, 154),
-            MavCmd::DoSetRoiLocation,
+        let c = roi(
             MavFrame::GlobalRelativeAltInt,
-            [0.0; 4],
-            (473_987_420, 85_465_940, 20.0),
+            473_987_420,
+            85_465_940,
+            20.0,
         );
         let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
         assert_eq!(
