@@ -36,6 +36,11 @@ TX_SLOTS=136
 # The MAVLink bridge, everything beyond the plain CAN driver.
 BRIDGE_FLASH_BUDGET=45056
 BRIDGE_RAM_BUDGET=4096
+# MAVLink 2 signing (the bridge's `signing` feature, a key configured): footprint_bridge
+# built with it, less footprint_bridge without. SHA-256 in sha2's compact form
+# (.cargo/config.toml), the streams' timestamps.
+SIGNING_FLASH_BUDGET=4096
+SIGNING_RAM_BUDGET=512
 
 ensure_bench_toolchain
 firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" build --release --locked \
@@ -44,6 +49,11 @@ firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" build --release --locked \
 firmware_cargo boards/stm32f405 "+$BENCH_TOOLCHAIN" build --release --locked \
     --bin stm32f405 --bin stm32f405_uart --bin stm32f405_mavlink
 firmware_cargo boards/stm32f405_qemu "+$BENCH_TOOLCHAIN" build --release --locked --bin qemu_demo
+# Signing, in a target directory of its own (the feature would reach every program of
+# benches/mcu in the same one).
+SIGNING_TARGET_DIR="$FIRMWARE_TARGET_DIR-signing"
+(cd benches/mcu && CARGO_TARGET_DIR="$SIGNING_TARGET_DIR" cargo "+$BENCH_TOOLCHAIN" build --release \
+    --locked --features signing --bin footprint_bridge)
 
 # "flash ram" of an ELF, from its section sizes.
 sizes() {
@@ -87,6 +97,13 @@ beyond_verdict=ok
 if [ "$flash" -gt "$FLASH_BUDGET" ]; then flash_verdict="OVER BUDGET"; status=1; fi
 if [ "$ram" -gt "$RAM_BUDGET" ]; then ram_verdict="OVER BUDGET"; status=1; fi
 if [ "$beyond" -gt "$RAM_BEYOND_SLOTS_BUDGET" ]; then beyond_verdict="OVER BUDGET"; status=1; fi
+read -r sig_flash sig_ram < <(sizes "$SIGNING_TARGET_DIR/$TARGET/release/footprint_bridge")
+signing_flash=$((sig_flash - br_flash))
+signing_ram=$((sig_ram - br_ram))
+signing_flash_verdict=ok
+signing_ram_verdict=ok
+if [ "$signing_flash" -gt "$SIGNING_FLASH_BUDGET" ]; then signing_flash_verdict="OVER BUDGET"; status=1; fi
+if [ "$signing_ram" -gt "$SIGNING_RAM_BUDGET" ]; then signing_ram_verdict="OVER BUDGET"; status=1; fi
 bridge_flash_verdict=ok
 bridge_ram_verdict=ok
 if [ "$bridge_flash" -gt "$BRIDGE_FLASH_BUDGET" ]; then bridge_flash_verdict="OVER BUDGET"; status=1; fi
@@ -110,4 +127,9 @@ echo "| MAVLink bridge, beyond the CAN driver (footprint_bridge - footprint_driv
 echo "|---|---:|---:|---|"
 echo "| flash | $bridge_flash | <= $BRIDGE_FLASH_BUDGET | $bridge_flash_verdict |"
 echo "| static RAM | $bridge_ram | <= $BRIDGE_RAM_BUDGET | $bridge_ram_verdict |"
+echo
+echo "| MAVLink 2 signing (footprint_bridge with the signing feature and a key, less without) | bytes | budget | verdict |"
+echo "|---|---:|---:|---|"
+echo "| flash | $signing_flash | <= $SIGNING_FLASH_BUDGET | $signing_flash_verdict |"
+echo "| static RAM | $signing_ram | <= $SIGNING_RAM_BUDGET | $signing_ram_verdict |"
 exit "$status"

@@ -14,7 +14,9 @@
 #   e2e       real third-party clients against gimbalctl: pymavlink as PX4 turning the
 #             vehicle (closed-loop aiming), as PX4 and ArduPilot and as a ground station of
 #             the camera (FTP, parameters, tracking), MAVSDK's camera plugin, each against
-#             both behaviours of the simulated gimbal in lock; the host simulation session
+#             both behaviours of the simulated gimbal in lock; a QGroundControl-faithful
+#             client for every camera family, MAVProxy's camera module, MAVLink 2 signing
+#             with pymavlink's; the host simulation session
 #   bench     instruction counts under QEMU -icount (the MAVLink bridge beside the C MAVLink
 #             library on the same bytes) and flash/RAM sizes, with the pinned bench
 #             toolchain; exits 1 over a budget
@@ -78,6 +80,8 @@ stage_fast() {
 
     step "MAVLink bridge (idu-gimbal-mavlink): clippy and build for thumbv7em-none-eabihf"
     cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --examples -- -D warnings
+    # With MAVLink 2 signing: sha2 without std, as a firmware builds it.
+    cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --features signing -- -D warnings
     cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib
     cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --features roi
 
@@ -104,7 +108,7 @@ stage_fast() {
         fi
     done
     CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock,fdcan
-    CARGO_TARGET_DIR=target/msrv cargo "+$bridge_msrv" check -p idu-gimbal-mavlink --features roi
+    CARGO_TARGET_DIR=target/msrv cargo "+$bridge_msrv" check -p idu-gimbal-mavlink --features roi,signing
     # Nothing else reads these checks (half a gigabyte).
     rm -rf target/msrv
 
@@ -161,6 +165,9 @@ stage_e2e() {
     # Once: the vehicle does not turn in it, so what lock holds changes nothing MAVProxy sees.
     step "MAVLink camera: MAVProxy's camera module as the ground station, through a stand-in ArduPilot (dual light with a field of view, X3)"
     python3 gimbalctl/tests/mavproxy_camera.py target/debug/gimbalctl
+
+    step "MAVLink 2 signing: pymavlink's own signing against gimbalctl mavlink --signing-passphrase and --signing-key-file"
+    python3 gimbalctl/tests/mavlink_signing.py target/debug/gimbalctl
 
     step "host_sim: the driver against the simulated gimbal, scripted"
     cargo run --quiet --example host_sim --features mock,std

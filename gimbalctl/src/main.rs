@@ -155,6 +155,12 @@ enum Top {
         /// The video streams' resolution in pixels, each 1-65535 (default unknown)
         #[arg(long, value_name = "WIDTHxHEIGHT")]
         camera_resolution: Option<String>,
+        /// Sign MAVLink 2 with the key MAVProxy's `signing setup` and QGroundControl derive from this passphrase (its SHA-256): only frames signed with it are acted on
+        #[arg(long, value_name = "TEXT", conflicts_with = "signing_key_file")]
+        signing_passphrase: Option<String>,
+        /// Sign MAVLink 2 with the 32-byte key in this file, as 64 hex digits
+        #[arg(long, value_name = "PATH")]
+        signing_key_file: Option<String>,
         /// With --sim: what the simulated gimbal holds in lock while the vehicle turns, its north heading or its motor angle (the vendor document does not say)
         #[arg(long, value_name = "WHAT", value_enum, default_value_t = mavlink::SimLock::North)]
         sim_lock_holds: mavlink::SimLock,
@@ -262,6 +268,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             camera,
             camera_fov,
             camera_resolution,
+            signing_passphrase,
+            signing_key_file,
             sim_lock_holds,
             exit_after_ms,
         } => {
@@ -289,6 +297,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 camera: &camera,
                 camera_fov: camera_fov.as_deref(),
                 camera_resolution: camera_resolution.as_deref(),
+                signing: match (&signing_passphrase, &signing_key_file) {
+                    (Some(p), _) => Some(mavlink::SigningKey::Passphrase(p)),
+                    (None, Some(path)) => Some(mavlink::SigningKey::File(path)),
+                    (None, None) => None,
+                },
                 sim_lock_holds,
                 exit_after_ms,
             })

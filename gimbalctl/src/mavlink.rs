@@ -51,6 +51,7 @@ use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::FrameReader;
+use idu_gimbal_mavlink::signing::SigningConfig;
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
@@ -105,6 +106,60 @@ pub enum SimLock {
     Motor,
 }
 
+/// Where the MAVLink 2 signing key comes from.
+pub enum SigningKey<'a> {
+    /// Its SHA-256 is the key, as MAVProxy and QGroundControl derive it.
+    Passphrase(&'a str),
+    /// A file of 64 hex digits.
+    File(&'a str),
+}
+
+/// The link id gimbalctl signs with.
+const SIGNING_LINK_ID: u8 = 1;
+
+/// The signing configuration `key` names: usage errors for a key file that is not 64 hex
+/// digits, a runtime failure for one that cannot be read.
+fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
+    match key {
+        SigningKey::Passphrase(p) => Ok(SigningConfig::from_passphrase(
+            p.as_bytes(),
+            SIGNING_LINK_ID,
+        )),
+        SigningKey::File(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                Failure::Runtime(format!("--signing-key-file: cannot read {path}: {e}"))
+            })?;
+            let hex = text.trim();
+            let usage = || {
+                Failure::Usage(format!(
+                    "--signing-key-file: {path} holds no key: 64 hex digits (32 bytes) expected"
+                ))
+            };
+            if hex.len() != 64 || !hex.is_ascii() {
+                return Err(usage());
+            }
+            let mut key = [0u8; 32];
+            for (i, k) in key.iter_mut().enumerate() {
+                *k = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| usage())?;
+            }
+            Ok(SigningConfig {
+                key,
+                link_id: SIGNING_LINK_ID,
+            })
+        }
+    }
+}
+
+/// Now as MAVLink 2 signing counts time: 10 µs units since 2015-01-01 00:00 GMT.
+fn signing_timestamp() -> u64 {
+    const EPOCH_2015_S: u64 = 1_420_070_400;
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| {
+            (d.as_micros() / 10).saturating_sub(u128::from(EPOCH_2015_S) * 100_000) as u64
+        })
+}
+
 /// What `gimbalctl mavlink` was asked to do.
 pub struct Options<'a> {
     pub gimbal: Gimbal<'a>,
@@ -115,6 +170,8 @@ pub struct Options<'a> {
     pub camera_fov: Option<&'a str>,
     /// `--camera-resolution WIDTHxHEIGHT`, unparsed.
     pub camera_resolution: Option<&'a str>,
+    /// `--signing-passphrase` or `--signing-key-file`.
+    pub signing: Option<SigningKey<'a>>,
     pub sim_lock_holds: SimLock,
     pub exit_after_ms: Option<u64>,
 }
@@ -222,6 +279,7 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let config = BridgeConfig {
         system_id: opts.system_id,
         camera: Some(camera),
+        signing: opts.signing.as_ref().map(signing_config).transpose()?,
         ..BridgeConfig::default()
     };
     // Every argument checked (exit 2) before anything is opened.
@@ -394,6 +452,8 @@ fn serve<S: Pump>(
             return Ok(());
         }
         let t = now();
+        // The host's clock: the first signed frames already carry the time receivers know.
+        bridge.signing_time_at_least(signing_timestamp());
         let clock = StdInstant::now();
         let drained = match &mut port {
             Port::Udp { socket, to } => {

@@ -92,6 +92,8 @@ pub mod framing;
 pub mod ftp;
 pub mod gimbal;
 mod setpoint;
+#[cfg(feature = "signing")]
+pub mod signing;
 pub mod status;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeStats, ANSWER_ROOM, AUTOPILOT_SILENCE_MS};

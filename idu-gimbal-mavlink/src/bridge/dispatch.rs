@@ -43,6 +43,15 @@ impl State {
         frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
+        // Signing: only frames signed with the key, newer than their stream's last (a frame
+        // changed in transit fails its signature, counted so).
+        #[cfg(feature = "signing")]
+        if let Some(signing) = self.out.signing_mut() {
+            let (system, component) = (frame.system_id(), frame.component_id());
+            if !signing.verify(frame.bytes(), frame.is_signed(), system, component) {
+                return Check::Unhandled;
+            }
+        }
         let id = frame.message_id();
         let from = (frame.system_id(), frame.component_id());
         // The messages received many times a second first, each decoded by its own codec

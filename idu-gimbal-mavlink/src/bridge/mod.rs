@@ -68,6 +68,11 @@ pub struct BridgeConfig {
     pub attitude_status_ms: u32,
     /// The camera component; `None`: the bridge is a gimbal device only.
     pub camera: Option<CameraConfig>,
+    /// MAVLink 2 signing (feature `signing`; see [`crate::signing`]): with a key, only
+    /// frames signed with it and newer than their stream's last are acted on, and
+    /// everything sent is signed. `None` (the default): nothing is signed or checked.
+    #[cfg(feature = "signing")]
+    pub signing: Option<crate::signing::SigningConfig>,
 }
 
 impl Default for BridgeConfig {
@@ -78,6 +83,8 @@ impl Default for BridgeConfig {
             heartbeat_ms: 1000,
             attitude_status_ms: 100,
             camera: None,
+            #[cfg(feature = "signing")]
+            signing: None,
         }
     }
 }
@@ -296,12 +303,18 @@ impl<G: GimbalControl> Bridge<G> {
             .map(|c| Camera::new(c, config.gimbal_component));
         let system_id = config.system_id.unwrap_or(1);
         let status_ms = config.attitude_status_ms;
+        #[allow(unused_mut)]
+        let mut out = Outbox::new();
+        #[cfg(feature = "signing")]
+        if let Some(signing) = config.signing.clone() {
+            out.sign_with(signing);
+        }
         Bridge {
             gimbal,
             reader: FrameReader::new(),
             state: State {
                 config,
-                out: Outbox::new(),
+                out,
                 system_id,
                 autopilot: None,
                 autopilot_heard: None,
@@ -399,6 +412,22 @@ impl<G: GimbalControl> Bridge<G> {
     /// The frame reader, for its state ([`FrameReader::pending`]).
     pub fn reader(&self) -> &FrameReader {
         &self.reader
+    }
+
+    /// What signing accepted and turned away; `None` when not signing (feature `signing`).
+    #[cfg(feature = "signing")]
+    pub fn signing_stats(&self) -> Option<crate::signing::SigningStats> {
+        self.state.out.signing().map(|s| s.stats())
+    }
+
+    /// The timestamps signed from now on are at least `timestamp` (10 µs units since
+    /// 2015-01-01 GMT, as the specification counts): a host with a clock gives it, so that
+    /// receivers that know the time take its first frames (feature `signing`).
+    #[cfg(feature = "signing")]
+    pub fn signing_time_at_least(&mut self, timestamp: u64) {
+        if let Some(s) = self.state.out.signing_mut() {
+            s.at_least(timestamp);
+        }
     }
 
     /// All counters.

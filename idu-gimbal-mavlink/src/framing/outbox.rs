@@ -11,7 +11,7 @@
 use mavio::mavspec::rust::spec::MavLinkVersion;
 use mavio::Message;
 
-use super::{x25, CHECKSUM_LEN, HEADER_LEN, STX_V2};
+use super::{x25, CHECKSUM_LEN, HEADER_LEN, IFLAG_SIGNED, STX_V2};
 
 /// Why a message was not queued for sending.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -34,6 +34,9 @@ pub struct Outbox<const N: usize> {
     start: usize,
     end: usize,
     sequence: u8,
+    /// Signs every frame when set (feature `signing`).
+    #[cfg(feature = "signing")]
+    signing: Option<crate::signing::Signing>,
 }
 
 impl<const N: usize> Default for Outbox<N> {
@@ -50,7 +53,36 @@ impl<const N: usize> Outbox<N> {
             start: 0,
             end: 0,
             sequence: 0,
+            #[cfg(feature = "signing")]
+            signing: None,
         }
+    }
+
+    /// Signs every frame from now on with `config` (feature `signing`).
+    #[cfg(feature = "signing")]
+    pub(crate) fn sign_with(&mut self, config: crate::signing::SigningConfig) {
+        self.signing = Some(crate::signing::Signing::new(config));
+    }
+
+    /// The signing state, when signing.
+    #[cfg(feature = "signing")]
+    pub(crate) fn signing_mut(&mut self) -> Option<&mut crate::signing::Signing> {
+        self.signing.as_mut()
+    }
+
+    /// The signing state, when signing.
+    #[cfg(feature = "signing")]
+    pub(crate) fn signing(&self) -> Option<&crate::signing::Signing> {
+        self.signing.as_ref()
+    }
+
+    /// The signature block's length on every frame: 13 when signing.
+    fn signature_len(&self) -> usize {
+        #[cfg(feature = "signing")]
+        if self.signing.is_some() {
+            return crate::signing::SIGNATURE_LEN;
+        }
+        0
     }
 
     /// Queues `message` from `(system, component)` as one MAVLink 2 frame, its payload
@@ -107,7 +139,8 @@ impl<const N: usize> Outbox<N> {
         if !(1..=255).contains(&len) {
             return Err(OutboxError::Encode);
         }
-        let frame_len = HEADER_LEN + len + CHECKSUM_LEN;
+        let signature_len = self.signature_len();
+        let frame_len = HEADER_LEN + len + CHECKSUM_LEN + signature_len;
         if N - self.len() < frame_len {
             return Err(OutboxError::Full);
         }
@@ -130,7 +163,8 @@ impl<const N: usize> Outbox<N> {
         head.copy_from_slice(&[
             STX_V2,
             sent as u8,
-            0, // incompatibility flags: not signed
+            // Incompatibility flags: signed or not.
+            u8::from(signature_len > 0) * IFLAG_SIGNED,
             0, // compatibility flags
             self.sequence,
             system,
@@ -141,10 +175,18 @@ impl<const N: usize> Outbox<N> {
         ]);
         let checksummed = frame.get(1..HEADER_LEN + sent).unwrap_or(&[]);
         let crc = x25::step(x25::update(x25::INIT, checksummed), crc_extra);
-        if let Some(at) = frame.get_mut(HEADER_LEN + sent..HEADER_LEN + sent + CHECKSUM_LEN) {
+        let body_len = HEADER_LEN + sent + CHECKSUM_LEN;
+        if let Some(at) = frame.get_mut(HEADER_LEN + sent..body_len) {
             at.copy_from_slice(&crc.to_le_bytes());
         }
-        self.end += HEADER_LEN + sent + CHECKSUM_LEN;
+        #[cfg(feature = "signing")]
+        if let Some(signing) = self.signing.as_mut() {
+            let block = signing.sign(frame.get(..body_len).unwrap_or(&[]));
+            if let Some(at) = frame.get_mut(body_len..body_len + signature_len) {
+                at.copy_from_slice(&block);
+            }
+        }
+        self.end += body_len + signature_len;
         self.sequence = self.sequence.wrapping_add(1);
         Ok(())
     }

@@ -32,9 +32,20 @@ fn main() -> ! {
     if let Some(c) = camera.as_mut() {
         c.fov = FieldOfView::from_degrees(input(6) as f32, input(7) as f32).ok();
     }
+    // With the `signing` feature, a key as a firmware reads it from its storage.
+    #[cfg(feature = "signing")]
+    let signing = Some(idu_gimbal_mavlink::signing::SigningConfig {
+        key: [input(8) as u8; 32],
+        link_id: input(9) as u8,
+    });
     let Some(bridge) = cortex_m::singleton!(: Bridge<Gimbal<RegCan>> = Bridge::new(
         Gimbal::new(RegCan, Config::default()),
-        BridgeConfig { camera, ..BridgeConfig::default() },
+        BridgeConfig {
+            camera,
+            #[cfg(feature = "signing")]
+            signing,
+            ..BridgeConfig::default()
+        },
     )) else {
         cortex_m::asm::udf()
     };
