@@ -34,17 +34,7 @@ fn sign(unsigned: &[u8], crc_extra: u8, key: &[u8; 32], timestamp: u64) -> Vec<u
     let len = usize::from(unsigned[1]);
     let mut f = unsigned[..10 + len].to_vec();
     f[2] = 0x01;
-    let mut crc: u16 = 0xFFFF;
-    for &b in f[1..].iter().chain([crc_extra].iter()) {
-        crc ^= u16::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0x8408
-            } else {
-                crc >> 1
-            };
-        }
-    }
+    let crc = checksum(&f[1..], crc_extra);
     f.extend_from_slice(&crc.to_le_bytes());
     f.push(1);
     f.extend_from_slice(&timestamp.to_le_bytes()[..6]);

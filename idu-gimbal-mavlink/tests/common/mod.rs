@@ -185,15 +185,11 @@ pub fn position(lat: i32, lon: i32, alt_mm: i32, relative_mm: i32) -> GlobalPosi
     }
 }
 
-/// A MAVLink 2 frame of message `id` with `payload` as given, its checksum computed here
-/// (CRC-16/MCRF4XX bit by bit, then `crc_extra`): what a sender whose dialect `mavio` does
-/// not share puts on the wire.
-pub fn raw_frame(from: (u8, u8), id: u32, crc_extra: u8, payload: &[u8]) -> Vec<u8> {
-    let mut f = vec![0xFD, payload.len() as u8, 0, 0, 0, from.0, from.1];
-    f.extend_from_slice(&id.to_le_bytes()[..3]);
-    f.extend_from_slice(payload);
+/// MAVLink's checksum of `bytes` (a frame after its start byte, to the payload's end) and
+/// `crc_extra`: CRC-16/MCRF4XX bit by bit, independent of the crate's table.
+pub fn checksum(bytes: &[u8], crc_extra: u8) -> u16 {
     let mut crc: u16 = 0xFFFF;
-    for &b in f[1..].iter().chain([crc_extra].iter()) {
+    for &b in bytes.iter().chain([crc_extra].iter()) {
         crc ^= u16::from(b);
         for _ in 0..8 {
             crc = if crc & 1 != 0 {
@@ -203,6 +199,17 @@ pub fn raw_frame(from: (u8, u8), id: u32, crc_extra: u8, payload: &[u8]) -> Vec<
             };
         }
     }
+    crc
+}
+
+/// A MAVLink 2 frame of message `id` with `payload` as given, its checksum computed here
+/// (CRC-16/MCRF4XX bit by bit, then `crc_extra`): what a sender whose dialect `mavio` does
+/// not share puts on the wire.
+pub fn raw_frame(from: (u8, u8), id: u32, crc_extra: u8, payload: &[u8]) -> Vec<u8> {
+    let mut f = vec![0xFD, payload.len() as u8, 0, 0, 0, from.0, from.1];
+    f.extend_from_slice(&id.to_le_bytes()[..3]);
+    f.extend_from_slice(payload);
+    let crc = checksum(&f[1..], crc_extra);
     f.extend_from_slice(&crc.to_le_bytes());
     f
 }
