@@ -22,6 +22,32 @@ fn drain(bridge: &mut Bridge<Link<3, 4>>, out: &mut FrameReader) {
     }
 }
 
+/// `bytes` into the bridge at `now`, its answers drained into `out` whenever a frame waits
+/// for room: every byte is taken, and a drained outbox always takes the frame that waited
+/// (no frame waits for ever).
+fn receive_all(bridge: &mut Bridge<Link<3, 4>>, bytes: &[u8], now: Instant, out: &mut FrameReader) {
+    let mut rest = bytes;
+    loop {
+        let taken = bridge.receive(rest, now);
+        assert!(taken <= rest.len(), "took more than it was given");
+        rest = rest.get(taken..).unwrap_or(&[]);
+        bridge.gimbal_mut().poll(now);
+        bridge.poll(now);
+        let waiting = bridge.reader().is_waiting();
+        drain(bridge, out);
+        if rest.is_empty() && !waiting {
+            return;
+        }
+        // The outbox is empty now: the frame that waited goes at once.
+        let taken = bridge.receive(&[], now);
+        assert_eq!(taken, 0);
+        assert!(
+            !bridge.reader().is_waiting(),
+            "a frame still waits with the outbox empty"
+        );
+    }
+}
+
 /// What the bridge sent was whole MAVLink 2 frames: `out` skipped nothing and is left with
 /// nothing pending.
 fn assert_whole_frames(out: &FrameReader) {
@@ -58,7 +84,7 @@ pub fn mavlink_bridge(data: &[u8]) {
     let mut out = FrameReader::new();
     for (i, part) in [a, b].into_iter().enumerate() {
         let now = Instant::from_millis(1_000 * i as u32);
-        bridge.receive(part, now);
+        receive_all(&mut bridge, part, now, &mut out);
         bridge.gimbal_mut().poll(now);
         bridge.poll(now);
         drain(&mut bridge, &mut out);
@@ -119,7 +145,7 @@ pub fn mavlink_messages(data: &[u8]) {
         // Time passes by the first payload byte's worth of milliseconds, across the wrap.
         ms = ms.wrapping_add(u32::from(payload.first().copied().unwrap_or(0)) * 16);
         let now = Instant::from_millis(ms.wrapping_sub(1_000));
-        bridge.receive(&frame, now);
+        receive_all(&mut bridge, &frame, now, &mut out);
         bridge.gimbal_mut().poll(now);
         bridge.poll(now);
         drain(&mut bridge, &mut out);

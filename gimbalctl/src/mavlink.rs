@@ -7,8 +7,10 @@
 //! reads at most [`DATAGRAMS_PER_TICK`] datagrams, sending each one's answers before the
 //! next is read (so a burst of requests never piles up in the bridge's outbox), then moves
 //! the gimbal side, polls the bridge and sends, so a flood of datagrams cannot starve the
-//! bridge's own traffic. Requests in one datagram beyond what the outbox holds at once are
-//! answered `TEMPORARILY_REJECTED` ([`idu_gimbal_mavlink::ANSWER_ROOM`]).
+//! bridge's own traffic. A datagram of more requests than the outbox holds answers for is
+//! taken in parts, each part's answers sent before the next part is offered
+//! ([`idu_gimbal_mavlink::ANSWER_ROOM`]); on a serial port, the bytes after a frame waiting
+//! for room are held and offered again first.
 //!
 //! Each datagram is parsed on its own ([`Bridge::receive_datagram`]): MAVLink on UDP carries
 //! whole frames, so a frame cut at a datagram's end is dropped rather than joined to the next
@@ -439,6 +441,8 @@ fn serve<S: Pump>(
     };
     // Allocated once; see DATAGRAM_BUFFER.
     let mut buf = vec![0u8; DATAGRAM_BUFFER];
+    // Serial bytes the bridge handed back (a frame waiting for room in its outbox).
+    let mut held = Vec::new();
     let mut was_up = false;
     let mut notes_at = start + NOTE_EVERY;
     // Said at most once a NOTE_EVERY, as the count grows.
@@ -462,7 +466,7 @@ fn serve<S: Pump>(
             Port::Udp { socket, to } => {
                 receive_udp(&mut bridge, socket, to, &mut clients, &mut buf, t, clock)?
             }
-            Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, t)?,
+            Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, &mut held, t)?,
         };
         S::pump(&mut bridge, &mut side, t)?;
         bridge.poll(t);
@@ -518,13 +522,29 @@ fn receive_serial<G: GimbalControl>(
     bridge: &mut Bridge<G>,
     port: &mut StreamPort,
     buf: &mut [u8],
+    held: &mut Vec<u8>,
     t: Instant,
 ) -> Result<bool, Failure> {
+    // The bytes after a frame that waited for room in the outbox, before anything newer.
+    if !held.is_empty() {
+        let taken = bridge.receive(held, t);
+        held.drain(..taken);
+        if !held.is_empty() {
+            // Still waiting: the port keeps what came since until the outbox drains.
+            return Ok(true);
+        }
+    }
     let chunk = buf.len().min(4096);
     for _ in 0..SERIAL_READS_PER_TICK {
         match port.read_now(&mut buf[..chunk]) {
             Ok(0) => return Ok(true),
-            Ok(n) => bridge.receive(&buf[..n], t),
+            Ok(n) => {
+                let taken = bridge.receive(&buf[..n], t);
+                if taken < n {
+                    held.extend_from_slice(&buf[taken..n]);
+                    return Ok(true);
+                }
+            }
             Err(e) => return Err(Failure::Runtime(e.0)),
         }
     }
@@ -619,8 +639,9 @@ mod tests {
                 }
                 // A byte stream, as from --autopilot-serial, in two pieces.
                 let (a, b) = bytes.split_at(bytes.len() / 3);
-                bridge.receive(a, now);
-                bridge.receive(b, now);
+                // Drained every tick: every byte is taken at once.
+                assert_eq!(bridge.receive(a, now), a.len());
+                assert_eq!(bridge.receive(b, now), b.len());
             }
             SessionSide::pump(&mut bridge, &mut side, now).unwrap();
             bridge.poll(now);

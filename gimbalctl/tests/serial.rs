@@ -421,3 +421,72 @@ fn mavlink_bridges_an_autopilot_on_a_serial_port() {
         "{first}"
     );
 }
+
+/// `mavlink --sim --autopilot-serial`: twenty requests in one write, more than the bridge's
+/// outbox holds answers for: every one ACCEPTED with its message, exactly once. The bridge
+/// takes the stream up to a frame that waits for room and holds the rest until it has sent.
+/// (Once three were ACCEPTED, the rest TEMPORARILY_REJECTED, and refusals that did not fit
+/// the outbox lost.)
+#[test]
+fn a_burst_of_requests_on_the_autopilot_serial_port_is_answered_in_full() {
+    use mavio::dialects::common::enums::MavResult;
+    use mavio::dialects::common::messages::CommandAck;
+    let mut ap = TestPty::new();
+    let ap_path = ap.path.clone();
+    let (_bridge, _out, stderr) = spawn(&[
+        "mavlink",
+        "--sim",
+        "--autopilot-serial",
+        &ap_path,
+        "--exit-after-ms",
+        "30000",
+    ]);
+    wait_open(&mut ap);
+    // Heartbeats until the bridge is heard: it has the port open and configured (bytes
+    // written before then may be flushed).
+    let mut heard = Heard::default();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !heard.has::<Heartbeat>() {
+        ap.write(&frame(AP, 0, &autopilot_heartbeat()));
+        heard.feed(&ap.read_for(Duration::from_millis(100)));
+        heard.assert_before(deadline, &stderr, &stderr);
+    }
+    let mut bytes = Vec::new();
+    for seq in 1..=20 {
+        bytes.extend(frame(AP, seq, &request_information(AP.0)));
+    }
+    ap.write(&bytes);
+    let (mut acks, mut information) = (Vec::new(), 0);
+    let mut reader = FrameReader::new();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while information < 20 && Instant::now() < deadline {
+        reader.feed(&ap.read_for(Duration::from_millis(100)), |f| {
+            match f.to_frame() {
+                Some(m) if m.component_id() == GIMBAL => {
+                    if let Ok(ack) = m.decode_message::<CommandAck>() {
+                        acks.push(ack.result);
+                    } else if m.message_id() == GimbalDeviceInformation::spec().id() {
+                        information += 1;
+                    }
+                }
+                _ => {}
+            }
+            Check::Unhandled
+        });
+    }
+    // Anything more would come within the next moments.
+    reader.feed(&ap.read_for(Duration::from_millis(300)), |f| {
+        if let Some(m) = f.to_frame() {
+            if m.component_id() == GIMBAL {
+                if let Ok(ack) = m.decode_message::<CommandAck>() {
+                    acks.push(ack.result);
+                } else if m.message_id() == GimbalDeviceInformation::spec().id() {
+                    information += 1;
+                }
+            }
+        }
+        Check::Unhandled
+    });
+    assert_eq!(acks, vec![MavResult::Accepted; 20], "{}", stderr.text());
+    assert_eq!(information, 20, "{}", stderr.text());
+}

@@ -114,7 +114,7 @@ impl Rig {
     fn send(&mut self, message: &dyn mavio::Message) {
         self.seq = self.seq.wrapping_add(1);
         let bytes = frame(AP, self.seq, message);
-        self.bridge.receive(&bytes, t(self.now));
+        self.bridge.receive_all(&bytes, t(self.now));
     }
 
     /// One millisecond: the autopilot's heartbeat (1 Hz), state and setpoint (50 Hz, as
@@ -287,7 +287,8 @@ fn both_streams_starting_in_one_datagram_leave_the_camera_where_the_setpoint_say
             2,
             &setpoint(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 40.0, 0.0),
         ));
-        rig.bridge.receive_datagram(&datagram, t(0));
+        let taken = rig.bridge.receive_datagram(&datagram, t(0));
+        assert_eq!(taken.bytes, datagram.len());
         rig.setpoint = Some((GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 40.0, 0.0));
         rig.run(3000);
         // 40 from the nose, not 70 (40 taken north-referenced with the vehicle at 30).
@@ -351,7 +352,7 @@ fn an_image_carries_the_cameras_attitude_in_the_earth_frame() {
         b.gimbal_mut()
             .receive(idu_gimbal::wire::ids::POSTBACK, &d, t(10));
     }
-    b.receive(
+    b.receive_all(
         &frame(
             AP,
             1,

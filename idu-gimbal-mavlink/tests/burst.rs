@@ -1,6 +1,6 @@
-//! Bursts of requests: no ACK promising a message that is then dropped, whatever the outbox
-//! has room for; a request refused (`TEMPORARILY_REJECTED`) when its answer would not fit;
-//! nothing lost uncounted.
+//! Bursts of requests: every request answered exactly once, in full (its ACK and the message
+//! it promises), whatever the outbox has room for and however the bytes are split: a frame
+//! whose answer would not fit waits in the bridge, and the bytes after it are handed back.
 
 mod common;
 use common::*;
@@ -10,7 +10,7 @@ use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::Bridge;
+use idu_gimbal_mavlink::{Bridge, ANSWER_ROOM};
 use mavio::dialects::common::enums::{MavCmd, MavResult};
 use mavio::dialects::common::messages::CommandAck;
 use proptest::prelude::*;
@@ -72,57 +72,142 @@ impl Answers {
     }
 }
 
+/// The answers to `asked` requests a client each: one ACCEPTED ACK a request and one message
+/// an ACCEPTED, nothing dropped.
+fn assert_all_answered(a: &Answers, asked: &[usize], b: &Bridge<Link>) {
+    for (c, &n) in asked.iter().enumerate() {
+        assert_eq!(a.acks[c], vec![MavResult::Accepted; n], "client {c}: {a:?}");
+    }
+    let messages: usize = REQUESTS
+        .iter()
+        .map(|(_, id)| a.messages.get(id).copied().unwrap_or(0))
+        .sum();
+    assert_eq!(messages, asked.iter().sum::<usize>(), "{a:?}");
+    assert_eq!(b.stats().outbox_full, 0, "{:?}", b.stats());
+    assert!(!b.reader().is_waiting());
+}
+
 #[test]
-fn six_information_requests_in_one_chunk_each_get_one_answer_and_none_a_false_promise() {
-    // Six REQUEST_MESSAGE(CAMERA_INFORMATION) in one datagram once got six ACCEPTED and
-    // three messages.
+fn six_information_requests_in_one_chunk_wait_for_room_and_are_all_answered() {
+    // Six REQUEST_MESSAGE(CAMERA_INFORMATION) in one read once got six ACCEPTED and three
+    // messages; then three ACCEPTED and three TEMPORARILY_REJECTED, a refusal's ACK lost
+    // whenever not even it fitted.
     let mut b = bridge();
+    let one = request(0, 0, 0).len();
     let burst: Vec<u8> = (0..6).flat_map(|i| request(0, i, 0)).collect();
-    b.receive(&burst, t(10));
+    let taken = b.receive(&burst, t(10));
+    // Each answer is an ACK and a CAMERA_INFORMATION; a request is acted on only with
+    // ANSWER_ROOM free of the 1,024 bytes: the third waits, the bytes after it handed back.
+    let answer = sent_len_of_one_answer();
+    assert!(1024 - 2 * answer < ANSWER_ROOM && 1024 - answer >= ANSWER_ROOM);
+    assert_eq!(taken, 3 * one, "the third frame waits whole in the bridge");
+    assert!(b.reader().is_waiting());
     let mut a = Answers::default();
     a.take(&mut b);
-    assert_eq!(a.acks[0].len(), 6, "{a:?}");
-    let accepted = a.acks[0]
+    assert_eq!(a.acks[0], vec![MavResult::Accepted; 2]);
+    // A poll takes the frame that waited once the outbox drained; then the rest.
+    b.poll(t(11));
+    assert!(!b.reader().is_waiting());
+    a.take(&mut b);
+    let mut rest = &burst[taken..];
+    while !rest.is_empty() {
+        let n = b.receive(rest, t(12));
+        rest = &rest[n..];
+        a.take(&mut b);
+    }
+    b.poll(t(13));
+    a.take(&mut b);
+    assert_all_answered(&a, &[6, 0, 0], &b);
+}
+
+/// The bytes of one CAMERA_INFORMATION request's answer (its ACK and the message).
+fn sent_len_of_one_answer() -> usize {
+    let mut b = bridge();
+    b.receive_all(&request(0, 0, 0), t(10));
+    b.transmit_bytes().len()
+}
+
+#[test]
+fn six_information_requests_in_one_datagram_are_handed_back_and_all_answered() {
+    let mut b = bridge();
+    let one = request(0, 0, 0).len();
+    let datagram: Vec<u8> = (0..6).flat_map(|i| request(0, i, 0)).collect();
+    let mut a = Answers::default();
+    let mut at = 0;
+    let mut takes = Vec::new();
+    while at < datagram.len() {
+        let taken = b.receive_datagram(&datagram[at..], t(10));
+        assert_eq!(taken.bytes % one, 0, "handed back at a frame's start");
+        assert_eq!(taken.good as usize, taken.bytes / one);
+        takes.push(taken.bytes / one);
+        at += taken.bytes;
+        // Nothing of the datagram stays in the bridge: the next sender's datagram starts
+        // clean.
+        assert_eq!(b.reader().pending(), 0);
+        a.take(&mut b);
+    }
+    // Two answers fit the outbox at a time.
+    assert_eq!(takes, [2, 2, 2]);
+    assert_all_answered(&a, &[6, 0, 0], &b);
+}
+
+#[test]
+fn a_waiting_frame_holds_back_the_frames_after_it_in_order() {
+    // A request waits; the heartbeat after it is not taken before it.
+    let mut b = bridge();
+    let mut bytes: Vec<u8> = (0..3).flat_map(|i| request(0, i, 0)).collect();
+    let three = bytes.len();
+    bytes.extend(frame(CLIENTS[1], 9, &heartbeat()));
+    let before = b.stats().reader.frames;
+    assert_eq!(b.receive(&bytes, t(10)), three);
+    // Two requests taken, the third waits (not yet counted), the heartbeat not read.
+    assert_eq!(b.stats().reader.frames - before, 2);
+    // Without a drain, nothing moves.
+    assert_eq!(b.receive(&bytes[three..], t(11)), 0);
+    b.poll(t(11));
+    assert!(b.reader().is_waiting());
+    let _ = sent(&mut b);
+    assert_eq!(b.receive(&bytes[three..], t(12)), bytes.len() - three);
+    assert_eq!(b.stats().reader.frames - before, 4);
+}
+
+/// Requests as (client, which of [`REQUESTS`]), and where to cut and whether to drain there.
+type Burst = (Vec<(usize, usize)>, Vec<(usize, bool)>);
+
+/// Requests and where to cut and drain, for the properties below.
+fn requests_and_cuts() -> impl Strategy<Value = Burst> {
+    (
+        prop::collection::vec((0..CLIENTS.len(), 0..REQUESTS.len()), 1..40),
+        prop::collection::vec((1usize..400, any::<bool>()), 1..40),
+    )
+}
+
+fn burst_of(requests: &[(usize, usize)]) -> (Vec<Vec<u8>>, Vec<usize>) {
+    let mut asked = vec![0usize; CLIENTS.len()];
+    let frames = requests
         .iter()
-        .filter(|&&r| r == MavResult::Accepted)
-        .count();
-    assert_eq!(
-        a.messages.get(&259).copied().unwrap_or(0),
-        accepted,
-        "{a:?}"
-    );
-    assert!(accepted >= 1, "{a:?}");
-    let rejected = a.acks[0]
-        .iter()
-        .filter(|&&r| r == MavResult::TemporarilyRejected)
-        .count();
-    assert_eq!(accepted + rejected, 6, "{a:?}");
-    assert_eq!(b.stats().rejected_no_room as usize, rejected);
-    // The outbox drained, the same burst is answered as far as room goes again.
-    b.receive(&burst, t(20));
-    let mut again = Answers::default();
-    again.take(&mut b);
-    assert_eq!(again.acks[0].len(), 6);
+        .enumerate()
+        .map(|(i, &(client, which))| {
+            asked[client] += 1;
+            request(client, i as u8, which)
+        })
+        .collect();
+    (frames, asked)
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
-    /// Any interleaving of requests from three clients, fed in any split, the outbox drained
-    /// at any points: every ACCEPTED gets its message, no request two ACKs, and a request
-    /// left without one only when not even its refusal fitted the outbox, counted.
+    /// Any interleaving of requests from three clients, as a byte stream fed in any split,
+    /// the outbox drained at any points (and whenever nothing was taken): every request is
+    /// answered exactly once, ACCEPTED with its message, and nothing is dropped.
     #[test]
-    fn no_promise_is_dropped_and_nothing_is_lost_uncounted(
-        requests in prop::collection::vec((0..CLIENTS.len(), 0..REQUESTS.len()), 1..40),
-        cuts in prop::collection::vec((1usize..400, any::<bool>()), 1..40),
+    fn every_request_in_a_stream_is_answered_once_in_full(
+        (requests, cuts) in requests_and_cuts(),
     ) {
         let mut b = bridge();
-        let mut bytes = Vec::new();
-        let mut asked = vec![0usize; CLIENTS.len()];
-        for (i, &(client, which)) in requests.iter().enumerate() {
-            bytes.extend(request(client, i as u8, which));
-            asked[client] += 1;
-        }
+        let (frames, asked) = burst_of(&requests);
+        let bytes = frames.concat();
         let mut a = Answers::default();
         let mut at = 0;
         for (ms, &(len, drain)) in (10..).zip(cuts.iter().cycle()) {
@@ -130,24 +215,48 @@ proptest! {
                 break;
             }
             let end = (at + len).min(bytes.len());
-            b.receive(&bytes[at..end], t(ms));
-            at = end;
-            if drain {
+            let taken = b.receive(&bytes[at..end], t(ms));
+            prop_assert!(taken <= end - at);
+            at += taken;
+            if drain || taken == 0 {
                 a.take(&mut b);
+                b.poll(t(ms));
             }
         }
         a.take(&mut b);
-        let mut unanswered = 0;
-        for (c, &n) in asked.iter().enumerate() {
-            prop_assert!(a.acks[c].len() <= n, "client {}: {:?}", c, a);
-            unanswered += n - a.acks[c].len();
+        b.poll(t(1_000));
+        a.take(&mut b);
+        assert_all_answered(&a, &asked, &b);
+    }
+
+    /// The same requests in datagrams of any number of frames: each datagram taken up to a
+    /// frame that waits, offered again after a drain, every request answered once in full.
+    #[test]
+    fn every_request_in_datagrams_is_answered_once_in_full(
+        (requests, cuts) in requests_and_cuts(),
+    ) {
+        let mut b = bridge();
+        let (frames, asked) = burst_of(&requests);
+        let mut a = Answers::default();
+        let mut frames = frames.as_slice();
+        for (ms, &(len, drain)) in (10..).zip(cuts.iter().cycle()) {
+            if frames.is_empty() {
+                break;
+            }
+            let (these, rest) = frames.split_at((len % 8 + 1).min(frames.len()));
+            frames = rest;
+            let datagram = these.concat();
+            let mut at = 0;
+            while at < datagram.len() {
+                let taken = b.receive_datagram(&datagram[at..], t(ms));
+                at += taken.bytes;
+                prop_assert_eq!(b.reader().pending(), 0);
+                if drain || at < datagram.len() {
+                    a.take(&mut b);
+                }
+            }
         }
-        let accepted: usize = a.acks.iter().flatten().filter(|&&r| r == MavResult::Accepted).count();
-        let messages: usize = REQUESTS.iter().map(|(_, id)| a.messages.get(id).copied().unwrap_or(0)).sum();
-        prop_assert_eq!(messages, accepted, "{:?}", a);
-        prop_assert!(a.acks.iter().flatten().all(|r| matches!(r, MavResult::Accepted | MavResult::TemporarilyRejected)));
-        // Only refusals are ever dropped, each counted; with a drain after every ~20
-        // requests (1 KiB of outbox), none is.
-        prop_assert_eq!(b.stats().outbox_full as usize, unanswered, "{:?}", b.stats());
+        a.take(&mut b);
+        assert_all_answered(&a, &asked, &b);
     }
 }

@@ -57,7 +57,7 @@ fn ask4(
     let mut c = command((AP.0, to), cmd, p[0], p[1]);
     c.param3 = p[2];
     c.param4 = p[3];
-    b.receive(&frame(GCS, 0, &c), t(ms));
+    b.receive_all(&frame(GCS, 0, &c), t(ms));
     let frames = sent(b);
     let acks: Vec<(u8, CommandAck)> = frames
         .iter()
@@ -587,7 +587,7 @@ fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
     let info = &of::<CameraInformation>(&frames)[0];
     assert_eq!(&info.model_name[..5], b"3.5x\0");
     // The 3.5× yaw motor turns ±325° (the document's Motor_psi scope).
-    b.receive(
+    b.receive_all(
         &frame(
             GCS,
             0,
@@ -615,7 +615,7 @@ fn the_camera_names_its_gimbal_by_the_configured_component() {
             ..BridgeConfig::default()
         },
     );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
     postback(&mut b, GimbalType::X30T, 10);
     let (_, frames) = ask(
         &mut b,

@@ -36,7 +36,7 @@ fn ask(
     p: [f32; 7],
     ms: u32,
 ) -> (MavResult, Vec<Frame<V2>>, Vec<Command>) {
-    b.receive(&frame(GCS, 0, &command7((AP.0, to), cmd, p)), t(ms));
+    b.receive_all(&frame(GCS, 0, &command7((AP.0, to), cmd, p)), t(ms));
     let frames = sent(b);
     let acks: Vec<CommandAck> = of(&frames);
     assert_eq!(acks.len(), 1, "{cmd:?}: one ACK");
@@ -437,7 +437,7 @@ fn fast_calibration_is_the_gyroscope_calibration_addressed_to_the_gimbal() {
     // bridge does not answer.
     let mut c = command((AP.0, 0), cal, 1.0, 0.0);
     c.param5 = 0.0;
-    b.receive(&frame(GCS, 0, &c), t(20));
+    b.receive_all(&frame(GCS, 0, &c), t(20));
     assert!(of::<CommandAck>(&sent(&mut b)).is_empty());
     assert!(queued_all(b.gimbal_mut()).is_empty());
 }

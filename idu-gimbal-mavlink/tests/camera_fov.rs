@@ -51,7 +51,7 @@ fn postback(b: &mut Bridge<Link>, pitch_cdeg: i16, motor_cdeg: i16, ms: u32) {
 
 /// `COMMAND_LONG` to the camera: its one ACK's result.
 fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResult {
-    b.receive(&frame(GCS, 0, &command((AP.0, 100), cmd, p1, p2)), t(ms));
+    b.receive_all(&frame(GCS, 0, &command((AP.0, 100), cmd, p1, p2)), t(ms));
     let acks = of::<CommandAck>(&sent(b));
     assert_eq!(acks.len(), 1, "{cmd:?}: one ACK");
     acks[0].result
@@ -59,7 +59,7 @@ fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResul
 
 /// `CAMERA_FOV_STATUS` asked for: ACCEPTED, then the one status.
 fn fov_status(b: &mut Bridge<Link>, ms: u32) -> CameraFovStatus {
-    b.receive(
+    b.receive_all(
         &frame(
             GCS,
             0,
@@ -76,7 +76,7 @@ fn fov_status(b: &mut Bridge<Link>, ms: u32) -> CameraFovStatus {
 
 /// The visible (main) stream's and the infrared stream's `hfov`.
 fn stream_hfov(b: &mut Bridge<Link>, ms: u32) -> (u16, u16) {
-    b.receive(
+    b.receive_all(
         &frame(
             GCS,
             0,
@@ -183,8 +183,8 @@ fn placed(
     motor_cdeg: i16,
 ) -> Bridge<Link> {
     let mut b = bridge(lens());
-    b.receive(&frame(AP, 1, &pos), t(10));
-    b.receive(&frame(AP, 2, &autopilot_state(vehicle_yaw_deg)), t(10));
+    b.receive_all(&frame(AP, 1, &pos), t(10));
+    b.receive_all(&frame(AP, 2, &autopilot_state(vehicle_yaw_deg)), t(10));
     postback(&mut b, pitch_cdeg, motor_cdeg, 20);
     let _ = sent(&mut b);
     b

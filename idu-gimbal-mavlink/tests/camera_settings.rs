@@ -30,7 +30,7 @@ fn bridge(family: Family) -> Bridge<Link> {
 }
 
 fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32) -> (MavResult, Vec<Frame<V2>>) {
-    b.receive(&frame(GCS, 0, &command((AP.0, CAMERA), cmd, p1, p2)), t(10));
+    b.receive_all(&frame(GCS, 0, &command((AP.0, CAMERA), cmd, p1, p2)), t(10));
     let mut frames = sent(b);
     // What did not fit the outbox at once follows at the next polls.
     for ms in 11..20 {
@@ -140,7 +140,7 @@ fn list(b: &mut Bridge<Link>) -> Vec<(String, u8, u16, u16)> {
         target_system: AP.0,
         target_component: CAMERA,
     };
-    b.receive(&frame(GCS, 0, &m), t(10));
+    b.receive_all(&frame(GCS, 0, &m), t(10));
     let mut frames = sent(b);
     b.poll(t(11));
     frames.extend(sent(b));
@@ -155,7 +155,7 @@ fn set(b: &mut Bridge<Link>, name: &str, value: [u8; 128], ty: MavParamExtType) 
         param_value: value,
         param_type: ty,
     };
-    b.receive(&frame(GCS, 0, &m), t(10));
+    b.receive_all(&frame(GCS, 0, &m), t(10));
     let acks: Vec<ParamExtAck> = of(&sent(b));
     assert_eq!(acks.len(), 1);
     acks[0].clone()
@@ -200,7 +200,7 @@ fn setting_the_palette_sends_the_gimbal_its_command_and_acks_the_value() {
             param_id: id,
             param_index: index,
         };
-        b.receive(&frame(GCS, 0, &m), t(20));
+        b.receive_all(&frame(GCS, 0, &m), t(20));
         assert_eq!(
             values(&sent(&mut b)),
             vec![("IR_PALETTE".to_string(), 10, 1, 3)]
@@ -347,7 +347,7 @@ fn reads_of_unknown_names_or_indexes_are_not_answered() {
             param_id: id,
             param_index: index,
         };
-        b.receive(&frame(GCS, 0, &m), t(20));
+        b.receive_all(&frame(GCS, 0, &m), t(20));
         assert!(values(&sent(&mut b)).is_empty());
     }
     // A list for another component is not ours.
@@ -355,7 +355,7 @@ fn reads_of_unknown_names_or_indexes_are_not_answered() {
         target_system: AP.0,
         target_component: 1,
     };
-    b.receive(&frame(GCS, 0, &m), t(30));
+    b.receive_all(&frame(GCS, 0, &m), t(30));
     assert!(values(&sent(&mut b)).is_empty());
 }
 
@@ -378,7 +378,7 @@ fn ftp(seq: u16, session: u8, opcode: u8, offset: u32, data: &[u8]) -> FileTrans
 
 /// The FTP replies to `m`, with the polls that follow a burst.
 fn ftp_ask(b: &mut Bridge<Link>, m: &FileTransferProtocol) -> Vec<FileTransferProtocol> {
-    b.receive(&frame(GCS, 0, m), t(10));
+    b.receive_all(&frame(GCS, 0, m), t(10));
     let mut frames = sent(b);
     for ms in 11..40 {
         b.poll(t(ms));
@@ -508,14 +508,14 @@ fn the_definitions_model_is_the_camera_informations() {
 fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     let mut b = bridge(Family::DualLight);
     let other: (u8, u8) = (GCS.0, GCS.1 + 1);
-    b.receive(&frame(GCS, 0, &ftp(1, 0, OPEN, 0, b"/camera.xml")), t(10));
+    b.receive_all(&frame(GCS, 0, &ftp(1, 0, OPEN, 0, b"/camera.xml")), t(10));
     let _ = sent(&mut b);
     // The burst starts (its first packet answers the request)...
     let mut m = ftp(2, 0, BURST, 0, &[]);
     m.payload[4] = 80;
-    b.receive(&frame(GCS, 1, &m), t(10));
+    b.receive_all(&frame(GCS, 1, &m), t(10));
     // ... and another client asks something before the rest is sent.
-    b.receive(&frame(other, 0, &ftp(7, 0, 0, 0, &[])), t(10));
+    b.receive_all(&frame(other, 0, &ftp(7, 0, 0, 0, &[])), t(10));
     let mut frames = sent(&mut b);
     for ms in 11..40 {
         b.poll(t(ms));
@@ -564,7 +564,7 @@ fn a_set_of_a_type_the_dialect_does_not_know_is_answered() {
     // A type past MAV_PARAM_EXT_TYPE's (11 is its last): answered, once, VALUE_UNSUPPORTED,
     // with the value in effect and its type for a parameter there is.
     for ty in [0u8, 12, 200, 255] {
-        b.receive(&raw_set("IR_PALETTE", 3, ty), t(10));
+        b.receive_all(&raw_set("IR_PALETTE", 3, ty), t(10));
         let acks = raw_acks(&mut b);
         assert_eq!(acks.len(), 1, "type {ty}");
         let a = &acks[0];
@@ -574,7 +574,7 @@ fn a_set_of_a_type_the_dialect_does_not_know_is_answered() {
             (0, MavParamExtType::Uint8 as u8, unsupported)
         );
         // And an unknown name: echoed, its type as sent.
-        b.receive(&raw_set("NO_SUCH", 3, ty), t(10));
+        b.receive_all(&raw_set("NO_SUCH", 3, ty), t(10));
         let acks = raw_acks(&mut b);
         assert_eq!(acks.len(), 1, "type {ty}");
         assert_eq!(

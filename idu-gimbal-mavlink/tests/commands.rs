@@ -22,7 +22,7 @@ fn bridge() -> Bridge<Link> {
             ..BridgeConfig::default()
         },
     );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
     let _ = sent(&mut b);
     b
 }
@@ -69,7 +69,7 @@ type Ack = (u8, MavCmd, MavResult);
 
 /// The ACKs a message produced, and all frames.
 fn acks_of(b: &mut Bridge<Link>, bytes: &[u8], ms: u32) -> (Vec<Ack>, Vec<Frame<V2>>) {
-    b.receive(bytes, t(ms));
+    b.receive_all(bytes, t(ms));
     let frames = sent(b);
     let acks = frames
         .iter()
@@ -145,7 +145,7 @@ fn command_int_is_answered_for_both_components() {
 fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
     let mut b = bridge();
     // 47.3977420 N, 8.5455940 E, 488.123 m AMSL; home 400 m AMSL (relative_alt 88.123 m).
-    b.receive(
+    b.receive_all(
         &frame(AP, 1, &position(473_977_420, 85_455_940, 488_123, 88_123)),
         t(5),
     );
@@ -260,7 +260,7 @@ fn home_s_height_from_extreme_altitudes_is_refused_never_wrapped() {
     // release build wrapped to a home 4,295 km up and accepted it).
     for (alt, relative) in [(i32::MAX, -1), (i32::MIN, 1), (i32::MIN, i32::MAX)] {
         let mut b = bridge();
-        b.receive(
+        b.receive_all(
             &frame(AP, 1, &position(473_977_420, 85_455_940, alt, relative)),
             t(5),
         );
@@ -325,7 +325,7 @@ fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
             let mut long = vec![0u8; 33];
             long[28..30].copy_from_slice(&command.to_le_bytes());
             (long[30], long[31]) = (AP.0, component);
-            b.receive(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
+            b.receive_all(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
             assert_eq!(
                 raw_acks(&mut b),
                 [(component, command, unsupported)],
@@ -335,7 +335,7 @@ fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
             let mut int = vec![0u8; 35];
             int[28..30].copy_from_slice(&command.to_le_bytes());
             (int[30], int[31], int[32]) = (AP.0, component, 6);
-            b.receive(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
+            b.receive_all(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
             assert_eq!(
                 raw_acks(&mut b),
                 [(component, command, unsupported)],
@@ -347,7 +347,7 @@ fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
             let mut long = vec![0u8; 33];
             long[28..30].copy_from_slice(&command.to_le_bytes());
             (long[30], long[31]) = target;
-            b.receive(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
+            b.receive_all(&raw_frame(GCS, 76, CommandLong::crc_extra(), &long), t(10));
             assert!(raw_acks(&mut b).is_empty(), "{command} to {target:?}");
         }
     }
@@ -355,7 +355,7 @@ fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
     let mut int = vec![0u8; 35];
     int[28..30].copy_from_slice(&(MavCmd::DoSetRoiLocation as u16).to_le_bytes());
     (int[30], int[31], int[32]) = (AP.0, 154, 200);
-    b.receive(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
+    b.receive_all(&raw_frame(GCS, 75, CommandInt::crc_extra(), &int), t(10));
     assert_eq!(
         raw_acks(&mut b),
         [(154, MavCmd::DoSetRoiLocation as u16, unsupported)]
@@ -364,6 +364,6 @@ fn a_command_the_dialect_does_not_know_is_answered_unsupported() {
     let mut bad = raw_frame(GCS, 76, CommandLong::crc_extra(), &[0u8; 33]);
     let n = bad.len();
     bad[n - 1] ^= 1;
-    b.receive(&bad, t(10));
+    b.receive_all(&bad, t(10));
     assert!(raw_acks(&mut b).is_empty());
 }

@@ -336,3 +336,82 @@ proptest! {
         prop_assert_eq!(good, expected);
     }
 }
+
+proptest! {
+    /// A caller that says `Wait` to some frames, in a stream split anywhere: each waiting
+    /// frame is kept whole and offered again first, no byte after it is taken while it
+    /// waits, and in the end every frame is handed out once, in order, nothing skipped.
+    #[test]
+    fn a_waiting_frame_is_offered_again_first_and_nothing_after_it_is_taken(
+        count in 1usize..12,
+        waits in prop::collection::vec(0u8..3, 1..30),
+        cuts in prop::collection::vec(1usize..60, 1..30),
+    ) {
+        let frames: Vec<Vec<u8>> = (0..count)
+            .map(|i| frame((i as u8 + 1, 190), i as u8, &heartbeat()))
+            .collect();
+        let bytes = frames.concat();
+        let mut reader = FrameReader::new();
+        let mut seen = Vec::new();
+        let mut waits = waits.iter().cycle();
+        let mut at = 0;
+        // Waits in a row: at most two, so that the run ends.
+        let mut in_a_row = 0;
+        for &len in cuts.iter().cycle() {
+            let end = (at + len).min(bytes.len());
+            let taken = reader.feed(&bytes[at..end], |f| {
+                if *waits.next().unwrap_or(&0) == 0 || in_a_row == 2 {
+                    in_a_row = 0;
+                    seen.push(f.system_id());
+                    Check::Handled
+                } else {
+                    in_a_row += 1;
+                    Check::Wait
+                }
+            });
+            prop_assert!(taken <= end - at);
+            if reader.is_waiting() {
+                // It holds exactly the frame that waits: the bytes taken end with it.
+                let held = reader.pending();
+                prop_assert_eq!(held, frames[0].len());
+                let next = usize::from(seen.len() as u8);
+                prop_assert_eq!(&bytes[at + taken - held..at + taken], &frames[next][..]);
+            } else {
+                prop_assert_eq!(taken, end - at);
+            }
+            at += taken;
+            if at == bytes.len() && !reader.is_waiting() {
+                break;
+            }
+        }
+        prop_assert_eq!(seen, (1..=count as u8).collect::<Vec<_>>());
+        prop_assert_eq!(reader.stats().skipped_bytes, 0);
+        prop_assert_eq!(reader.stats().frames as usize, count);
+    }
+}
+
+#[test]
+fn a_frame_waiting_at_a_datagrams_end_stays_and_clear_forgets_it() {
+    let hb = frame((1, 190), 0, &heartbeat());
+    let mut reader = FrameReader::new();
+    assert_eq!(reader.feed(&hb, |_| Check::Wait), hb.len());
+    reader.end_datagram(|_| Check::Wait);
+    // Not dropped as an unfinished frame: it waits whole.
+    assert!(reader.is_waiting());
+    assert_eq!(reader.pending(), hb.len());
+    reader.clear();
+    assert!(!reader.is_waiting());
+    assert_eq!(reader.pending(), 0);
+    assert_eq!(reader.stats().skipped_bytes, 0);
+    assert_eq!(reader.stats().frames, 0);
+    // Offered again, it is read as new.
+    let mut n = 0;
+    assert_eq!(
+        reader.feed(&hb, |_| {
+            n += 1;
+            Check::Handled
+        }),
+        hb.len()
+    );
+    assert_eq!(n, 1);
+}

@@ -95,23 +95,23 @@ fn a_signed_request_is_answered_signed_and_nothing_else_is() {
         "{sent:?}"
     );
     // Unsigned: not acted on.
-    b.receive(&request(), t(10));
+    b.receive_all(&request(), t(10));
     assert!(output(&mut b, &k).is_empty());
     // Signed with another key: not acted on.
-    b.receive(
+    b.receive_all(
         &sign(&request(), COMMAND_LONG_CRC_EXTRA, &key(b"another"), T),
         t(20),
     );
     assert!(output(&mut b, &k).is_empty());
     // Signed with the key: the ACK and the information, both signed with it.
     let good = sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T);
-    b.receive(&good, t(30));
+    b.receive_all(&good, t(30));
     let sent = output(&mut b, &k);
     assert_eq!(sent, [(77, true), (283, true)]);
     // The same frame again (replayed): not acted on; a newer one is.
-    b.receive(&good, t(40));
+    b.receive_all(&good, t(40));
     assert!(output(&mut b, &k).is_empty());
-    b.receive(&sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T + 1), t(50));
+    b.receive_all(&sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T + 1), t(50));
     assert_eq!(output(&mut b, &k), [(77, true), (283, true)]);
     let s = b.signing_stats().unwrap();
     assert_eq!(
@@ -126,7 +126,7 @@ fn the_timestamps_sent_go_on_from_the_newest_known() {
     let k = key(KEY_PASSPHRASE);
     let mut b = signing_bridge();
     b.signing_time_at_least(T + 1_000);
-    b.receive(
+    b.receive_all(
         &sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T + 5_000),
         t(10),
     );
@@ -151,7 +151,7 @@ fn the_timestamps_sent_go_on_from_the_newest_known() {
 #[test]
 fn without_a_key_nothing_is_signed_or_checked() {
     let mut b = Bridge::new(Link::new(Config::default()), BridgeConfig::default());
-    b.receive(&request(), t(10));
+    b.receive_all(&request(), t(10));
     assert!(b.signing_stats().is_none());
     let out = output(&mut b, &key(KEY_PASSPHRASE));
     assert_eq!(out, [(77, false), (283, false)]);

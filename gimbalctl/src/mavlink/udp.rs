@@ -96,13 +96,19 @@ pub(super) fn receive_udp<G: GimbalControl>(
     for _ in 0..DATAGRAMS_PER_TICK {
         match socket.recv_from(buf) {
             Ok((n, from)) => {
-                let good = bridge.receive_datagram(&buf[..n], t);
-                if !to.contains(&from) {
-                    heard(clients, from, good, clock);
+                // Taken up to a frame whose answer would not fit the outbox, the answers so
+                // far sent, the rest offered again: every request answered in full. Its
+                // answers at once, too: a burst of datagrams never piles up in the outbox.
+                let mut at = 0;
+                while at < n {
+                    let taken = bridge.receive_datagram(&buf[at..n], t);
+                    at += taken.bytes;
+                    // Before sending: a peer that joins hears its first answers.
+                    if !to.contains(&from) {
+                        heard(clients, from, taken.good, clock);
+                    }
+                    send_udp(bridge, socket, to, clients);
                 }
-                // Its answers at once: a burst of datagrams never piles up in the outbox
-                // behind it, and each request's answer finds room.
-                send_udp(bridge, socket, to, clients);
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
             // A peer that went away (ICMP port unreachable) must not stop the bridge.

@@ -34,6 +34,20 @@ where
 }
 
 impl State {
+    /// A whole frame from the reader: acted on when the outbox has room for the most it can
+    /// ask ([`ANSWER_ROOM`]), else it waits, so that no answer is promised and then dropped.
+    pub(super) fn take<G: GimbalControl>(
+        &mut self,
+        gimbal: &mut G,
+        frame: &ReceivedFrame<'_>,
+        now: Instant,
+    ) -> Check {
+        if self.room() < ANSWER_ROOM {
+            return Check::Wait;
+        }
+        self.dispatch(gimbal, frame, now)
+    }
+
     // Out of line: decoding needs a large stack frame (mavio's 255-byte payload and the
     // message), which would otherwise be set up on every `receive` call, a frame or not.
     #[inline(never)]
@@ -232,14 +246,6 @@ impl State {
         };
         if !owner {
             self.ack(me, from, cmd.command as u16, MavResult::Unsupported);
-            return;
-        }
-        // An ACK that says ACCEPTED promises what follows it (the message asked for, the
-        // settings, an image's report): with no room for the most that follows, the command
-        // is refused before it is acted on, never promised and then dropped.
-        if self.room() < ANSWER_ROOM {
-            bump(&mut self.stats.rejected_no_room);
-            self.ack(me, from, cmd.command as u16, MavResult::TemporarilyRejected);
             return;
         }
         if me == gimbal_id {

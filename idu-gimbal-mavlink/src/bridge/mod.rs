@@ -35,17 +35,35 @@ pub const GIMBAL_COMPONENT: u8 = 154;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
 
-/// Outbox room a command needs to be acted on: its ACK and the most that follows one (two
-/// messages: an image's report and the capture status), 582 bytes of the 1,024.
+/// Outbox room a frame needs to be acted on: the most one can ask for, a command's ACK and
+/// two messages (an image's report and the capture status), 595 bytes of the 1,024, every
+/// frame signed. A frame arriving with less room waits in the bridge (see
+/// [`Bridge::receive`]); answers longer than that (all the streams, kept images) are sent
+/// as room comes.
 pub const ANSWER_ROOM: usize = framing::HEADER_LEN
     + crate::codec::command_ack::LEN
     + framing::CHECKSUM_LEN
+    + framing::SIGNATURE_LEN
     + 2 * framing::MAX_FRAME_LEN;
+
+// A frame that waits for more room than the outbox has would wait for ever.
+const _: () = assert!(ANSWER_ROOM <= OUTBOX_LEN);
 
 /// How long the autopilot followed must be silent (no heartbeat, ms) before another
 /// autopilot's heartbeat is taken instead: 5 missed heartbeats at MAVLink's 1 Hz, longer
 /// than QGroundControl's 3.5 s link loss, shorter than a flight controller's restart.
 pub const AUTOPILOT_SILENCE_MS: u32 = 5_000;
+
+/// What [`Bridge::receive_datagram`] took of a datagram.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Taken {
+    /// Bytes taken: the whole datagram, or those before a frame that waits for room in the
+    /// outbox; offer the rest again once the outbox has drained.
+    pub bytes: usize,
+    /// Frames taken that were messages the bridge handles with a good CRC: a sender worth
+    /// answering.
+    pub good: u32,
+}
 
 /// How the bridge presents itself and paces what it sends.
 #[derive(Clone, PartialEq, Debug)]
@@ -118,10 +136,6 @@ pub struct BridgeStats {
     /// one followed is heard ([`AUTOPILOT_SILENCE_MS`]), another system's than the
     /// configured [`BridgeConfig::system_id`], system 0's, or `MAV_AUTOPILOT_INVALID`'s.
     pub other_autopilots: u32,
-    /// Commands answered `TEMPORARILY_REJECTED` because the outbox had no room for their
-    /// ACK and what it would promise ([`ANSWER_ROOM`]): a burst of requests faster than
-    /// the link drains.
-    pub rejected_no_room: u32,
 }
 
 /// A MAVLink Gimbal Device (gimbal protocol v2) in front of an IDU gimbal; see the crate
@@ -337,22 +351,31 @@ impl<G: GimbalControl> Bridge<G> {
         }
     }
 
-    /// Takes MAVLink bytes from a byte stream (a serial port), in any split.
-    pub fn receive(&mut self, bytes: &[u8], now: Instant) {
+    /// Takes MAVLink bytes from a byte stream (a serial port), in any split. Returns how
+    /// many it took: all of them, unless a frame waits for room in the outbox for what it
+    /// asks ([`ANSWER_ROOM`]). Then the frame waits in the bridge, to be acted on at the next
+    /// [`Bridge::poll`] or `receive` that finds room, and the bytes after it are not taken:
+    /// send what [`Bridge::transmit_bytes`] holds, then offer them again. So a burst of
+    /// requests is answered in full, each exactly once, never faster than the link drains.
+    #[must_use = "bytes not taken must be offered again once the outbox has drained"]
+    pub fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
         let Bridge {
             gimbal,
             reader,
             state,
             ..
         } = self;
-        reader.feed(bytes, |frame| state.dispatch(gimbal, frame, now));
+        reader.feed(bytes, |frame| state.take(gimbal, frame, now))
     }
 
     /// Takes one UDP datagram: MAVLink on UDP carries whole frames, so a frame cut at the
     /// datagram's end is dropped (its bytes counted as skipped) rather than joined to the
-    /// next datagram, which may come from another sender. Returns how many frames in it
-    /// were messages the bridge handles with a good CRC: a sender worth answering.
-    pub fn receive_datagram(&mut self, datagram: &[u8], now: Instant) -> u32 {
+    /// next datagram, which may come from another sender. Takes the datagram up to a frame
+    /// that waits for room in the outbox ([`ANSWER_ROOM`]), as [`Bridge::receive`] does, but
+    /// keeps nothing of it: send what [`Bridge::transmit_bytes`] holds and offer the rest
+    /// (`&datagram[taken.bytes..]`), until all of it is taken.
+    #[must_use = "a datagram not taken whole must be offered again once the outbox has drained"]
+    pub fn receive_datagram(&mut self, datagram: &[u8], now: Instant) -> Taken {
         let Bridge {
             gimbal,
             reader,
@@ -361,20 +384,32 @@ impl<G: GimbalControl> Bridge<G> {
         } = self;
         let mut good = 0u32;
         let mut check = |frame: &ReceivedFrame<'_>| {
-            let verdict = state.dispatch(gimbal, frame, now);
+            let verdict = state.take(gimbal, frame, now);
             if verdict == Check::Handled {
                 good = good.wrapping_add(1);
             }
             verdict
         };
-        reader.feed(datagram, &mut check);
-        reader.end_datagram(&mut check);
-        good
+        let mut taken = reader.feed(datagram, &mut check);
+        if !reader.is_waiting() {
+            reader.end_datagram(&mut check);
+        }
+        if reader.is_waiting() {
+            // What the reader holds is the end of what it took of this datagram (it starts
+            // each one empty): hand those bytes back, the waiting frame first.
+            taken = taken.saturating_sub(reader.pending());
+            reader.clear();
+        }
+        Taken { bytes: taken, good }
     }
 
     /// Sends what is due at `now`: heartbeats, the attitude status, the stream requests,
     /// scheduled images.
     pub fn poll(&mut self, now: Instant) {
+        // A frame waiting for room goes first: it came before anything due now.
+        if self.reader.is_waiting() {
+            let _taken_none = self.receive(&[], now);
+        }
         self.state.poll(&mut self.gimbal, now);
     }
 

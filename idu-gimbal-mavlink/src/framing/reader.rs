@@ -14,6 +14,10 @@ pub enum Check {
     Unhandled,
     /// A message it handles whose CRC failed, or whose payload did not decode.
     Bad,
+    /// It cannot act on the frame now (no room for its answer): the reader keeps the frame
+    /// whole, takes no more bytes, and offers it first at the next call
+    /// ([`FrameReader::is_waiting`]).
+    Wait,
 }
 
 /// Counters of a [`FrameReader`], each wrapping at `u32::MAX`.
@@ -89,13 +93,36 @@ impl FrameReader {
         self.stats
     }
 
-    /// Bytes of an incomplete frame held now.
+    /// Bytes held now: of an incomplete frame, or of a whole one waiting ([`Check::Wait`]).
     pub fn pending(&self) -> usize {
         self.len
     }
 
-    /// Takes bytes in any split; calls `check` with each complete frame, in order.
-    pub fn feed(&mut self, mut bytes: &[u8], mut check: impl FnMut(&ReceivedFrame<'_>) -> Check) {
+    /// Whether a whole frame waits for the caller ([`Check::Wait`]): the next
+    /// [`FrameReader::feed`] offers it first, and takes no bytes while it waits.
+    pub fn is_waiting(&self) -> bool {
+        // Between calls `len < need`, but for a whole frame kept back.
+        self.len > 0 && self.len >= self.need
+    }
+
+    /// Forgets what is held, counting nothing: for a caller who offers those bytes again
+    /// (a datagram's, after [`Check::Wait`]).
+    pub fn clear(&mut self) {
+        self.drop_front(self.len);
+    }
+
+    /// Takes bytes in any split; calls `check` with each complete frame, in order. Returns
+    /// how many bytes it took: all of them, or, when `check` said [`Check::Wait`], those up
+    /// to the end of the frame that waits; offer the rest again after it is taken.
+    pub fn feed(
+        &mut self,
+        mut bytes: &[u8],
+        mut check: impl FnMut(&ReceivedFrame<'_>) -> Check,
+    ) -> usize {
+        let given = bytes.len();
+        if self.is_waiting() && !self.complete(&mut check) {
+            return 0;
+        }
         loop {
             if self.len == 0 {
                 // Look for a start byte; everything before it is skipped.
@@ -107,7 +134,7 @@ impl FrameReader {
                 // were it not, the counter wraps as every counter does.
                 self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(start as u32);
                 let Some(rest) = bytes.get(start + 1..) else {
-                    return;
+                    return given;
                 };
                 // The start byte is not checksummed.
                 if let Some(first) = self.buf.first_mut() {
@@ -118,7 +145,7 @@ impl FrameReader {
                 bytes = rest;
             }
             if bytes.is_empty() {
-                return;
+                return given;
             }
             // Copy what the frame in hand still needs (the header first), in one go,
             // checksumming up to the payload's end. `len < need <= MAX_FRAME_LEN` here.
@@ -137,8 +164,9 @@ impl FrameReader {
             }
             self.len += n;
             bytes = rest;
-            if self.len >= self.need {
-                self.complete(&mut check);
+            if self.len >= self.need && !self.complete(&mut check) {
+                // `rest` is what is left of `bytes`: the difference cannot underflow.
+                return given.saturating_sub(bytes.len());
             }
         }
     }
@@ -148,12 +176,17 @@ impl FrameReader {
     /// follows it is searched again, until nothing is held. Frames found in that tail are
     /// handed to `check` as by [`FrameReader::feed`]; every dropped byte is counted in
     /// [`ReaderStats::skipped_bytes`]. The next datagram then starts clean, whatever this
-    /// one held.
+    /// one held. When `check` says [`Check::Wait`], the frame waiting stays
+    /// ([`FrameReader::is_waiting`]): its bytes are the last [`FrameReader::pending`] of the
+    /// datagram.
     pub fn end_datagram(&mut self, mut check: impl FnMut(&ReceivedFrame<'_>) -> Check) {
+        if self.is_waiting() && !self.complete(&mut check) {
+            return;
+        }
         while self.len > 0 {
             self.resync();
-            if self.len > 0 {
-                self.complete(&mut check);
+            if self.len > 0 && !self.complete(&mut check) {
+                return;
             }
         }
     }
@@ -175,8 +208,9 @@ impl FrameReader {
         }
     }
 
-    /// Hands out every frame the buffer completes; resyncs after a bad one.
-    fn complete(&mut self, check: &mut impl FnMut(&ReceivedFrame<'_>) -> Check) {
+    /// Hands out every frame the buffer completes; resyncs after a bad one. False when a
+    /// frame waits ([`Check::Wait`]).
+    fn complete(&mut self, check: &mut impl FnMut(&ReceivedFrame<'_>) -> Check) -> bool {
         loop {
             if self.len >= HEADER_LEN
                 && self
@@ -192,14 +226,17 @@ impl FrameReader {
             self.need = total;
             self.crc_end = crc_end;
             if self.len < total {
-                return;
+                return true;
             }
             let bytes = self.buf.get(..total).unwrap_or(&[]);
-            let verdict = check(&ReceivedFrame::new(bytes, self.crc));
-            if verdict == Check::Bad {
-                self.stats.bad_frames = self.stats.bad_frames.wrapping_add(1);
-                self.resync();
-                continue;
+            match check(&ReceivedFrame::new(bytes, self.crc)) {
+                Check::Wait => return false,
+                Check::Bad => {
+                    self.stats.bad_frames = self.stats.bad_frames.wrapping_add(1);
+                    self.resync();
+                    continue;
+                }
+                Check::Handled | Check::Unhandled => {}
             }
             self.stats.frames = self.stats.frames.wrapping_add(1);
             self.drop_front(total);

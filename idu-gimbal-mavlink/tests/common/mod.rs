@@ -106,6 +106,38 @@ pub fn command7(target: (u8, u8), command: MavCmd, p: [f32; 7]) -> CommandLong {
     }
 }
 
+/// Feeding a bridge whose outbox the test drains often enough for every frame to be taken
+/// at once.
+pub trait ReceiveAll {
+    /// [`Bridge::receive`], every byte taken: the test fails if a frame had to wait for
+    /// room in the outbox.
+    fn receive_all(&mut self, bytes: &[u8], now: Instant);
+}
+
+impl<G: GimbalControl> ReceiveAll for Bridge<G> {
+    fn receive_all(&mut self, bytes: &[u8], now: Instant) {
+        let taken = self.receive(bytes, now);
+        assert_eq!(taken, bytes.len(), "a frame waits for room in the outbox");
+    }
+}
+
+/// [`Bridge::receive`] of all of `bytes`, the outbox drained whenever a frame waits for room
+/// in it, as a transport drains it; the frames sent meanwhile.
+pub fn receive_draining<G: GimbalControl>(
+    b: &mut Bridge<G>,
+    mut bytes: &[u8],
+    now: Instant,
+) -> Vec<Frame<V2>> {
+    let mut out = Vec::new();
+    loop {
+        bytes = &bytes[b.receive(bytes, now)..];
+        if bytes.is_empty() && !b.reader().is_waiting() {
+            return out;
+        }
+        out.extend(sent(b));
+    }
+}
+
 /// A bridge on the core's CAN link with `camera`, that has heard the autopilot's heartbeat
 /// (so its system id is the autopilot's), its output so far drained.
 pub fn camera_bridge(camera: CameraConfig) -> Bridge<Link> {
@@ -116,7 +148,7 @@ pub fn camera_bridge(camera: CameraConfig) -> Bridge<Link> {
             ..BridgeConfig::default()
         },
     );
-    b.receive(&frame(AP, 0, &heartbeat()), t(0));
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
     let _ = sent(&mut b);
     b
 }

@@ -52,14 +52,19 @@ fn main() -> ! {
     footprint::use_mem_builtins();
     let mut port = RegPort;
     let mut buf = [0u8; 64];
+    // What of `buf` the bridge has not taken (a frame waits for room in its outbox).
+    let mut held = 0..0;
     loop {
         // The same as `footprint_driver`: the port used directly, the driver driven.
         footprint::port_skeleton();
         footprint::drive(bridge.gimbal_mut());
         let now = Instant::from_millis(input(4));
-        if let Ok(n) = port.read(&mut buf) {
-            bridge.receive(&buf[..n.min(64)], now);
+        if held.is_empty() {
+            if let Ok(n) = port.read(&mut buf) {
+                held = 0..n.min(64);
+            }
         }
+        held.start += bridge.receive(buf.get(held.clone()).unwrap_or(&[]), now);
         bridge.poll(now);
         let bytes = bridge.transmit_bytes();
         if let Ok(n) = port.write(bytes) {

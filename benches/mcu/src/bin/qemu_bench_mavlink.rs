@@ -332,11 +332,16 @@ mod fw {
         // message's CRC_EXTRA, dispatched and decoded, then left (counted as not for us).
         // The same work as the C library's parse and decode.
         let before = bridge.stats();
+        // Every byte is taken at once (the outbox never runs short here): summed, checked
+        // after the timed runs.
+        let mut taken = 0usize;
+        let mut given = 0usize;
         let decoded = m.per_op(8, |_| {
             t = t.wrapping_add(1000);
             for chunk in elsewhere.chunks(8) {
-                bridge.receive(black_box(chunk), Instant::from_millis(t));
+                taken += bridge.receive(black_box(chunk), Instant::from_millis(t));
             }
+            given += elsewhere.len();
             drain(&mut bridge);
         });
         let after = bridge.stats();
@@ -354,10 +359,15 @@ mod fw {
         let per_second = m.per_op(8, |_| {
             t = t.wrapping_add(1000);
             for chunk in bytes.chunks(8) {
-                bridge.receive(black_box(chunk), Instant::from_millis(t));
+                taken += bridge.receive(black_box(chunk), Instant::from_millis(t));
             }
+            given += bytes.len();
             drain(&mut bridge);
         });
+        if taken != given {
+            println!("bench: a frame waited for room in the outbox");
+            qemu::exit(false);
+        }
         // Every timed second was read whole: its 106 frames each time (1 heartbeat, 50
         // states, 50 setpoints, 5 positions), none bad, the setpoints acted on.
         let s = bridge.stats();
@@ -439,8 +449,13 @@ mod fw {
             );
             let (head, last) = frame.split_at(frame.len() - 1);
             let now = Instant::from_millis(t + i);
-            bridge.receive(head, now);
-            total += m.once(|| bridge.receive(black_box(last), now));
+            let head_taken = bridge.receive(head, now);
+            let mut last_taken = 0;
+            total += m.once(|| last_taken = bridge.receive(black_box(last), now));
+            if head_taken + last_taken != frame.len() {
+                println!("bench: a setpoint waited for room in the outbox");
+                qemu::exit(false);
+            }
             drain(&mut bridge);
         }
         // Every setpoint was followed: taken as the aim, its heading and pitch commands
@@ -666,10 +681,15 @@ mod fw {
             let n = counts[k].max(1) as f32;
             let c_cost = m.per_op(4, |_| c::receive(black_box(kind))) / n;
             let now = Instant::from_millis(ms);
+            let mut short = false;
             let ours = m.per_op(4, |_| {
-                bridge.receive(black_box(kind), now);
+                short |= bridge.receive(black_box(kind), now) != kind.len();
                 drain(bridge);
             }) / n;
+            if short {
+                println!("bench: a message waited for room in the outbox");
+                qemu::exit(false);
+            }
             cmp.info(names[k], c_cost, ours);
         }
         if c::seen().dropped != 0 || bridge.stats().reader.bad_frames != 0 {

@@ -70,6 +70,9 @@ mod fw {
             },
         );
         let mut buf = [0u8; 64];
+        // What of `buf` the bridge has not taken: the bytes after a frame that waits for
+        // room in its outbox, offered again once what it holds is sent.
+        let mut held = 0..0;
         let mut was_up = false;
         loop {
             let now = now();
@@ -77,11 +80,21 @@ mod fw {
                 defmt::warn!("{}", e);
             }
             loop {
-                match autopilot.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(n) => bridge.receive(&buf[..n], now),
-                    // Counted where it shows: the frame it broke fails its CRC.
-                    Err(_) => defmt::warn!("autopilot UART: line error or overrun"),
+                if held.is_empty() {
+                    match autopilot.read(&mut buf) {
+                        Ok(0) => break,
+                        Ok(n) => held = 0..n,
+                        // Counted where it shows: the frame it broke fails its CRC.
+                        Err(_) => {
+                            defmt::warn!("autopilot UART: line error or overrun");
+                            continue;
+                        }
+                    }
+                }
+                held.start += bridge.receive(&buf[held.clone()], now);
+                if !held.is_empty() {
+                    // A frame waits for room: send first; the ring keeps what comes.
+                    break;
                 }
             }
             bridge.poll(now);

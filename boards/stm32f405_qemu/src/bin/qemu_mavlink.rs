@@ -231,6 +231,10 @@ mod fw {
         bridge_line: Line<'a>,
         sim: Simulator,
         sim_can: Endpoint<'a, 2, 32>,
+        /// Bytes read from the autopilot's line; `held` is what the bridge has not taken
+        /// (the bytes after a frame that waits for room in its outbox).
+        buf: [u8; 256],
+        held: core::ops::Range<usize>,
         ms: u32,
         failures: u32,
     }
@@ -240,12 +244,19 @@ mod fw {
         fn tick(&mut self) {
             let now = Instant::from_millis(self.ms);
             self.ap.periodic(self.ms);
-            let mut buf = [0u8; 256];
-            while let Ok(n) = self.bridge_line.0.read(&mut buf) {
-                if n == 0 {
+            loop {
+                if self.held.is_empty() {
+                    match self.bridge_line.0.read(&mut self.buf) {
+                        Ok(n) if n > 0 => self.held = 0..n,
+                        _ => break,
+                    }
+                }
+                let bytes = self.buf.get(self.held.clone()).unwrap_or(&[]);
+                self.held.start += self.bridge.receive(bytes, now);
+                if !self.held.is_empty() {
+                    // A frame waits for room in the outbox: send first.
                     break;
                 }
-                self.bridge.receive(&buf[..n], now);
             }
             let _ = self.bridge.gimbal_mut().poll(now);
             self.bridge.poll(now);
@@ -332,6 +343,8 @@ mod fw {
             bridge_line,
             sim: Simulator::new(sim_config, Instant::from_millis(0)),
             sim_can,
+            buf: [0; 256],
+            held: 0..0,
             ms: 0,
             failures: 0,
         };
