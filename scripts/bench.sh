@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Deterministic cost benchmarks on an emulated STM32F405: guest instructions counted under
 # QEMU `-icount shift=0` (benches/mcu: qemu_bench, qemu_bench_mavlink, the latter beside the
-# C MAVLink library on the same bytes), then the flash cost of each CRC variant (nm) and the
+# C MAVLink library on the same bytes, and qemu_bench_signing, what MAVLink 2 signing costs
+# a frame), then the flash cost of each CRC variant (nm) and the
 # driver's flash and static RAM (scripts/size-report.sh). Built with the pinned toolchain
 # BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
 #
@@ -80,6 +81,11 @@ status=0
 firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" run --release --locked --bin qemu_bench || status=$?
 echo
 firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" run --release --locked --bin qemu_bench_mavlink || status=$?
+echo
+# Signing, in the target directory scripts/size-report.sh builds it in (the feature would
+# reach every program of benches/mcu in the shared one).
+(cd benches/mcu && CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR-signing" cargo "+$BENCH_TOOLCHAIN" run \
+    --release --locked --features signing --bin qemu_bench_signing) || status=$?
 
 echo
 echo "Flash cost of the CRC variants (bytes; arm-none-eabi-nm --size-sort, qemu_bench build):"

@@ -36,6 +36,9 @@ echo "--- firmware: the MCU benchmarks (benches/mcu: release build, rustfmt, cli
 firmware_cargo benches/mcu build --release --locked
 firmware_cargo benches/mcu fmt --check
 firmware_cargo benches/mcu clippy --release --locked -- -D warnings
+# The signing bench, in the signing build's own target directory (scripts/size-report.sh).
+(cd benches/mcu && CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR-signing" cargo clippy --release --locked \
+    --features signing --bin qemu_bench_signing -- -D warnings)
 
 echo "--- firmware: embassy on QEMU (boards/embassy_qemu: the async link task, the scripted session)"
 CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR" boards/embassy_qemu/run.sh
