@@ -304,7 +304,7 @@ impl Tx<'_> {
 
     /// Bytes the outbox has room for.
     pub(crate) fn room(&self) -> usize {
-        OUTBOX_LEN - self.out.len()
+        self.out.room()
     }
 }
 
@@ -513,7 +513,7 @@ impl State {
 
     /// Bytes the outbox has room for.
     fn room(&self) -> usize {
-        OUTBOX_LEN - self.out.len()
+        self.out.room()
     }
 
     /// Queues `me`'s ACK of `command` to `to`, counted.
@@ -640,10 +640,14 @@ impl State {
         let yaw = self.postback_vehicle_yaw(gimbal, now);
         let attitude = match (gimbal.latest_postback(now), yaw) {
             (Some((p, _)), Some(yaw)) if gimbal.is_link_up() => {
-                // |yaw| <= π: its 0.01° fit; the sum is wrapped into [-18000, 18000).
+                // |yaw| <= π: its 0.01° fit; the sum is wrapped into [-18000, 18000). (The
+                // saturating forms never saturate here.)
                 let yaw_cdeg = libm::roundf(yaw.to_degrees() * 100.0) as i32;
-                let earth =
-                    (i32::from(p.motor_heading) + yaw_cdeg + 18_000).rem_euclid(36_000) - 18_000;
+                let earth = i32::from(p.motor_heading)
+                    .saturating_add(yaw_cdeg)
+                    .saturating_add(18_000)
+                    .rem_euclid(36_000)
+                    .saturating_sub(18_000);
                 Some((earth as i16, p.pitch))
             }
             _ => None,

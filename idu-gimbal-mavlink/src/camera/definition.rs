@@ -54,13 +54,13 @@ const fn starts_with(mut s: &[u8], mut prefix: &[u8]) -> bool {
 /// Where the model's name goes in `xml`: just after its `<model>`; 0 when it has none.
 const fn model_at(xml: &[u8]) -> usize {
     const TAG: &[u8] = b"<model>";
-    let (mut rest, mut at) = (xml, 0);
+    let (mut rest, mut at) = (xml, 0usize);
     loop {
         if starts_with(rest, TAG) {
-            return at + TAG.len();
+            return at.saturating_add(TAG.len());
         }
         match rest.split_first() {
-            Some((_, r)) => (rest, at) = (r, at + 1),
+            Some((_, r)) => (rest, at) = (r, at.saturating_add(1)),
             None => return 0,
         }
     }

@@ -173,12 +173,13 @@ fn image_centre(vantage: &Vantage) -> [i32; 3] {
             let (Some(lat), Some(lon)) = (lat.checked_add(dlat), lon.checked_add(dlon)) else {
                 return UNKNOWN;
             };
-            // Across the antimeridian: back into ±180°.
+            // Across the antimeridian: back into ±180° (from within i32, a turn back never
+            // leaves it: the saturating forms never saturate).
             const HALF_TURN: i32 = 1_800_000_000;
             let lon = if lon > HALF_TURN {
-                lon - HALF_TURN - HALF_TURN
+                lon.saturating_sub(HALF_TURN).saturating_sub(HALF_TURN)
             } else if lon < -HALF_TURN {
-                lon + HALF_TURN + HALF_TURN
+                lon.saturating_add(HALF_TURN).saturating_add(HALF_TURN)
             } else {
                 lon
             };

@@ -277,6 +277,14 @@ pub(crate) struct Camera {
     burst_client: (u8, u8),
 }
 
+/// A mask of the lowest `n` bits (of streams, of parameters); all eight for `n` >= 8.
+pub(crate) fn low_bits(n: usize) -> u8 {
+    // A shift by 8 (n = 0) is out of range: no bits.
+    u8::MAX
+        .checked_shr(8u32.saturating_sub(n as u32))
+        .unwrap_or(0)
+}
+
 /// Messages other than commands the camera answers.
 pub(crate) fn handles(id: u32) -> bool {
     id == id_of::<FileTransferProtocol>()
@@ -639,7 +647,11 @@ impl Camera {
             match next {
                 Some(image) => {
                     self.send_captured(config, &image, tx);
-                    self.resend = (image.index < last).then_some((image.index + 1, last));
+                    self.resend = image
+                        .index
+                        .checked_add(1)
+                        .filter(|&next| next <= last)
+                        .map(|next| (next, last));
                 }
                 None => self.resend = None,
             }

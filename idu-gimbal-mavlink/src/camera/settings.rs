@@ -138,7 +138,7 @@ impl Settings {
 
     /// `PARAM_EXT_REQUEST_LIST`: every value, as the outbox makes room.
     pub(crate) fn list(&mut self) {
-        self.listing = ((1u16 << self.count) - 1) as u8;
+        self.listing = super::low_bits(self.count);
     }
 
     /// `PARAM_EXT_REQUEST_READ`: by index when `index` ≥ 0, else by name; whether it names
@@ -288,5 +288,11 @@ mod tests {
         assert!(PARAMETERS[first_thermal..].iter().all(|p| p.thermal));
         assert_eq!(parameters(false).len(), first_thermal);
         assert_eq!(parameters(true).len(), PARAMETERS.len());
+    }
+
+    #[test]
+    fn low_bits_masks_the_first_n() {
+        let masks: Vec<u8> = (0..=9).map(crate::camera::low_bits).collect();
+        assert_eq!(masks, [0, 1, 3, 7, 15, 31, 63, 127, 255, 255]);
     }
 }

@@ -67,12 +67,13 @@ pub(crate) struct Pending {
 /// What a request's stream id names: one stream, all (0), or none of ours.
 pub(crate) fn selection(config: &CameraConfig, id: f32) -> Option<u8> {
     let count = config.streams().len();
-    let all = (1u8 << count) - 1;
+    let all = super::low_bits(count);
     if id == 0.0 {
         return Some(all);
     }
     // Ids are 1..=count: whole and small, so the cast is exact.
-    (id >= 1.0 && id <= count as f32 && id == libm::truncf(id)).then(|| 1u8 << (id as u8 - 1))
+    (id >= 1.0 && id <= count as f32 && id == libm::truncf(id))
+        .then(|| 1u8 << (id as u8).saturating_sub(1))
 }
 
 impl Pending {
@@ -100,7 +101,7 @@ impl Pending {
             let hfov = if stream.is_thermal() { 0 } else { visible_hfov };
             let bit = 1u8 << i;
             // The index is below MAX_STREAMS: the id fits.
-            let id = i as u8 + 1;
+            let id = (i as u8).saturating_add(1);
             if self.information & bit != 0 {
                 if tx.room() < MAX_FRAME_LEN {
                     return;

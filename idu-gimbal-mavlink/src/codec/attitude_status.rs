@@ -30,8 +30,11 @@ pub fn encode(m: &GimbalDeviceAttitudeStatus, p: &mut [u8]) {
         return;
     };
     put(p, field::TIME_BOOT_MS, m.time_boot_ms.to_le_bytes());
-    for (i, q) in m.q.iter().enumerate() {
-        put(p, field::Q + 4 * i, q.to_le_bytes());
+    for (at, q) in [field::Q, field::Q + 4, field::Q + 8, field::Q + 12]
+        .into_iter()
+        .zip(m.q)
+    {
+        put(p, at, q.to_le_bytes());
     }
     put(
         p,

@@ -29,14 +29,18 @@ mod field {
 /// outside the dialect.
 pub fn decode(payload: &[u8]) -> Option<AutopilotStateForGimbalDevice> {
     decode_with::<LEN, _>(payload, |p| {
-        let q = |i: usize| f32_at(p, field::Q + 4 * i);
         let time_boot_us = u64::from(u32_at(p, field::TIME_BOOT_US))
             | u64::from(u32_at(p, field::TIME_BOOT_US + 4)) << 32;
         Some(AutopilotStateForGimbalDevice {
             target_system: u8_at(p, field::TARGET_SYSTEM),
             target_component: u8_at(p, field::TARGET_COMPONENT),
             time_boot_us,
-            q: [q(0), q(1), q(2), q(3)],
+            q: [
+                f32_at(p, field::Q),
+                f32_at(p, field::Q + 4),
+                f32_at(p, field::Q + 8),
+                f32_at(p, field::Q + 12),
+            ],
             q_estimated_delay_us: u32_at(p, field::Q_ESTIMATED_DELAY_US),
             vx: f32_at(p, field::VX),
             vy: f32_at(p, field::VY),

@@ -56,7 +56,8 @@ fn decode_with<const L: usize, T>(payload: &[u8], full: impl Fn(&[u8; L]) -> T) 
 /// codecs use, which the compiler then sees).
 #[inline(always)]
 fn bytes<const N: usize>(p: &[u8], at: usize) -> [u8; N] {
-    p.get(at..at + N)
+    // Offsets are the codecs' constants, far below usize::MAX: the sum never saturates.
+    p.get(at..at.saturating_add(N))
         .and_then(|s| <[u8; N]>::try_from(s).ok())
         .unwrap_or([0; N])
 }
@@ -89,7 +90,7 @@ fn u8_at(p: &[u8], at: usize) -> u8 {
 /// Writes `value`'s bytes at `at` (in bounds for every offset the codecs use).
 #[inline(always)]
 fn put<const N: usize>(p: &mut [u8], at: usize, value: [u8; N]) {
-    if let Some(dst) = p.get_mut(at..at + N) {
+    if let Some(dst) = p.get_mut(at..at.saturating_add(N)) {
         dst.copy_from_slice(&value);
     }
 }

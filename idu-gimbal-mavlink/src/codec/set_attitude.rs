@@ -20,16 +20,18 @@ mod field {
 
 /// The message in `payload` (as received: possibly truncated).
 pub fn decode(payload: &[u8]) -> GimbalDeviceSetAttitude {
-    decode_with::<LEN, _>(payload, |p| {
-        let q = |i: usize| f32_at(p, field::Q + 4 * i);
-        GimbalDeviceSetAttitude {
-            target_system: u8_at(p, field::TARGET_SYSTEM),
-            target_component: u8_at(p, field::TARGET_COMPONENT),
-            flags: GimbalDeviceFlags::from_bits_truncate(u16_at(p, field::FLAGS)),
-            q: [q(0), q(1), q(2), q(3)],
-            angular_velocity_x: f32_at(p, field::ANGULAR_VELOCITY_X),
-            angular_velocity_y: f32_at(p, field::ANGULAR_VELOCITY_Y),
-            angular_velocity_z: f32_at(p, field::ANGULAR_VELOCITY_Z),
-        }
+    decode_with::<LEN, _>(payload, |p| GimbalDeviceSetAttitude {
+        target_system: u8_at(p, field::TARGET_SYSTEM),
+        target_component: u8_at(p, field::TARGET_COMPONENT),
+        flags: GimbalDeviceFlags::from_bits_truncate(u16_at(p, field::FLAGS)),
+        q: [
+            f32_at(p, field::Q),
+            f32_at(p, field::Q + 4),
+            f32_at(p, field::Q + 8),
+            f32_at(p, field::Q + 12),
+        ],
+        angular_velocity_x: f32_at(p, field::ANGULAR_VELOCITY_X),
+        angular_velocity_y: f32_at(p, field::ANGULAR_VELOCITY_Y),
+        angular_velocity_z: f32_at(p, field::ANGULAR_VELOCITY_Z),
     })
 }

@@ -118,7 +118,7 @@ impl<'a> ReceivedFrame<'a> {
     /// The checksum the frame carries.
     pub fn checksum(&self) -> u16 {
         let at = self.payload_end();
-        u16::from_le_bytes([self.byte(at), self.byte(at + 1)])
+        u16::from_le_bytes([self.byte(at), self.byte(at.saturating_add(1))])
     }
 
     /// Whether the checksum holds for a message with this `CRC_EXTRA`.

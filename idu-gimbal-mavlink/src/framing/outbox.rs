@@ -139,17 +139,26 @@ impl<const N: usize> Outbox<N> {
         if !(1..=255).contains(&len) {
             return Err(OutboxError::Encode);
         }
+        // Every length below is at most a frame's 280 bytes or the outbox's N, with
+        // `start <= end <= N`: the saturating operations never saturate, and no overflow
+        // check is left to panic.
         let signature_len = self.signature_len();
-        let frame_len = HEADER_LEN + len + CHECKSUM_LEN + signature_len;
-        if N - self.len() < frame_len {
+        let frame_len = HEADER_LEN
+            .saturating_add(len)
+            .saturating_add(CHECKSUM_LEN)
+            .saturating_add(signature_len);
+        if self.room() < frame_len {
             return Err(OutboxError::Full);
         }
-        if N - self.end < frame_len {
+        if N.saturating_sub(self.end) < frame_len {
             self.buf.copy_within(self.start..self.end, 0);
-            self.end -= self.start;
+            self.end = self.len();
             self.start = 0;
         }
-        let Some(frame) = self.buf.get_mut(self.end..self.end + frame_len) else {
+        let Some(frame) = self
+            .buf
+            .get_mut(self.end..self.end.saturating_add(frame_len))
+        else {
             return Err(OutboxError::Full);
         };
         let (head, rest) = frame.split_at_mut(HEADER_LEN);
@@ -157,7 +166,10 @@ impl<const N: usize> Outbox<N> {
         payload.fill(0);
         write(payload);
         // MAVLink 2 drops the payload's trailing zeros (at least one byte stays).
-        let sent = payload.iter().rposition(|&b| b != 0).map_or(1, |i| i + 1);
+        let sent = payload
+            .iter()
+            .rposition(|&b| b != 0)
+            .map_or(1, |i| i.saturating_add(1));
         let [id0, id1, id2, _] = id.to_le_bytes();
         // `sent` <= len <= 255: the cast is exact.
         head.copy_from_slice(&[
@@ -173,20 +185,24 @@ impl<const N: usize> Outbox<N> {
             id1,
             id2,
         ]);
-        let checksummed = frame.get(1..HEADER_LEN + sent).unwrap_or(&[]);
+        let payload_end = HEADER_LEN.saturating_add(sent);
+        let checksummed = frame.get(1..payload_end).unwrap_or(&[]);
         let crc = x25::step(x25::update(x25::INIT, checksummed), crc_extra);
-        let body_len = HEADER_LEN + sent + CHECKSUM_LEN;
-        if let Some(at) = frame.get_mut(HEADER_LEN + sent..body_len) {
+        let body_len = payload_end.saturating_add(CHECKSUM_LEN);
+        if let Some(at) = frame.get_mut(payload_end..body_len) {
             at.copy_from_slice(&crc.to_le_bytes());
         }
         #[cfg(feature = "signing")]
         if let Some(signing) = self.signing.as_mut() {
             let block = signing.sign(frame.get(..body_len).unwrap_or(&[]));
-            if let Some(at) = frame.get_mut(body_len..body_len + signature_len) {
+            if let Some(at) = frame.get_mut(body_len..body_len.saturating_add(signature_len)) {
                 at.copy_from_slice(&block);
             }
         }
-        self.end += body_len + signature_len;
+        self.end = self
+            .end
+            .saturating_add(body_len)
+            .saturating_add(signature_len);
         self.sequence = self.sequence.wrapping_add(1);
         Ok(())
     }
@@ -199,7 +215,7 @@ impl<const N: usize> Outbox<N> {
     /// `n` bytes of [`Outbox::bytes`] were written (more than it holds counts as all of
     /// them).
     pub fn written(&mut self, n: usize) {
-        self.start += n.min(self.len());
+        self.start = self.start.saturating_add(n.min(self.len()));
         if self.start == self.end {
             // Empty: start again at the front.
             self.start = 0;
@@ -209,7 +225,13 @@ impl<const N: usize> Outbox<N> {
 
     /// Bytes waiting.
     pub fn len(&self) -> usize {
-        self.end - self.start
+        // `start <= end`.
+        self.end.saturating_sub(self.start)
+    }
+
+    /// Bytes there is room for.
+    pub fn room(&self) -> usize {
+        N.saturating_sub(self.len())
     }
 
     /// Whether nothing waits.

@@ -133,7 +133,8 @@ impl FrameReader {
                 // A slice is shorter than 2^32 bytes here (it came through a UART buffer);
                 // were it not, the counter wraps as every counter does.
                 self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(start as u32);
-                let Some(rest) = bytes.get(start + 1..) else {
+                // The bytes after the start byte; none found, all were skipped.
+                let Some((_, rest)) = bytes.get(start..).and_then(<[u8]>::split_first) else {
                     return given;
                 };
                 // The start byte is not checksummed.
@@ -152,7 +153,9 @@ impl FrameReader {
             let n = self.need.saturating_sub(self.len).min(bytes.len());
             let (now, rest) = bytes.split_at(n);
             let covered = self.crc_end.saturating_sub(self.len).min(n);
-            if let Some(dst) = self.buf.get_mut(self.len..self.len + n) {
+            // `len + n <= need <= MAX_FRAME_LEN`: the sum never saturates.
+            let end = self.len.saturating_add(n);
+            if let Some(dst) = self.buf.get_mut(self.len..end) {
                 let (dst_crc, dst_plain) = dst.split_at_mut(covered);
                 let (src_crc, src_plain) = now.split_at(covered);
                 self.crc = x25::copy_update(self.crc, dst_crc, src_crc);
@@ -162,7 +165,7 @@ impl FrameReader {
                     *d = b;
                 }
             }
-            self.len += n;
+            self.len = end;
             bytes = rest;
             if self.len >= self.need && !self.complete(&mut check) {
                 // `rest` is what is left of `bytes`: the difference cannot underflow.
@@ -202,7 +205,11 @@ impl FrameReader {
                     0
                 };
                 let payload_end = HEADER_LEN + usize::from(payload_len);
-                (payload_end + CHECKSUM_LEN + signature, payload_end)
+                // At most MAX_FRAME_LEN: the sum never saturates.
+                let total = payload_end
+                    .saturating_add(CHECKSUM_LEN)
+                    .saturating_add(signature);
+                (total, payload_end)
             }
             _ => (HEADER_LEN, HEADER_LEN),
         }
@@ -272,13 +279,15 @@ impl FrameReader {
         let skip = rest.iter().position(|&b| b == STX_V2).unwrap_or(rest.len());
         // `skip` <= MAX_FRAME_LEN: the cast is exact.
         self.stats.skipped_bytes = self.stats.skipped_bytes.wrapping_add(skip as u32);
-        let start = n + skip;
-        self.len -= start;
+        // `n + skip <= len`: what is left starts at the next start byte.
+        let start = n.saturating_add(skip);
+        self.len = self.len.saturating_sub(start);
         self.need = HEADER_LEN;
         self.crc_end = HEADER_LEN;
         self.crc = x25::INIT;
         if self.len > 0 {
-            self.buf.copy_within(start..start + self.len, 0);
+            self.buf
+                .copy_within(start..start.saturating_add(self.len), 0);
             let (_, crc_end) = self.extent();
             self.crc_end = crc_end;
             self.crc = x25::update(

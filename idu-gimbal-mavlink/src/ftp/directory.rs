@@ -125,11 +125,13 @@ impl Writer<'_> {
 
 /// `value` in decimal, written at the end of `buf`.
 pub(super) fn decimal(mut value: usize, buf: &mut [u8; 20]) -> &[u8] {
-    let mut len = 0;
+    let mut len = 0usize;
     for digit in buf.iter_mut().rev() {
-        *digit = b'0' + (value % 10) as u8;
+        // `'0'` is 0x30: a digit below 10 goes in its low bits.
+        *digit = b'0' | (value % 10) as u8;
         value /= 10;
-        len += 1;
+        // At most 20 digits.
+        len = len.saturating_add(1);
         if value == 0 {
             break;
         }
