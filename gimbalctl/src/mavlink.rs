@@ -53,7 +53,7 @@ use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::FrameReader;
-use idu_gimbal_mavlink::signing::SigningConfig;
+use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
 
 use crate::error::Failure;
@@ -150,6 +150,14 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
             })
         }
     }
+}
+
+/// What signing let through and turned away, for stderr.
+fn signing_line(s: &SigningStats) -> String {
+    format!(
+        "{} frames accepted; turned away: {} unsigned, {} with a bad signature, {} replayed",
+        s.accepted, s.unsigned, s.bad_signature, s.replayed
+    )
 }
 
 /// Now as MAVLink 2 signing counts time: 10 µs units since 2015-01-01 00:00 GMT.
@@ -447,8 +455,12 @@ fn serve<S: Pump>(
     let mut notes_at = start + NOTE_EVERY;
     // Said at most once a NOTE_EVERY, as the count grows.
     let mut other_autopilots = 0;
+    let mut signing_turned = (0, 0, 0);
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
+            if let Some(s) = bridge.signing_stats() {
+                eprintln!("gimbalctl mavlink: signing: {}", signing_line(&s));
+            }
             eprintln!(
                 "gimbalctl mavlink: exiting after {} ms",
                 exit_after_ms.unwrap_or(0)
@@ -490,6 +502,17 @@ fn serve<S: Pump>(
                     bridge.system_id()
                 );
                 other_autopilots = others;
+            }
+            // Frames signing turned away, said as their count grows.
+            if let Some(s) = bridge.signing_stats() {
+                let turned = (s.unsigned, s.bad_signature, s.replayed);
+                if turned != signing_turned {
+                    eprintln!(
+                        "gimbalctl mavlink: warning: signing: {}",
+                        signing_line(&s)
+                    );
+                    signing_turned = turned;
+                }
             }
             notes_at = clock + NOTE_EVERY;
         }

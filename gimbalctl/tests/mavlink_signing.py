@@ -15,6 +15,7 @@ Usage: mavlink_signing.py PATH/TO/gimbalctl
 
 import hashlib
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -39,12 +40,24 @@ check = r.check
 
 
 def start(gimbalctl, *key_args):
+    """The bridge, its port, and the file its stderr goes to."""
+    err = tempfile.TemporaryFile(mode="w+")
     proc = subprocess.Popen(
         [gimbalctl, "mavlink", "--sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "60000", *key_args],
-        stdout=subprocess.PIPE, stderr=sys.stderr, text=True)
+        stdout=subprocess.PIPE, stderr=err, text=True)
     line = proc.stdout.readline()
     port = int(line.split("listening on ")[1].split(",")[0].rsplit(":", 1)[1])
-    return proc, port
+    return proc, port, err
+
+
+def turned_away(err):
+    """The counts of the bridge's latest signing line on stderr (said once a second as they
+    grow): (unsigned, bad signature, replayed), or None."""
+    err.seek(0)
+    text = err.read()
+    sys.stderr.write(text)
+    found = re.findall(r"turned away: (\d+) unsigned, (\d+) with a bad signature, (\d+) replayed", text)
+    return tuple(int(v) for v in found[-1]) if found else None
 
 
 class Client(Inbox):
@@ -81,7 +94,7 @@ def answered(client, what):
 
 
 def session(gimbalctl, label, *key_args):
-    proc, port = start(gimbalctl, *key_args)
+    proc, port, err = start(gimbalctl, *key_args)
     try:
         good = Client(port, KEY)
         acks, infos = answered(good, "signed")
@@ -117,6 +130,12 @@ def session(gimbalctl, label, *key_args):
         acks, infos = good.answers(since)
         check(len(acks) == 1 and len(infos) == 1,
               f"{label}: a signed request sent twice byte for byte is answered once ({len(acks)} ACKs)")
+
+        # The bridge says what it turned away (once a second, as the counts grow).
+        good.idle(1.5)
+        counts = turned_away(err)
+        check(counts is not None and counts[0] >= 1 and counts[1] >= 1 and counts[2] == 1,
+              f"{label}: stderr counts the unsigned, wrong-key and replayed frames: {counts}")
     except Exception as e:  # a crash is a failure with its reason
         check(False, f"{label}: crashed: {e!r}")
     finally:
