@@ -16,6 +16,7 @@ Everything is bounded: --deadline seconds overall (default 280).
 """
 import argparse
 import collections
+import hashlib
 import math
 import os
 import sys
@@ -184,6 +185,25 @@ class Pump:
             data = f.read()
             self.bridge_err_pos = f.tell()
         return [ln for ln in data.splitlines() if ln.strip()]
+
+
+def signing_now():
+    """Now in MAVLink 2 signing's units: 10 us since 2015-01-01 00:00 GMT."""
+    return int((time.time() - 1420070400) * 100000)
+
+
+def setup_signing(p, obs, passphrase):
+    """SETUP_SIGNING to ArduPilot with the passphrase's SHA-256 (MAVProxy's 'signing setup'):
+    it stores the key and, from then on and after the reboot, signs on every link but the
+    first (SERIAL0, this GCS link, which it trusts unsigned) and accepts only frames signed
+    with the key on them, the gimbal's SERIAL2 among them. The observer signs too, so that the
+    bridge takes it as a peer."""
+    key = hashlib.sha256(passphrase.encode()).digest()
+    p.ap.mav.setup_signing_send(p.ap.target_system, p.ap.target_component, key, signing_now())
+    if obs is not None:
+        obs.setup_signing(key, sign_outgoing=True, initial_timestamp=signing_now())
+    log("SETUP_SIGNING sent to ArduPilot (key = SHA-256 of the passphrase); the observer signs")
+    p.spin(1.0)
 
 
 def connect_ap(url, timeout):
@@ -589,6 +609,10 @@ def main():
                      help="s after the turn ends still judged by the turn's bound (a postback period and more)")
     ap_.add_argument("--after-s", type=float, default=3.0, help="s sampled after that, judged within 2 deg")
     ap_.add_argument("--arm-wait", type=float, default=60.0, help="max s to retry arming (pre-arm checks)")
+    ap_.add_argument("--signing-passphrase", default="",
+                     help="set up MAVLink 2 signing in ArduPilot (SETUP_SIGNING, key = SHA-256 of the "
+                          "passphrase, as MAVProxy's 'signing setup') before the reboot; the observer "
+                          "signs with it too. Give the bridge the same --signing-passphrase")
     a = ap_.parse_args()
     DEADLINE = a.deadline
     lat, lon, alt, hdg = [float(v) for v in a.home.split(",")]
@@ -610,6 +634,8 @@ def main():
     ok &= set_param(p, "CAM1_TYPE", a.cam_type)
     if not ok:
         log("WARN: a parameter did not read back as set")
+    if a.signing_passphrase:
+        setup_signing(p, obs, a.signing_passphrase)
     r = command_long(p, mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1, 0], wait=3)
     log("PREFLIGHT_REBOOT_SHUTDOWN -> %s" % res_name(r))
     try:
