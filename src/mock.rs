@@ -506,11 +506,7 @@ impl<const ENDPOINTS: usize, const QUEUE: usize> State<ENDPOINTS, QUEUE> {
     }
 
     fn deliver_all(&mut self) -> usize {
-        let mut count = 0;
-        while self.deliver_one().is_some() {
-            count += 1;
-        }
-        count
+        core::iter::from_fn(|| self.deliver_one()).count()
     }
 
     /// Applies the wire faults and queues the frame at every other taken endpoint.

@@ -172,6 +172,7 @@
 pub mod serial;
 
 use core::fmt;
+use core::num::NonZeroU32;
 
 use heapless::Deque;
 
@@ -213,6 +214,12 @@ pub const FOCUS_INITIAL: f32 = 0.5;
 pub const FOCUS_SPEED_PER_S: f32 = 0.5;
 /// How long a fast calibration lasts, ms.
 pub const CALIBRATION_MS: u32 = 2000;
+
+/// A second, in ms (1000 is not zero): a time-lapse's period is its seconds times this.
+const SECOND_MS: NonZeroU32 = match NonZeroU32::new(1000) {
+    Some(n) => n,
+    None => NonZeroU32::MIN,
+};
 
 /// The camera's field of view at `zoom_ratio`, (horizontal, vertical) degrees.
 ///
@@ -591,17 +598,18 @@ impl<const TX: usize> Simulator<TX> {
     pub fn poll(&mut self, now: Instant) -> Option<Postback> {
         self.advance(now);
         let now = self.last;
-        let period = self.config.postback_period_ms.max(1);
+        let period = NonZeroU32::new(self.config.postback_period_ms).unwrap_or(NonZeroU32::MIN);
         if !now.is_at_or_after(self.next_postback) {
             // Normally at most one period ahead; more only if calls came ≥ 2^31 ms apart
             // and the deadline looks to be in the future: restart the grid.
-            if self.next_postback.millis_since(now) > period {
-                self.next_postback = now.add_millis(period);
+            if self.next_postback.millis_since(now) > period.get() {
+                self.next_postback = now.add_millis(period.get());
             }
             return None;
         }
         let late = now.millis_since(self.next_postback);
-        self.next_postback = now.add_millis(period - late % period);
+        // The next point of the grid: 1 to `period` ms ahead (exact).
+        self.next_postback = now.add_millis(period.get().saturating_sub(late % period));
         if self.silent || self.booting_left_ms > 0 {
             return None;
         }
@@ -732,7 +740,8 @@ impl<const TX: usize> Simulator<TX> {
         let (yaw, pitch) = self.state.rate;
         self.state.motor_yaw_deg = clamp_yaw(self.state.motor_yaw_deg + yaw * seconds);
         self.state.pitch_deg = clamp_pitch(self.state.pitch_deg + pitch * seconds);
-        self.rate_left_ms -= t;
+        // Counted down to 0 at most (`t` is no more than what is left).
+        self.rate_left_ms = self.rate_left_ms.saturating_sub(t);
         if self.rate_left_ms == 0 {
             self.state.rate = (0.0, 0.0);
         }
@@ -760,11 +769,13 @@ impl<const TX: usize> Simulator<TX> {
         if !self.state.tracking || self.config.tracking_lost_ms == 0 {
             return None;
         }
-        if dt >= self.tracking_left_ms {
-            Some(self.tracking_left_ms)
-        } else {
-            self.tracking_left_ms -= dt;
-            None
+        match self.tracking_left_ms.checked_sub(dt) {
+            Some(left) if left > 0 => {
+                self.tracking_left_ms = left;
+                None
+            }
+            // The step reaches the end.
+            _ => Some(self.tracking_left_ms),
         }
     }
 
@@ -781,11 +792,9 @@ impl<const TX: usize> Simulator<TX> {
         if !self.state.calibrating {
             return;
         }
-        if dt >= self.calibration_left_ms {
+        self.calibration_left_ms = self.calibration_left_ms.saturating_sub(dt);
+        if self.calibration_left_ms == 0 {
             self.state.calibrating = false;
-            self.calibration_left_ms = 0;
-        } else {
-            self.calibration_left_ms -= dt;
         }
     }
 
@@ -800,25 +809,26 @@ impl<const TX: usize> Simulator<TX> {
 
     fn run_photo_timers(&mut self, dt: u32) {
         match self.state.photo_mode {
-            Some(Photo::Timer(_)) => {
-                if dt >= self.photo_left_ms {
+            Some(Photo::Timer(_)) => match self.photo_left_ms.checked_sub(dt) {
+                Some(left) if left > 0 => self.photo_left_ms = left,
+                _ => {
                     self.state.photos = self.state.photos.saturating_add(1);
                     self.state.photo_mode = None;
-                } else {
-                    self.photo_left_ms -= dt;
                 }
-            }
-            Some(Photo::TimeLapse(s)) => {
-                let period = u32::from(s.get()) * 1000;
-                if dt >= self.photo_left_ms {
-                    let over = dt - self.photo_left_ms;
-                    let taken = 1 + over / period;
+            },
+            Some(Photo::TimeLapse(s)) => match self.photo_left_ms.checked_sub(dt) {
+                Some(left) if left > 0 => self.photo_left_ms = left,
+                _ => {
+                    // 1 to 255 s, in ms: not zero, no overflow.
+                    let period = NonZeroU32::from(s).saturating_mul(SECOND_MS);
+                    // The step runs `over` ms past the photo due: one photo then, one more
+                    // per whole period after it, and the next one is 1 to `period` ms away.
+                    let over = dt.saturating_sub(self.photo_left_ms);
+                    let taken = (over / period).saturating_add(1);
                     self.state.photos = self.state.photos.saturating_add(taken);
-                    self.photo_left_ms = period - over % period;
-                } else {
-                    self.photo_left_ms -= dt;
+                    self.photo_left_ms = period.get().saturating_sub(over % period);
                 }
-            }
+            },
             _ => {}
         }
     }

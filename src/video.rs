@@ -519,14 +519,13 @@ fn write_decimal<W: fmt::Write + ?Sized>(out: &mut W, n: impl Into<u32>) -> fmt:
     let mut n: u32 = n.into();
     let mut digits = [0u8; 10];
     let mut start = digits.len();
-    loop {
-        start -= 1;
-        // A digit: n % 10 < 10 fits a u8; start stays within the 10 digits a u32 has.
-        if let Some(d) = digits.get_mut(start) {
-            *d = b'0' + (n % 10) as u8;
-        }
+    // From the last digit back: ten places hold any u32.
+    for (i, d) in digits.iter_mut().enumerate().rev() {
+        // A digit: n % 10 < 10, so the sum is exact.
+        *d = b'0'.saturating_add((n % 10) as u8);
         n /= 10;
-        if n == 0 || start == 0 {
+        start = i;
+        if n == 0 {
             break;
         }
     }

@@ -190,7 +190,8 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     first_error.get_or_insert(DriverError(kind));
                 }
             }
-            left -= 1;
+            // At least 1 here: the bound is not zero, and the loop ends at 0.
+            left = left.saturating_sub(1);
             if left == 0 {
                 break;
             }

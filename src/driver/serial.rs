@@ -168,39 +168,38 @@ where
         if let Some(e) = self.rx_error.take() {
             return Err(e);
         }
-        let mut n = 0;
-        for slot in buf.iter_mut() {
+        // `n`: the bytes read before this one.
+        for (n, slot) in buf.iter_mut().enumerate() {
             match self.rx.read() {
                 Ok(b) => *slot = b,
-                Err(nb::Error::WouldBlock) => break,
+                Err(nb::Error::WouldBlock) => return Ok(n),
                 Err(nb::Error::Other(e)) if n == 0 => return Err(e),
                 Err(nb::Error::Other(e)) => {
                     self.rx_error = Some(e);
-                    break;
+                    return Ok(n);
                 }
             }
-            n += 1;
         }
-        Ok(n)
+        Ok(buf.len())
     }
 
     fn write(&mut self, bytes: &[u8]) -> Result<usize, W::Error> {
         if let Some(e) = self.tx_error.take() {
             return Err(e);
         }
-        let mut n = 0;
-        for &b in bytes {
+        // `n`: the bytes written before this one.
+        for (n, &b) in bytes.iter().enumerate() {
             match self.tx.write(b) {
-                Ok(()) => n += 1,
-                Err(nb::Error::WouldBlock) => break,
+                Ok(()) => {}
+                Err(nb::Error::WouldBlock) => return Ok(n),
                 Err(nb::Error::Other(e)) if n == 0 => return Err(e),
                 Err(nb::Error::Other(e)) => {
                     self.tx_error = Some(e);
-                    break;
+                    return Ok(n);
                 }
             }
         }
-        Ok(n)
+        Ok(bytes.len())
     }
 }
 
@@ -375,7 +374,8 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
                     first_error.get_or_insert(PortError::Read(e));
                 }
             }
-            left -= 1;
+            // At least 1 here: the bound is not zero, and the loop ends at 0.
+            left = left.saturating_sub(1);
             if left == 0 {
                 return;
             }

@@ -50,6 +50,7 @@
 use crate::time::Instant;
 use crate::wire::control::{Command, GimbalCommand, Heading, Pitch};
 use crate::wire::postback::ControlMode;
+use crate::wire::vehicle::wrap_centideg as angle_cdeg;
 
 use super::*;
 
@@ -253,9 +254,12 @@ impl<const Q: usize, const T: usize> Hold<Q, T> {
     /// in its frame.
     pub(crate) fn differs(&self, aim: Aim, band_cdeg: i32) -> bool {
         aim.yaw.is_earth() != (self.flags & EARTH != 0)
-            || angle_cdeg(i32::from(aim.yaw.deci()) * 10 - i32::from(self.yaw.deci()) * 10).abs()
+            || angle_cdeg(cdeg(aim.yaw.deci()).saturating_sub(cdeg(self.yaw.deci()))).abs()
                 > band_cdeg
-            || (i32::from(aim.pitch.deci()) - i32::from(self.pitch.deci())).abs() * 10 > band_cdeg
+            || cdeg(aim.pitch.deci())
+                .saturating_sub(cdeg(self.pitch.deci()))
+                .abs()
+                > band_cdeg
     }
 
     /// Takes `aim` when it differs from the aim held past the dead-band (a point-at's
@@ -282,9 +286,14 @@ impl<const Q: usize, const T: usize> Hold<Q, T> {
     }
 }
 
-/// `cdeg` wrapped into [-18000, 18000).
-fn angle_cdeg(cdeg: i32) -> i32 {
-    (cdeg + 18_000).rem_euclid(36_000) - 18_000
+/// 0.1° to 0.01°.
+///
+/// The loop's angles in 0.01° all come from 16-bit fields (tenths here, hundredths in the
+/// attitude and the postback, the limits, tolerances and dead-band): `i32` holds every sum
+/// and difference of two of them exactly, so the loop's saturating operations never
+/// saturate (they are `i32` arithmetic without a panic path).
+fn cdeg(deci: impl Into<i32>) -> i32 {
+    deci.into().saturating_mul(10)
 }
 
 impl<const Q: usize, const T: usize> Link<Q, T> {
@@ -400,19 +409,19 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         let vehicle = self
             .is_fresh(ATTITUDE, now)
             .then(|| i32::from(self.vehicle.attitude.heading_centideg()));
-        let yaw = i32::from(h.yaw.deci()) * 10;
+        let yaw = cdeg(h.yaw.deci());
         let earth = h.flags & EARTH != 0;
         // Where the motor must be, from the nose.
         let motor = if earth {
-            vehicle.map(|v| angle_cdeg(yaw - v))
+            vehicle.map(|v| angle_cdeg(yaw.saturating_sub(v)))
         } else {
             Some(angle_cdeg(yaw))
         };
         // The heading command in the gimbal's reference.
         let command = match (north, earth) {
             (true, true) | (false, false) => Some(yaw),
-            (true, false) => vehicle.map(|v| yaw + v),
-            (false, true) => vehicle.map(|v| yaw - v),
+            (true, false) => vehicle.map(|v| yaw.saturating_add(v)),
+            (false, true) => vehicle.map(|v| yaw.saturating_sub(v)),
         };
         // What the latest postback says, read once (no copy of the whole postback).
         let (limit, tracking, reading) = match &self.latest {
@@ -462,14 +471,14 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         };
         if h.flags & SENT != 0 && !owned {
             if let (true, Some(reading), Some(m)) = (fresh, reading, motor) {
-                self.judge(h, reading, m.clamp(-limit, limit));
+                self.judge(h, reading, m.clamp(limit.saturating_neg(), limit));
             }
             if (h.flags & SENT_NORTH != 0) != north {
                 h.flags |= PENDING;
             }
             let band = i32::from(self.config.aim_deadband_mdeg) / 10;
             if let (Some(r), true) = (reference, h.sent_vehicle_cdeg != NO_HEADING) {
-                if angle_cdeg(r - i32::from(h.sent_vehicle_cdeg)).abs() > band {
+                if angle_cdeg(r.saturating_sub(i32::from(h.sent_vehicle_cdeg))).abs() > band {
                     // A turn changes what the gimbal must do: a new chance.
                     h.flags = (h.flags | PENDING) & !NOT_REACHED;
                     h.attempts = 0;
@@ -538,12 +547,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         (motor, pitch, followed): (i16, i16, bool),
         motor_cdeg: i32,
     ) {
-        let yaw_err = angle_cdeg(i32::from(motor) - motor_cdeg).abs();
-        let pitch_err = (i32::from(pitch) - i32::from(h.pitch.deci()) * 10).abs();
+        let yaw_err = angle_cdeg(i32::from(motor).saturating_sub(motor_cdeg)).abs();
+        let pitch_err = i32::from(pitch).saturating_sub(cdeg(h.pitch.deci())).abs();
         let err = yaw_err.max(pitch_err);
         let tolerance = i32::from(self.config.aim_tolerance_mdeg) / 10;
         let prev = h.prev_err_cdeg;
-        h.prev_err_cdeg = err.min(i32::from(NO_ERROR) - 1) as u16;
+        h.prev_err_cdeg = err.min(i32::from(NO_ERROR - 1)) as u16;
         if err <= tolerance && !followed {
             h.flags = (h.flags | ON_TARGET) & !NOT_REACHED;
             h.attempts = 0;
@@ -554,12 +563,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             // The first postback since a command: it may predate any movement.
             return;
         }
-        let closer = err + tolerance < i32::from(prev) && !followed;
+        let closer = err.saturating_add(tolerance) < i32::from(prev) && !followed;
         if closer || h.flags & NOT_REACHED != 0 {
             return;
         }
         if h.attempts < ATTEMPTS {
-            h.attempts += 1;
+            h.attempts = h.attempts.saturating_add(1);
             h.flags |= PENDING;
         } else {
             h.flags |= NOT_REACHED;

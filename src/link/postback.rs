@@ -192,8 +192,10 @@ impl PostbackAssembler {
         if let Some(slot) = self.frames.get_mut(usize::from(count & 3)) {
             *slot = *data;
         }
-        self.count = count + 1;
-        usize::from(count) + 1 >= postback::FRAMES
+        // Below 5: never saturates.
+        let count = count.saturating_add(1);
+        self.count = count;
+        usize::from(count) >= postback::FRAMES
     }
 
     /// The window is full and starts with a header: the CRC decides. Kept out of line so
@@ -206,19 +208,25 @@ impl PostbackAssembler {
             return Some(p);
         }
         // Move on to the next header held, if any; the frames before it are discarded.
-        match self.frames.iter().skip(1).position(is_header) {
-            Some(i) => {
+        let next = self
+            .frames
+            .iter()
+            .enumerate()
+            .skip(1)
+            .find(|(_, f)| is_header(f));
+        match next {
+            Some((drop, _)) => {
                 self.stats.restarts = self.stats.restarts.wrapping_add(1);
-                let drop = i + 1;
                 // Four frames at most: a loop of word copies, no memmove.
-                for i in drop..postback::FRAMES {
-                    if let Some(&src) = self.frames.get(i) {
-                        if let Some(dst) = self.frames.get_mut(i - drop) {
+                for (dst, src) in (drop..postback::FRAMES).enumerate() {
+                    if let Some(&src) = self.frames.get(src) {
+                        if let Some(dst) = self.frames.get_mut(dst) {
                             *dst = src;
                         }
                     }
                 }
-                self.count -= drop as u8;
+                // The window is full (4) and `drop` in 1..4.
+                self.count = self.count.saturating_sub(drop as u8);
                 self.stats.discarded_frames = self.stats.discarded_frames.wrapping_add(drop as u32);
             }
             None => {
@@ -250,7 +258,8 @@ impl PostbackAssembler {
         self.stats.discarded_frames = self
             .stats
             .discarded_frames
-            .wrapping_add(u32::from(self.count) + extra);
+            .wrapping_add(u32::from(self.count))
+            .wrapping_add(extra);
         self.count = 0;
     }
 

@@ -131,6 +131,8 @@ pub(crate) struct TxQueue<const Q: usize, const T: usize> {
     /// waits.
     flags: u8,
     /// Frames waiting in all three classes, so that "anything to send?" is one compare.
+    /// At most `Q + T + 4` (514), and counted with each push and pop: its saturating
+    /// steps never saturate.
     waiting: u16,
 }
 
@@ -183,7 +185,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     /// Queues a control frame's data; hands it back when the FIFO is full.
     pub(crate) fn push_control(&mut self, data: [u8; 8], quiet: &mut Quiet) -> Result<(), [u8; 8]> {
         self.control.push_back(data)?;
-        self.waiting += 1;
+        self.waiting = self.waiting.saturating_add(1);
         quiet.hold_idle();
         Ok(())
     }
@@ -206,7 +208,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     pub(crate) fn cancel_zero_rate(&mut self) {
         if self.flags & ZERO_RATE != 0 {
             self.flags &= !ZERO_RATE;
-            self.waiting -= 1;
+            self.waiting = self.waiting.saturating_sub(1);
         }
     }
 
@@ -214,7 +216,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         let was = self.flags & bit != 0;
         if !was && bit != 0 {
             self.flags |= bit;
-            self.waiting += 1;
+            self.waiting = self.waiting.saturating_add(1);
         }
         was
     }
@@ -232,7 +234,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         for f in frames {
             // Room was checked above.
             if self.text.push_back(f).is_ok() {
-                self.waiting += 1;
+                self.waiting = self.waiting.saturating_add(1);
             }
         }
         quiet.hold_idle();
@@ -243,7 +245,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
     #[inline]
     pub(crate) fn pop_control(&mut self) -> Option<[u8; 8]> {
         let d = self.control.pop_front()?;
-        self.waiting -= 1;
+        self.waiting = self.waiting.saturating_sub(1);
         Some(d)
     }
 
@@ -263,13 +265,13 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 Next::ZeroRate
             } else {
                 let slot = VehicleSlot::lowest(self.flags);
-                self.flags &= self.flags - 1;
+                self.flags &= !slot.bit();
                 Next::Vehicle(slot)
             }
         } else {
             Next::Text(self.text.pop_front()?)
         };
-        self.waiting -= 1;
+        self.waiting = self.waiting.saturating_sub(1);
         Some(next)
     }
 
@@ -283,7 +285,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
         match Class::of(id) {
             Class::Control => match self.control.push_front(data) {
                 Ok(()) => {
-                    self.waiting += 1;
+                    self.waiting = self.waiting.saturating_add(1);
                     Requeued::Queued
                 }
                 // A zero-rate frame needs no slot.
@@ -301,7 +303,7 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
                 last: id == ids::TEXT_END,
             }) {
                 Ok(()) => {
-                    self.waiting += 1;
+                    self.waiting = self.waiting.saturating_add(1);
                     Requeued::Queued
                 }
                 Err(_) => Requeued::NoRoom,

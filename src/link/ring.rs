@@ -37,7 +37,8 @@ impl<T: Copy, const N: usize> Ring<T, N> {
     }
 
     pub(crate) fn free(&self) -> usize {
-        N - self.len()
+        // `len <= N`: exact.
+        N.saturating_sub(self.len())
     }
 
     /// `i` reduced into `0..N`, for `i < 2 * N` (no division). For a power of two (the
@@ -45,11 +46,11 @@ impl<T: Copy, const N: usize> Ring<T, N> {
     #[inline(always)]
     fn wrap(i: usize) -> usize {
         if N.is_power_of_two() {
-            i & (N - 1)
-        } else if i >= N {
-            i - N
+            // N >= 1: the mask is the constant N - 1.
+            i & N.saturating_sub(1)
         } else {
-            i
+            // One subtraction reduces any `i < 2 * N`.
+            i.checked_sub(N).unwrap_or(i)
         }
     }
 
@@ -58,12 +59,14 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         if self.len() >= N {
             return Err(x);
         }
-        let tail = Self::wrap(usize::from(self.head) + self.len());
+        // Both below 256: the saturating adds here and below never saturate, and fold
+        // into plain adds.
+        let tail = Self::wrap(usize::from(self.head).saturating_add(self.len()));
         let Some(slot) = self.slots.get_mut(tail) else {
             return Err(x);
         };
         *slot = x;
-        self.len += 1;
+        self.len = self.len.saturating_add(1);
         Ok(())
     }
 
@@ -72,15 +75,15 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         if self.len() >= N {
             return Err(x);
         }
-        // N > 0 here: the ring is not full.
-        let head = Self::wrap(usize::from(self.head) + N - 1);
+        // N > 0 here: the ring is not full. `head + N - 1 < 2 * N`.
+        let head = Self::wrap(usize::from(self.head).saturating_add(N.saturating_sub(1)));
         let Some(slot) = self.slots.get_mut(head) else {
             return Err(x);
         };
         *slot = x;
         // head < N <= 255.
         self.head = head as u8;
-        self.len += 1;
+        self.len = self.len.saturating_add(1);
         Ok(())
     }
 
@@ -92,8 +95,9 @@ impl<T: Copy, const N: usize> Ring<T, N> {
         // `head < N`: `wrap` changes nothing, but for a power of two its mask shows the
         // compiler that the index is in bounds (no bounds check).
         let x = *self.slots.get(Self::wrap(usize::from(self.head)))?;
-        self.head = Self::wrap(usize::from(self.head) + 1) as u8;
-        self.len -= 1;
+        self.head = Self::wrap(usize::from(self.head).saturating_add(1)) as u8;
+        // Not empty (checked above).
+        self.len = self.len.saturating_sub(1);
         Some(x)
     }
 }

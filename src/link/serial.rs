@@ -196,10 +196,12 @@ impl<const Q: usize> SerialLink<Q> {
                     self.link.transmit_done(None);
                     self.state = Out::Started;
                 }
-                let left = FRAME_LEN - usize::from(self.written);
+                // `written <= FRAME_LEN`, and `n` is cut to what is left: the saturating
+                // steps are exact, whatever `n` the caller says.
+                let left = FRAME_LEN.saturating_sub(usize::from(self.written));
                 let n = n.min(left);
                 // n <= 24: both casts are exact.
-                self.written += n as u8;
+                self.written = self.written.saturating_add(n as u8);
                 self.bytes_sent = self.bytes_sent.wrapping_add(n as u32);
                 if usize::from(self.written) == FRAME_LEN {
                     self.state = Out::Idle;

@@ -123,12 +123,13 @@ impl<const N: usize> TextAssembler<N> {
             return fail(self, TextError::WrongLength { len: data.len() });
         };
         // Only the last frame is padded: strip its trailing zeros.
-        let used = if last {
-            data.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1)
-        } else {
-            8
-        };
-        for &byte in data.get(..used).unwrap_or(&[]) {
+        let mut used: &[u8] = data;
+        if last {
+            while let [rest @ .., 0] = used {
+                used = rest;
+            }
+        }
+        for &byte in used {
             if !is_valid_byte(byte) {
                 let index = self.buf.len();
                 return fail(self, TextError::InvalidByte { index, byte });

@@ -218,8 +218,8 @@ impl<const N: usize> Pipe<N> {
         Some((
             Rx {
                 pipe: self,
-                // The line the other port writes.
-                line: 1 - index,
+                // The line the other port writes (`index` is 0 or 1: checked above).
+                line: index ^ 1,
             },
             Tx {
                 pipe: self,
@@ -242,7 +242,7 @@ impl<const N: usize> Pipe<N> {
         self.state
             .try_borrow()
             .ok()
-            .and_then(|s| s.lines.get(1 - reader.min(1)).map(|l| l.buf.len()))
+            .and_then(|s| s.lines.get(reader.min(1) ^ 1).map(|l| l.buf.len()))
             .unwrap_or(0)
     }
 

@@ -78,7 +78,8 @@ impl<const OUT: usize> SerialSimulator<OUT> {
     /// dropped, counted in [`SerialSimulator::out_overflows`], and `None` is returned.
     pub fn poll(&mut self, now: Instant) -> Option<Postback> {
         let status = self.sim.poll(now)?;
-        if OUT - self.out.len() < MESSAGE_LEN {
+        // `len <= OUT`: exact.
+        if OUT.saturating_sub(self.out.len()) < MESSAGE_LEN {
             self.out_overflows = self.out_overflows.wrapping_add(1);
             return None;
         }

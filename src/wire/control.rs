@@ -215,9 +215,9 @@ impl Rate {
 
     /// Rates in wire units, (deg/s)×100, each in [−10000, 10000].
     pub fn from_centi(yaw: i16, pitch: i16) -> Result<Self, RangeError> {
-        let max = i32::from(Self::MAX_CENTI);
-        check_int("yaw_rate", yaw.into(), -max, max, 100.0)?;
-        check_int("pitch_rate", pitch.into(), -max, max, 100.0)?;
+        let (min, max) = ((-Self::MAX_CENTI).into(), Self::MAX_CENTI.into());
+        check_int("yaw_rate", yaw.into(), min, max, 100.0)?;
+        check_int("pitch_rate", pitch.into(), min, max, 100.0)?;
         Ok(Rate { yaw, pitch })
     }
 
@@ -267,8 +267,9 @@ impl Heading {
     /// command's 0.1° (359.96° rounds to 360.0°, which is north). Total: every angle has
     /// one.
     pub const fn from_centideg_wrapped(cdeg: i32) -> Heading {
-        // rem_euclid: [0, 35999]; rounded to tenths: [0, 3600], the command's range.
-        Heading(((cdeg.rem_euclid(36_000) + 5) / 10) as u16)
+        // rem_euclid: [0, 35999] (+ 5 is exact); rounded to tenths: [0, 3600], the
+        // command's range.
+        Heading((cdeg.rem_euclid(36_000).saturating_add(5) / 10) as u16)
     }
 
     /// A heading in degrees in [0, 360], rounded to the nearest 0.1°.
@@ -403,9 +404,9 @@ impl ImageOffset {
 
     /// An offset with each axis in [−10000, 10000].
     pub fn new(x: i32, y: i32) -> Result<Self, RangeError> {
-        let max = i32::from(Self::MAX);
-        check_int("x", x, -max, max, 1.0)?;
-        check_int("y", y, -max, max, 1.0)?;
+        let (min, max) = ((-Self::MAX).into(), Self::MAX.into());
+        check_int("x", x, min, max, 1.0)?;
+        check_int("y", y, min, max, 1.0)?;
         Ok(ImageOffset {
             x: x as i16,
             y: y as i16,
@@ -501,12 +502,14 @@ impl TrackingBox {
 
     /// The box width, image units (a multiple of 16).
     pub const fn width(self) -> u16 {
-        self.width16 as u16 * 16
+        // At most 255 × 16 = 4080: exact.
+        (self.width16 as u16).saturating_mul(16)
     }
 
     /// The box height, image units (a multiple of 16).
     pub const fn height(self) -> u16 {
-        self.height16 as u16 * 16
+        // At most 255 × 16 = 4080: exact.
+        (self.height16 as u16).saturating_mul(16)
     }
 
     /// The box width as sent, image units / 16.

@@ -212,7 +212,8 @@ impl StreamParser {
             self.len = 0;
             let mut again = false;
             while let Some(&b) = todo.get(start) {
-                start += 1;
+                // Below `todo.len()` (the byte was there): exact.
+                start = start.saturating_add(1);
                 match self.step(b) {
                     Step::More => {}
                     Step::Item(item) => out = Some(item),
@@ -253,7 +254,8 @@ impl StreamParser {
             // Keep the new byte in the buffer so the resync re-examines it.
             if let Some(slot) = self.buf.get_mut(at) {
                 *slot = byte;
-                self.len += 1;
+                // `at` indexed the buffer: the count stays within it.
+                self.len = at.saturating_add(1);
             }
             return Step::Resync;
         }
@@ -261,7 +263,8 @@ impl StreamParser {
             Some(slot) => *slot = byte,
             None => return Step::Resync,
         }
-        self.len += 1;
+        // `at` indexed the buffer: the count stays within it.
+        self.len = at.saturating_add(1);
         let expected = match self.buf.get(field::LENGTH) {
             Some(&CONTROL_LENGTH_BYTE) => FRAME_LEN,
             _ => postback::MESSAGE_LEN,

@@ -175,7 +175,7 @@ impl Attitude {
         }
         // Normalise in wire units so rounding cannot land on +180.00.
         let centi = round_f32(libm::remainderf(heading_deg, 360.0) * 100.0) as i32;
-        let heading = (centi + 18000).rem_euclid(36000) - 18000;
+        let heading = wrap_centideg(centi);
         Ok(Attitude {
             pitch: round_f32(pitch * 100.0) as i16,
             roll: round_f32(roll * 100.0) as i16,
@@ -225,6 +225,18 @@ impl Attitude {
     /// Heading in 0.01°, in [-18000, 17999].
     pub const fn heading_centideg(&self) -> i16 {
         self.heading
+    }
+}
+
+/// `cdeg` (0.01°) wrapped into [-18000, 18000), the attitude's heading range. Total: the
+/// remainder comes first, so no `i32` overflows on the way.
+pub(crate) const fn wrap_centideg(cdeg: i32) -> i32 {
+    let r = cdeg.rem_euclid(36_000);
+    if r < 18_000 {
+        r
+    } else {
+        // r in [18000, 35999]: exact.
+        r.saturating_sub(36_000)
     }
 }
 
@@ -447,6 +459,30 @@ mod tests {
         assert_eq!(h(-450.0), -9000);
         assert!(Attitude::new(0.0, 0.0, f32::NAN).is_err());
         assert!(Attitude::new(0.0, 0.0, f32::INFINITY).is_err());
+    }
+
+    #[test]
+    fn wrap_centideg_is_total() {
+        for (cdeg, wrapped) in [
+            (0, 0),
+            (17_999, 17_999),
+            (18_000, -18_000),
+            (-18_000, -18_000),
+            (-18_001, 17_999),
+            (36_000, 0),
+            (-36_000, 0),
+            // Far outside any angle the crate makes: no overflow on the way.
+            (i32::MAX, 11_647),
+            (i32::MIN, -11_648),
+        ] {
+            assert_eq!(wrap_centideg(cdeg), wrapped, "{cdeg}");
+        }
+        for cdeg in -100_000..100_000 {
+            assert_eq!(
+                wrap_centideg(cdeg),
+                (cdeg + 18_000).rem_euclid(36_000) - 18_000
+            );
+        }
     }
 
     #[test]
