@@ -190,8 +190,9 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     first_error.get_or_insert(DriverError(kind));
                 }
             }
-            // At least 1 here: the bound is not zero, and the loop ends at 0.
-            left = left.saturating_sub(1);
+            // At least 1 here (the bound is not zero, and the loop ends at 0): never wraps,
+            // and the plain subtraction keeps the per-frame path short.
+            left = left.wrapping_sub(1);
             if left == 0 {
                 break;
             }

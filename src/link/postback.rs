@@ -192,8 +192,9 @@ impl PostbackAssembler {
         if let Some(slot) = self.frames.get_mut(usize::from(count & 3)) {
             *slot = *data;
         }
-        // Below 5: never saturates.
-        let count = count.saturating_add(1);
+        // Below 4 before: never wraps, and the plain addition keeps the per-frame path
+        // short.
+        let count = count.wrapping_add(1);
         self.count = count;
         usize::from(count) >= postback::FRAMES
     }
