@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Mutation testing: runs cargo-mutants over the protocol code of `idu-gimbal`
-# (src/wire, src/link, src/driver) and fails when fewer
-# than 95% of the viable mutants are caught. Not part of CI: too slow. Results and the
-# survivor triage are in TESTING.md, "Mutation testing".
+# (src/wire, src/link, src/driver), or with `bridge` first over the whole of
+# `idu-gimbal-mavlink`'s library, and fails when fewer than 95% of the viable mutants are
+# caught. Not part of CI: too slow. Results and the survivor triage are in TESTING.md,
+# "Mutation testing".
 #
-# Usage: scripts/mutants.sh [extra cargo-mutants args, e.g. --shard 0/16 --sharding round-robin]
+# Usage: scripts/mutants.sh [bridge] [extra cargo-mutants args, e.g. --shard 0/16 --sharding round-robin]
+#   scripts/mutants.sh bridge --re 'src/framing/'   # the bridge's framing only
 #   MUTANTS_JOBS=2 scripts/mutants.sh    # parallel jobs (default 1: the machine has 2 cores)
 #   MUTANTS_TIMEOUT=120                  # per-mutant test timeout, seconds (default 90)
 #   PROPTEST_CASES=256                   # proptest cases per property (default 32 here)
@@ -48,6 +50,23 @@ export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-0}"
 echo "$(cargo mutants --version), jobs $jobs, timeout ${timeout}s, PROPTEST_CASES $PROPTEST_CASES"
 start=$(date +%s)
 rc=0
+if [ "${1:-}" = bridge ]; then
+    shift
+    # The bridge: every test but tests/no_panic.rs (its proptests only check panic-freedom,
+    # which the fuzz corpus replayed by tests/fuzz_corpus.rs also covers).
+    cargo mutants \
+        --package idu-gimbal-mavlink \
+        --all-features \
+        --file 'idu-gimbal-mavlink/src/**' \
+        --timeout "$timeout" \
+        --build-timeout 600 \
+        --jobs "$jobs" \
+        --output . \
+        "$@" \
+        -- --lib --test aiming --test bridge --test burst --test camera --test camera_control \
+        --test camera_fov --test camera_settings --test codec --test commands --test framing \
+        --test fuzz_corpus --test signing || rc=$?
+else
 # #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
 cargo mutants \
     --package idu-gimbal \
@@ -66,6 +85,7 @@ cargo mutants \
     -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
     --test serial --test bounds --test api_contracts --test blocking_adapter \
     --test next_deadline || rc=$?
+fi
 echo "wall time: $(($(date +%s) - start)) s"
 
 # cargo-mutants exits 2 for missed mutants and 3 for timeouts: the score decides here.
