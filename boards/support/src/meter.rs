@@ -41,6 +41,23 @@ fn known_loop(n: u32) {
 }
 
 impl Meter {
+    /// The meter on the core's SysTick, calibrated, its calibration said as the first line
+    /// of benchmark `name`; the run ends (failed) if the core's peripherals are taken.
+    #[inline]
+    pub fn start(name: &str) -> Self {
+        let Some(core) = cortex_m::Peripherals::take() else {
+            crate::qemu::exit(false)
+        };
+        let m = Meter::new(core.SYST);
+        crate::println!(
+            "{}: {:.3} instructions per SysTick tick (calibrated), loop overhead {:.1} per iteration",
+            name,
+            m.instructions_per_tick(),
+            m.loop_overhead()
+        );
+        m
+    }
+
     #[inline]
     pub fn new(mut syst: SYST) -> Self {
         syst.disable_interrupt();

@@ -4,7 +4,7 @@
 use mavio::dialects::common::enums::{EstimatorStatusFlags, MavLandedState};
 use mavio::dialects::common::messages::AutopilotStateForGimbalDevice;
 
-use super::{decode_with, f32_at, u16_at, u32_at, u8_at};
+use super::{decode_with, f32_at, quaternion_at, u16_at, u32_at, u8_at};
 
 /// The full payload's length.
 pub const LEN: usize = 57;
@@ -35,12 +35,7 @@ pub fn decode(payload: &[u8]) -> Option<AutopilotStateForGimbalDevice> {
             target_system: u8_at(p, field::TARGET_SYSTEM),
             target_component: u8_at(p, field::TARGET_COMPONENT),
             time_boot_us,
-            q: [
-                f32_at(p, field::Q),
-                f32_at(p, field::Q + 4),
-                f32_at(p, field::Q + 8),
-                f32_at(p, field::Q + 12),
-            ],
+            q: quaternion_at(p, field::Q),
             q_estimated_delay_us: u32_at(p, field::Q_ESTIMATED_DELAY_US),
             vx: f32_at(p, field::VX),
             vy: f32_at(p, field::VY),

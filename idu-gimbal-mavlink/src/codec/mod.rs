@@ -82,6 +82,18 @@ fn f32_at(p: &[u8], at: usize) -> f32 {
     f32::from_le_bytes(bytes(p, at))
 }
 
+/// The quaternion `[w, x, y, z]` at `at`: four `f32`s in a row.
+#[inline(always)]
+fn quaternion_at(p: &[u8], at: usize) -> [f32; 4] {
+    let [w0, w1, w2, w3, x0, x1, x2, x3, y0, y1, y2, y3, z0, z1, z2, z3] = bytes::<16>(p, at);
+    [
+        f32::from_le_bytes([w0, w1, w2, w3]),
+        f32::from_le_bytes([x0, x1, x2, x3]),
+        f32::from_le_bytes([y0, y1, y2, y3]),
+        f32::from_le_bytes([z0, z1, z2, z3]),
+    ]
+}
+
 #[inline(always)]
 fn u8_at(p: &[u8], at: usize) -> u8 {
     p.get(at).copied().unwrap_or(0)

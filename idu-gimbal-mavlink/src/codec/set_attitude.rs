@@ -3,7 +3,7 @@
 use mavio::dialects::common::enums::GimbalDeviceFlags;
 use mavio::dialects::common::messages::GimbalDeviceSetAttitude;
 
-use super::{decode_with, f32_at, u16_at, u8_at};
+use super::{decode_with, f32_at, quaternion_at, u16_at, u8_at};
 
 /// The full payload's length.
 pub const LEN: usize = 32;
@@ -24,12 +24,7 @@ pub fn decode(payload: &[u8]) -> GimbalDeviceSetAttitude {
         target_system: u8_at(p, field::TARGET_SYSTEM),
         target_component: u8_at(p, field::TARGET_COMPONENT),
         flags: GimbalDeviceFlags::from_bits_truncate(u16_at(p, field::FLAGS)),
-        q: [
-            f32_at(p, field::Q),
-            f32_at(p, field::Q + 4),
-            f32_at(p, field::Q + 8),
-            f32_at(p, field::Q + 12),
-        ],
+        q: quaternion_at(p, field::Q),
         angular_velocity_x: f32_at(p, field::ANGULAR_VELOCITY_X),
         angular_velocity_y: f32_at(p, field::ANGULAR_VELOCITY_Y),
         angular_velocity_z: f32_at(p, field::ANGULAR_VELOCITY_Z),

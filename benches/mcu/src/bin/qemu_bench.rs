@@ -281,16 +281,8 @@ mod fw {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        let Some(core) = cortex_m::Peripherals::take() else {
-            qemu::exit(false)
-        };
-        let mut m = Meter::new(core.SYST);
+        let mut m = Meter::start("qemu_bench");
         let mut table = Table::new();
-        println!(
-            "qemu_bench: {:.3} instructions per SysTick tick (calibrated), loop overhead {:.1} per iteration",
-            m.instructions_per_tick(),
-            m.loop_overhead()
-        );
 
         bench_driver(&mut m, &mut table);
         bench_aim(&mut m, &mut table);

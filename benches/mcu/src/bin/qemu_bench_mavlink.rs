@@ -304,16 +304,8 @@ mod fw {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        let Some(core) = cortex_m::Peripherals::take() else {
-            qemu::exit(false)
-        };
-        let mut m = Meter::new(core.SYST);
+        let mut m = Meter::start("qemu_bench_mavlink");
         let mut table = Table::new();
-        println!(
-            "qemu_bench_mavlink: {:.3} instructions per SysTick tick (calibrated), loop overhead {:.1} per iteration",
-            m.instructions_per_tick(),
-            m.loop_overhead()
-        );
         let bytes = traffic(TO_THE_GIMBAL);
         let elsewhere = traffic(ELSEWHERE);
         let mut bridge = Bridge::new(Link::new(Config::default()), BridgeConfig::default());

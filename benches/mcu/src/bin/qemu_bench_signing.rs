@@ -103,16 +103,8 @@ mod fw {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        let Some(core) = cortex_m::Peripherals::take() else {
-            qemu::exit(false)
-        };
-        let mut m = Meter::new(core.SYST);
+        let mut m = Meter::start("qemu_bench_signing");
         let mut table = Table::new();
-        println!(
-            "qemu_bench_signing: {:.3} instructions per SysTick tick (calibrated), loop overhead {:.1} per iteration",
-            m.instructions_per_tick(),
-            m.loop_overhead()
-        );
         let mut signed = bridge(true);
         let mut plain = bridge(false);
         let sign = send_cost(&mut m, &mut signed) - send_cost(&mut m, &mut plain);
