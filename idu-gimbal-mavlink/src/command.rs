@@ -110,3 +110,26 @@ impl Interval {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_position_is_taken_only_when_both_are_finite_and_in_range() {
+        assert_eq!(Xy::Float(45.0, 90.0).lat_lon_deg(), Some((45.0, 90.0)));
+        assert_eq!(
+            Xy::Int(-900_000_000, 1_800_000_000).lat_lon_deg(),
+            Some((-90.0, 180.0))
+        );
+        for (lat, lon) in [
+            (f32::NAN, 0.0),
+            (0.0, f32::NAN),
+            (f32::INFINITY, 0.0),
+            (90.5, 0.0),
+            (0.0, -180.5),
+        ] {
+            assert_eq!(Xy::Float(lat, lon).lat_lon_deg(), None, "{lat}, {lon}");
+        }
+    }
+}

@@ -246,6 +246,45 @@ mod tests {
     }
 
     #[test]
+    fn timestamps_stop_at_48_bits_and_the_state_prints_without_the_key() {
+        let mut s = signing();
+        s.at_least(u64::MAX);
+        let body = &hex(PYMAVLINK)[..44];
+        for _ in 0..2 {
+            // The six timestamp bytes all ones, never wrapping to small values.
+            assert_eq!(s.sign(body)[1..7], [0xFF; 6]);
+        }
+        let printed = format!("{s:?}");
+        assert!(
+            printed.contains("timestamp: 281474976710655") && printed.contains("(secret)"),
+            "{printed}"
+        );
+    }
+
+    #[test]
+    fn each_stream_keeps_its_own_timestamp() {
+        // Frames from streams A and B, signed by a sender whose clock moves on.
+        let mut tx = signing();
+        let body = hex(PYMAVLINK);
+        let mut frame_at = |ts: u64| {
+            tx.at_least(ts);
+            let mut f = body[..44].to_vec();
+            f.extend_from_slice(&tx.sign(&body[..44]));
+            f
+        };
+        // Each signature one past the time given: 11, 21, 31, 32.
+        let (a11, b21, a31, b32) = (frame_at(10), frame_at(20), frame_at(30), frame_at(31));
+        let mut rx = signing();
+        assert!(rx.verify(&a11, true, 1, 1));
+        assert!(rx.verify(&b21, true, 2, 1));
+        assert!(rx.verify(&a31, true, 1, 1));
+        // B's last is still 21: its frame at 32 is new; A's at 11 again is a replay of A.
+        assert!(rx.verify(&b32, true, 2, 1));
+        assert!(!rx.verify(&a11, true, 1, 1));
+        assert_eq!(rx.stats().replayed, 1);
+    }
+
+    #[test]
     fn pymavlink_s_signed_frame_is_accepted_once() {
         let frame = hex(PYMAVLINK);
         let mut s = signing();

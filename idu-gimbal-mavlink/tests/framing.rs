@@ -415,3 +415,15 @@ fn a_frame_waiting_at_a_datagrams_end_stays_and_clear_forgets_it() {
     );
     assert_eq!(n, 1);
 }
+
+#[test]
+fn the_longest_frame_is_280_bytes_and_decode_errors_say_what_failed() {
+    // MAVLink 2: a 10-byte header, 255 of payload, the checksum, a 13-byte signature.
+    assert_eq!(idu_gimbal_mavlink::framing::MAX_FRAME_LEN, 280);
+    assert_eq!(
+        DecodeError::OtherMessage(77).to_string(),
+        "the frame carries message id 77"
+    );
+    assert!(DecodeError::Checksum.to_string().contains("checksum"));
+    assert!(!DecodeError::Payload.to_string().is_empty());
+}
