@@ -427,3 +427,41 @@ fn the_longest_frame_is_280_bytes_and_decode_errors_say_what_failed() {
     assert!(DecodeError::Checksum.to_string().contains("checksum"));
     assert!(!DecodeError::Payload.to_string().is_empty());
 }
+
+#[test]
+fn to_frame_gives_mavio_s_frame_of_the_same_bytes() {
+    let bytes = frame((7, 190), 42, &heartbeat());
+    let mut reader = FrameReader::new();
+    let mut seen = 0;
+    reader.feed(&bytes, |f| {
+        let ours = f.to_frame().expect("mavio reads a whole frame");
+        assert_eq!(
+            (
+                ours.system_id(),
+                ours.component_id(),
+                ours.sequence(),
+                ours.message_id()
+            ),
+            (7, 190, 42, 0)
+        );
+        // Its own fields, not the reader's: the heartbeat sent, the checksum's bytes.
+        let decoded: Heartbeat = ours.decode_message().unwrap();
+        assert_eq!(format!("{decoded:?}"), format!("{:?}", heartbeat()));
+        let crc = &bytes[bytes.len() - 2..];
+        assert_eq!(ours.checksum(), u16::from_le_bytes([crc[0], crc[1]]));
+        seen += 1;
+        Check::Unhandled
+    });
+    assert_eq!(seen, 1);
+}
+
+#[test]
+fn an_outbox_is_empty_until_a_frame_is_queued_and_again_once_it_is_written() {
+    let mut out = idu_gimbal_mavlink::framing::Outbox::<300>::new();
+    assert!(out.is_empty());
+    out.push_payload(1, 154, 0, 50, &[1, 2, 3]).unwrap();
+    assert!(!out.is_empty());
+    let n = out.bytes().len();
+    out.written(n);
+    assert!(out.is_empty());
+}
