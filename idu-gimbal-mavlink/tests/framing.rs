@@ -465,3 +465,21 @@ fn an_outbox_is_empty_until_a_frame_is_queued_and_again_once_it_is_written() {
     out.written(n);
     assert!(out.is_empty());
 }
+
+#[test]
+fn a_frame_inside_a_datagram_s_unfinished_tail_is_read_and_the_rest_dropped() {
+    // The datagram ends in a header that claims 255 bytes of payload; inside what follows
+    // it, a whole heartbeat, then half of another.
+    let hb = frame((3, 190), 0, &heartbeat());
+    let mut datagram = vec![0xFD, 255, 0, 0, 0, 1, 1, 0, 0, 0];
+    datagram.extend_from_slice(&hb);
+    datagram.extend_from_slice(&hb[..hb.len() / 2]);
+    let (good, reader) = read_datagrams(&[datagram.clone()]);
+    assert_eq!(good, [(3, 0)]);
+    assert_eq!(reader.pending(), 0);
+    // Everything but the heartbeat was skipped, each byte counted once.
+    assert_eq!(
+        reader.stats().skipped_bytes as usize,
+        datagram.len() - hb.len()
+    );
+}
