@@ -611,9 +611,15 @@ fn neutral_holds_forward_and_retract_looks_down_once_each() {
     b.receive_all(&frame(AP, 0, &autopilot_state(40.0)), t(0));
     b.gimbal_mut().poll(t(0));
     let _ = queued(b.gimbal_mut());
+    // The quaternion of a neutral setpoint is not followed, neither at the flag's edge
+    // nor while the flag stays.
     for i in 0..3 {
         b.receive_all(
-            &frame(AP, i, &set_attitude(GimbalDeviceFlags::NEUTRAL, 0.0, 0.0)),
+            &frame(
+                AP,
+                i,
+                &set_attitude(GimbalDeviceFlags::NEUTRAL, 30.0, -20.0),
+            ),
             t(u32::from(i)),
         );
     }
@@ -628,6 +634,20 @@ fn neutral_holds_forward_and_retract_looks_down_once_each() {
         t(10),
     );
     assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::LookDown]);
+}
+
+#[test]
+fn a_rolled_setpoint_is_refused() {
+    let mut b = bridge();
+    let mut rolled = set_attitude(GimbalDeviceFlags::empty(), 0.0, 0.0);
+    // 10° of roll about the x axis, [w, x, y, z]: the gimbal has no roll.
+    let half = 5f32.to_radians();
+    rolled.q = [half.cos(), half.sin(), 0.0, 0.0];
+    let before = b.stats();
+    b.receive_all(&frame(AP, 0, &rolled), t(0));
+    assert_eq!(b.stats().refused_setpoints, before.refused_setpoints + 1);
+    assert_eq!(b.stats().angle_setpoints, before.angle_setpoints);
+    assert!(queued(b.gimbal_mut()).is_empty());
 }
 
 #[test]

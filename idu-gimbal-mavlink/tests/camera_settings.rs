@@ -357,6 +357,18 @@ fn reads_of_unknown_names_or_indexes_are_not_answered() {
     };
     b.receive_all(&frame(GCS, 0, &m), t(30));
     assert!(values(&sent(&mut b)).is_empty());
+    // Nor one to every component of another system; one to every system is.
+    for (system, answered) in [(42, false), (0, true)] {
+        let m = ParamExtRequestList {
+            target_system: system,
+            target_component: 0,
+        };
+        b.receive_all(&frame(GCS, 0, &m), t(40));
+        let mut frames = sent(&mut b);
+        b.poll(t(41));
+        frames.extend(sent(&mut b));
+        assert_eq!(!values(&frames).is_empty(), answered, "system {system}");
+    }
 }
 
 /// An FTP request payload, written out by hand: seq, session, opcode, size, offset, data.
