@@ -35,6 +35,9 @@ pub trait GimbalControl {
     /// hands the command back and ends nothing (see [`Link::send`]).
     fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>>;
 
+    /// How many commands [`GimbalControl::send`] takes now (see [`Link::command_room`]).
+    fn command_room(&self) -> usize;
+
     /// Starts, changes or refreshes a rate hold, which the dead-man ends when refreshes
     /// stop; a full queue hands the rate back (see [`Link::set_rate`]).
     fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>>;
@@ -114,6 +117,10 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
         Link::send(self, command)
     }
     #[inline]
+    fn command_room(&self) -> usize {
+        Link::command_room(self)
+    }
+    #[inline]
     fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {
         Link::set_rate(self, rate, now)
     }
@@ -191,6 +198,10 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
 impl<D: Transport> GimbalControl for D {
     fn send(&mut self, command: impl Into<Command>) -> Result<(), QueueFull<Command>> {
         self.link_mut().send(command)
+    }
+    #[inline]
+    fn command_room(&self) -> usize {
+        self.link().command_room()
     }
     #[inline]
     fn set_rate(&mut self, rate: Rate, now: Instant) -> Result<(), QueueFull<Rate>> {

@@ -4,9 +4,10 @@
 //! `--serial`; see [`crate::transport`]).
 //!
 //! One thread, non-blocking sockets, a 1 ms tick on the host's monotonic clock. Each tick
-//! reads at most [`DATAGRAMS_PER_TICK`] datagrams, sending each one's answers before the
-//! next is read (so a burst of requests never piles up in the bridge's outbox), then moves
-//! the gimbal side, polls the bridge and sends, so a flood of datagrams cannot starve the
+//! reads at most [`DATAGRAMS_PER_TICK`] datagrams, sending each one's answers and moving
+//! the gimbal side before the next is read (so a burst of requests never piles up in the
+//! bridge's outbox or the gimbal's command queue), then moves the gimbal side, polls the
+//! bridge and sends, so a flood of datagrams cannot starve the
 //! bridge's own traffic. A datagram of more requests than the outbox holds answers for is
 //! taken in parts, each part's answers sent before the next part is offered
 //! ([`idu_gimbal_mavlink::ANSWER_ROOM`]); on a serial port, the bytes after a frame waiting
@@ -475,9 +476,16 @@ fn serve<S: Pump>(
         }
         let clock = StdInstant::now();
         let drained = match &mut port {
-            Port::Udp { socket, to } => {
-                receive_udp(&mut bridge, socket, to, &mut clients, &mut buf, t, clock)?
-            }
+            Port::Udp { socket, to } => receive_udp(
+                &mut bridge,
+                socket,
+                to,
+                &mut clients,
+                &mut buf,
+                t,
+                clock,
+                |bridge| S::pump(bridge, &mut side, t),
+            )?,
             Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, &mut held, t)?,
         };
         S::pump(&mut bridge, &mut side, t)?;

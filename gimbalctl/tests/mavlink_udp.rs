@@ -24,7 +24,7 @@ use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::mavio;
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavResult, MavType};
 use mavio::dialects::common::messages::{
-    CommandAck, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
+    CommandAck, CommandLong, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
 };
 use mavio::dialects::common::Common;
 use mavio::protocol::{Frame, V2};
@@ -32,6 +32,8 @@ use mavio::Message;
 
 /// A ground station: system 255, component 190 (MAV_COMP_ID_MISSIONPLANNER).
 const GCS: (u8, u8) = (255, 190);
+/// The bridge's camera (MAV_COMP_ID_CAMERA).
+const CAMERA: u8 = 100;
 /// How long a client waits for the bridge's heartbeat or status (sent every 100 ms).
 const TRAFFIC: Duration = Duration::from_secs(3);
 /// How long a client waits for the answers to a request (normally ~10 ms).
@@ -572,4 +574,47 @@ fn a_burst_of_requests_is_answered_in_full() {
         "every request ACCEPTED\n{stderr}"
     );
     assert_eq!(information, 28, "every ACCEPTED its message\n{stderr}");
+}
+
+/// Zoom steps back to back, as QGroundControl's pinch sends them (each SET_CAMERA_ZOOM
+/// ZOOM_TYPE_STEP −10 is five halvings for the gimbal's eight-command queue): every one
+/// ACCEPTED. (The gimbal side once moved only after all of a tick's datagrams were read:
+/// the second step of a tick found three slots and was TEMPORARILY_REJECTED.)
+#[test]
+fn zoom_steps_back_to_back_are_each_accepted() {
+    let bridge = Bridge::start();
+    let client = socket();
+    let step = CommandLong {
+        target_system: 1,
+        target_component: CAMERA,
+        command: MavCmd::SetCameraZoom,
+        // ZOOM_TYPE_STEP, −10 steps: the bridge sends the gimbal five halvings.
+        param1: 0.0,
+        param2: -10.0,
+        ..Default::default()
+    };
+    const STEPS: usize = 6;
+    for seq in 0..STEPS {
+        client
+            .send_to(&frame(GCS, seq as u8, &step), bridge.addr)
+            .expect("send");
+    }
+    let mut results = Vec::new();
+    let deadline = Instant::now() + ANSWERS;
+    while let Some(f) = recv_frame(&client, deadline) {
+        if f.component_id() != CAMERA {
+            continue;
+        }
+        if let Ok(Common::CommandAck(a)) = f.decode::<Common>() {
+            if a.command == MavCmd::SetCameraZoom {
+                results.push(a.result);
+            }
+        }
+    }
+    let stderr = bridge.stop();
+    assert_eq!(
+        results,
+        [MavResult::Accepted; STEPS],
+        "every step ACCEPTED\n{stderr}"
+    );
 }

@@ -538,6 +538,23 @@ fn zoom_by_range_continuous_and_step() {
     // 4× of 1×..30×: (4 − 1) / 29 = 10.34 %.
     let level = of::<CameraSettings>(&frames)[0].zoom_level;
     assert!((level - 300.0 / 29.0).abs() < 1e-4, "{level}");
+    // A queue with room for four of five halvings: none sent, the level kept, the client
+    // told to try again (a part would leave the lens where the level does not say).
+    while b.gimbal_mut().command_room() > 4 {
+        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    }
+    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
+    assert_eq!(ack.result, MavResult::TemporarilyRejected);
+    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Recenter; 4]);
+    let (_, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestCameraSettings,
+        [1.0, 0.0, 0.0],
+        33,
+    );
+    let kept = of::<CameraSettings>(&frames)[0].zoom_level;
+    assert_eq!(kept, level);
     // QGroundControl's pinch out: round(scale × −10) steps (FlightDisplayViewVideo.qml), here
     // −10: five halvings take any level of the range to its wide end, 1×.
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);

@@ -316,10 +316,25 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
     );
     let listed = list(&mut b);
     assert!(listed.iter().all(|(_, v, _, _)| *v == 0), "{listed:?}");
-    // A queue without room: TEMPORARILY_REJECTED, which QGroundControl also lets go of.
-    while b.gimbal_mut().send(GimbalCommand::Recenter).is_ok() {}
+    // A queue with room for two of the three settings: TEMPORARILY_REJECTED, which
+    // QGroundControl also lets go of, and nothing sent or changed (all or none).
+    let ack = set(&mut b, "IR_PALETTE", value_of(9), MavParamExtType::Uint8);
+    assert_eq!(ack.param_result, ParamAck::Accepted);
+    let _ = queued_all(b.gimbal_mut());
+    while b.gimbal_mut().command_room() > 2 {
+        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    }
     let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
     assert_eq!(result, MavResult::TemporarilyRejected);
+    assert_eq!(
+        queued_all(b.gimbal_mut()),
+        [Command::from(GimbalCommand::Recenter); 6]
+    );
+    let listed = list(&mut b);
+    assert!(
+        listed.iter().any(|(_, v, _, _)| *v == 9),
+        "the palette kept: {listed:?}"
+    );
 }
 
 #[test]

@@ -4,6 +4,14 @@ use super::*;
 use crate::wire::control::DualLightCommand;
 
 impl<const Q: usize, const T: usize> Link<Q, T> {
+    /// How many commands [`Link::send`] takes now: the free control-frame slots, out of
+    /// `Q`. A caller with several commands that only make sense together (a zoom of several
+    /// steps) checks it first and sends all or none.
+    #[inline]
+    pub fn command_room(&self) -> usize {
+        self.tx.control_free()
+    }
+
     /// Queues a command. A pointing command (see [`Command::is_pointing`]) ends a rate hold
     /// (without a zero-rate command: it is the gimbal's new instruction), an aim or a
     /// point-at, except start tracking, to which an aim or a point-at yields until the

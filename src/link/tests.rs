@@ -180,8 +180,12 @@ fn stop_rate_sends_one_zero_and_pointing_commands_cancel() {
 fn full_queue_hands_back_and_zero_rate_is_never_lost() {
     let mut link: Link<2, 2> = Link::new(Config::default());
     let cmd = Command::from(GimbalCommand::Recenter);
+    // The room says what `send` takes: two, one, then none.
+    assert_eq!(link.command_room(), 2);
     link.send(cmd).unwrap();
+    assert_eq!(link.command_room(), 1);
     link.send(cmd).unwrap();
+    assert_eq!(link.command_room(), 0);
     assert_eq!(link.send(cmd), Err(QueueFull(cmd)));
     let r = Rate::new(3.0, 0.0).unwrap();
     assert_eq!(link.set_rate(r, Instant::from_millis(0)), Err(QueueFull(r)));
@@ -190,6 +194,7 @@ fn full_queue_hands_back_and_zero_rate_is_never_lost() {
     // Make room, start a hold, fill the queue, stop: the zero goes out once there is room.
     link.next_transmit();
     link.transmit_done(None);
+    assert_eq!(link.command_room(), 1);
     link.set_rate(r, Instant::from_millis(0)).unwrap();
     link.stop_rate();
     let log = run(&mut link, 0, 10, 1);

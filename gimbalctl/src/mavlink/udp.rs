@@ -77,6 +77,7 @@ fn heard(clients: &mut Clients, from: SocketAddr, good: u32, clock: StdInstant) 
 
 /// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
 /// the peer table; whether the socket was emptied.
+#[allow(clippy::too_many_arguments)] // the loop's state, lent for one tick
 pub(super) fn receive_udp<G: GimbalControl>(
     bridge: &mut Bridge<G>,
     socket: &UdpSocket,
@@ -85,6 +86,7 @@ pub(super) fn receive_udp<G: GimbalControl>(
     buf: &mut [u8],
     t: Instant,
     clock: StdInstant,
+    mut move_gimbal: impl FnMut(&mut Bridge<G>) -> Result<(), Failure>,
 ) -> Result<bool, Failure> {
     let Clients { peers, log, .. } = clients;
     log.tick(clock);
@@ -109,6 +111,10 @@ pub(super) fn receive_udp<G: GimbalControl>(
                     }
                     send_udp(bridge, socket, to, clients);
                 }
+                // What the datagram asked of the gimbal leaves before the next is read: a
+                // client that sends again as soon as it is answered (QGroundControl's pinch,
+                // five zoom steps a command) never finds the gimbal's queue still full.
+                move_gimbal(bridge)?;
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
             // A peer that went away (ICMP port unreachable) must not stop the bridge.

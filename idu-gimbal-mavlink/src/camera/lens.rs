@@ -160,6 +160,11 @@ impl Camera {
             } else {
                 return MavResult::Unsupported;
             };
+        // All the steps or none: a part of them would move the lens where the level kept
+        // here does not say. A full queue is the client's to try again.
+        if commands.iter().flatten().count() > gimbal.command_room() {
+            return MavResult::TemporarilyRejected;
+        }
         for c in commands.into_iter().flatten() {
             if gimbal.send(GimbalCmd::from(c)).is_err() {
                 return MavResult::TemporarilyRejected;

@@ -229,9 +229,13 @@ impl Settings {
     }
 
     /// `MAV_CMD_RESET_CAMERA_SETTINGS`: every parameter back to its default, each sent to
-    /// the gimbal. `TEMPORARILY_REJECTED` when the gimbal's queue has no room for them all
-    /// (those sent keep their default): the client may try again.
+    /// the gimbal. `TEMPORARILY_REJECTED`, nothing sent, when the gimbal's queue has no room
+    /// for them all: the client may try again.
     pub(crate) fn reset<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
+        // Each parameter is one command.
+        if gimbal.command_room() < self.count {
+            return MavResult::TemporarilyRejected;
+        }
         for (i, p) in PARAMETERS.iter().enumerate().take(self.count) {
             match self.put(gimbal, i, p.default) {
                 ParamAck::Accepted => {}
