@@ -15,8 +15,8 @@ use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
 use mavio::dialects::common::messages::{
-    CommandAck, CommandLong, GimbalDeviceAttitudeStatus, GimbalDeviceInformation,
-    GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
+    AutopilotStateForGimbalDevice, CommandAck, CommandLong, GimbalDeviceAttitudeStatus,
+    GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 
 fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
@@ -117,6 +117,77 @@ fn the_first_autopilot_is_kept_until_it_falls_silent() {
 }
 
 #[test]
+fn no_autopilot_yet_and_a_heartbeat_of_system_0_or_of_no_autopilot_takes_nothing() {
+    // Heard first, with no autopilot to keep: neither is one (system 0 is the broadcast
+    // address; MAV_AUTOPILOT_INVALID says the sender is no autopilot).
+    let mut b = fresh();
+    b.receive_all(&frame((0, 1), 0, &heartbeat()), t(0));
+    assert_eq!(system_id_after(&mut b, 0), 1);
+    let invalid = Heartbeat {
+        autopilot: MavAutopilot::Invalid,
+        ..heartbeat()
+    };
+    b.receive_all(&frame((43, 1), 1, &invalid), t(1_200));
+    assert_eq!(system_id_after(&mut b, 1_200), 1);
+    assert_eq!(b.stats().other_autopilots, 2);
+    // The real one is still taken at once.
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(2_400));
+    assert_eq!(system_id_after(&mut b, 2_400), AP.0);
+}
+
+/// The quaternion (w, x, y, z) of the 3-2-1 rotation: yaw about z, then pitch about y, then
+/// roll about x (common.xml's vehicle attitude), from the half angles' products.
+fn quaternion_321(roll_deg: f32, pitch_deg: f32, yaw_deg: f32) -> [f32; 4] {
+    let (sr, cr) = (roll_deg.to_radians() / 2.0).sin_cos();
+    let (sp, cp) = (pitch_deg.to_radians() / 2.0).sin_cos();
+    let (sy, cy) = (yaw_deg.to_radians() / 2.0).sin_cos();
+    [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ]
+}
+
+#[test]
+fn the_vehicles_roll_pitch_and_heading_from_autopilot_state_reach_the_gimbal() {
+    let mut b = fresh();
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
+    // Whole degrees: f32 trigonometry is good to about 1e-3° here (1e-5° near ±85° pitch
+    // where asin's slope is 11), far from the 0.005° at which the wire's 0.01° rounds, so
+    // the centidegrees are exact.
+    for (i, (roll, pitch, yaw)) in [
+        (10, -20, 30),
+        (-35, 15, -120),
+        (170, 5, 179),
+        (-170, -5, -179),
+        (0, 80, 45),
+        (-5, -85, -170),
+        (25, 0, 0),
+        (0, 0, 90),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let state = AutopilotStateForGimbalDevice {
+            target_system: AP.0,
+            target_component: 154,
+            q: quaternion_321(roll as f32, pitch as f32, yaw as f32),
+            angular_velocity_z: f32::NAN,
+            ..Default::default()
+        };
+        let ms = 100 * (i as u32 + 1);
+        b.receive_all(&frame(AP, i as u8, &state), t(ms));
+        let a = b.gimbal().attitude().expect("an attitude");
+        assert_eq!(
+            (a.roll_centideg(), a.pitch_centideg(), a.heading_centideg()),
+            (roll * 100, pitch * 100, yaw * 100),
+            "roll {roll}, pitch {pitch}, yaw {yaw}"
+        );
+    }
+}
+
+#[test]
 fn a_configured_system_id_follows_only_its_own_autopilot() {
     let mut b = Bridge::new(
         Link::new(Config::default()),
@@ -173,6 +244,13 @@ fn information_on_request_broadcast_or_addressed_and_an_ack_for_every_command() 
         assert!((i.yaw_min - (-170f32).to_radians()).abs() < 1e-6);
         assert!((i.yaw_max - 170f32.to_radians()).abs() < 1e-6);
         assert!(i.roll_min.is_nan() && i.roll_max.is_nan());
+        // common.xml's GIMBAL_DEVICE_CAP_FLAGS: RETRACT 1, NEUTRAL 2, PITCH_AXIS 32,
+        // PITCH_LOCK 128, YAW_AXIS 256, YAW_FOLLOW 512, YAW_LOCK 1024,
+        // SUPPORTS_YAW_IN_EARTH_FRAME 4096; no roll axis, no infinite yaw, no RC inputs.
+        assert_eq!(
+            i.cap_flags.bits(),
+            1 + 2 + 32 + 128 + 256 + 512 + 1024 + 4096
+        );
         assert_eq!(i.gimbal_device_id, 0);
     }
     // Another component's request: not ours, no answer.
