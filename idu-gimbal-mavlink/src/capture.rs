@@ -373,6 +373,43 @@ mod tests {
     }
 
     #[test]
+    fn a_late_image_keeps_its_slots_until_it_is_an_interval_behind() {
+        let mut c = Capture::new();
+        c.start(Request::from_params(1.0, 0.0, 0.0).unwrap(), t(0));
+        let v = Vantage::default();
+        c.taken(t(0), v);
+        assert!(!c.due(t(999)) && c.due(t(1_000)));
+        // Half an interval late: the next slot is still 2,000.
+        c.taken(t(1_500), v);
+        assert!(!c.due(t(1_999)) && c.due(t(2_000)));
+        // 1,500 late, less than an interval past the next slot (3,000): that one at once.
+        c.taken(t(3_500), v);
+        assert!(c.due(t(3_500)));
+        // An interval and more past the next slot (4,000): from now on, 6,100.
+        c.taken(t(5_100), v);
+        assert!(!c.due(t(6_099)) && c.due(t(6_100)));
+    }
+
+    #[test]
+    fn a_single_capture_has_no_interval_nor_a_sequence_that_is_not_whole() {
+        let mut c = Capture::new();
+        c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), t(0));
+        assert!(c.due(t(0)));
+        assert_eq!(c.interval(), None);
+        for sequence in [2.5, f32::NAN, -1.0, 16_777_218.0] {
+            assert_eq!(
+                Request::from_params(0.0, 1.0, sequence).map(|r| r.sequence),
+                Ok(0),
+                "{sequence}"
+            );
+        }
+        assert_eq!(
+            Request::from_params(0.0, 1.0, 16_777_216.0).map(|r| r.sequence),
+            Ok(16_777_216)
+        );
+    }
+
+    #[test]
     fn a_retransmitted_single_capture_takes_no_second_picture() {
         let mut c = Capture::new();
         let once = Request::from_params(0.0, 1.0, 1.0).unwrap();

@@ -4,11 +4,11 @@ mod common;
 use common::*;
 
 use idu_gimbal::link::{Config, Link};
-use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
+use idu_gimbal::video::{Camera as VideoCamera, Family, Stream, VideoError};
 use idu_gimbal::wire::control::{GimbalCommand, Photo, Video, Zoom};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
-use idu_gimbal_mavlink::camera::{camera_model, CameraConfig, UriTooLong};
+use idu_gimbal_mavlink::camera::{camera_model, CameraConfig, StreamError, UriTooLong};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{
     CameraCapFlags, CameraMode, MavCmd, MavResult, MavType, StorageStatus, VideoStreamStatusFlags,
@@ -373,6 +373,16 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
         320,
     );
     assert_eq!(indexes(&frames), [10, 11, 12]);
+    // From an index on (param3 −1).
+    let (ack, frames) = ask(
+        &mut b,
+        100,
+        MavCmd::RequestMessage,
+        [263.0, 17.0, -1.0],
+        325,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(indexes(&frames), [17, 18, 19]);
     let (ack, mut frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, -1.0, 0.0], 330);
     assert_eq!(ack.result, MavResult::Accepted);
     for ms in 331..340 {
@@ -388,10 +398,37 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
         ([263.0, f32::NAN, 0.0], MavResult::Denied),
         ([263.0, 3.0, 0.0], MavResult::Failed),
         ([263.0, 5.0, 2.0], MavResult::Denied),
+        // Not whole, or past i32 (2^31, exact in f32): no index, not the nearest one.
+        ([263.0, 17.5, 0.0], MavResult::Denied),
+        ([263.0, 17.0, 18.5], MavResult::Denied),
+        ([263.0, 17.0, 2_147_483_648.0], MavResult::Denied),
+        ([263.0, 17.0, f32::INFINITY], MavResult::Denied),
+        // −1 is "all"; other negative indexes are none.
+        ([263.0, -2.0, 0.0], MavResult::Denied),
+        ([263.0, -2.0, -1.0], MavResult::Denied),
     ] {
         let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, p, 400);
         assert_eq!(ack.result, result, "{p:?}");
         assert!(indexes(&frames).is_empty());
+    }
+}
+
+#[test]
+fn each_camera_message_by_request_message_is_that_message() {
+    let mut b = bridge();
+    postback(&mut b, GimbalType::X30, 5);
+    // common.xml's ids: CAMERA_SETTINGS 260, STORAGE_INFORMATION 261,
+    // CAMERA_CAPTURE_STATUS 262; param2 0 as QGroundControl sends it, which for a stream
+    // request would mean every stream: none of those may come instead.
+    for (id, ms) in [(260.0, 10), (261.0, 20), (262.0, 30)] {
+        let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, [id, 0.0, 0.0], ms);
+        assert_eq!(ack.result, MavResult::Accepted, "{id}");
+        let got: Vec<u32> = frames
+            .iter()
+            .map(|f| f.message_id())
+            .filter(|&m| m != 77)
+            .collect();
+        assert_eq!(got, [id as u32], "{id}: only the message asked for");
     }
 }
 
@@ -690,4 +727,19 @@ fn a_uri_longer_than_the_field_is_a_configuration_error() {
         })
     );
     assert!(CameraConfig::new(&long[..160]).is_ok());
+    // What was wrong and what is valid, in words.
+    let e = CameraConfig::new(&long).unwrap_err();
+    let said = format!(
+        "stream URI is {} bytes; VIDEO_STREAM_INFORMATION holds at most 160",
+        long.len()
+    );
+    assert_eq!(e.to_string(), said);
+    assert_eq!(StreamError::UriTooLong(e).to_string(), said);
+    let video = VideoError::NoSuchStream {
+        family: Family::A2000,
+        stream: Stream::Infrared,
+    };
+    assert_eq!(StreamError::Video(video).to_string(), video.to_string());
+    // The main stream's URI is the one given.
+    assert_eq!(CameraConfig::new(URI).unwrap().uri(), URI);
 }

@@ -15,7 +15,8 @@ use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{MavCmd, MavResult};
 use mavio::dialects::common::messages::{
-    CameraFovStatus, CommandAck, GlobalPositionInt, VideoStreamInformation,
+    CameraCaptureStatus, CameraFovStatus, CameraTrackingImageStatus, CommandAck, GlobalPositionInt,
+    VideoStreamInformation,
 };
 
 const FOV_STATUS: f32 = 271.0;
@@ -315,4 +316,47 @@ fn the_status_is_streamed_at_the_interval_asked_and_stops() {
     let r = ask(&mut b, MavCmd::SetMessageInterval, FOV_STATUS, -1.0, 2_401);
     assert_eq!(r, MavResult::Accepted);
     assert!(count(&mut b, 2_401, 4_000).is_empty());
+}
+
+/// Two periodic messages at once, each at its own rate: the field of view every 200 ms, the
+/// capture status while recording once a second (VIDEO_START_CAPTURE's param2, in Hz); no
+/// tracking status, nothing being tracked.
+#[test]
+fn each_periodic_message_keeps_its_own_rate() {
+    let mut b = bridge(lens());
+    postback(&mut b, 0, 0, 0);
+    let _ = sent(&mut b);
+    let r = ask(&mut b, MavCmd::VideoStartCapture, 0.0, 1.0, 1_000);
+    assert_eq!(r, MavResult::Accepted);
+    let r = ask(
+        &mut b,
+        MavCmd::SetMessageInterval,
+        FOV_STATUS,
+        200_000.0,
+        1_000,
+    );
+    assert_eq!(r, MavResult::Accepted);
+    let (mut fov, mut capture, mut tracking) = (Vec::new(), Vec::new(), 0);
+    for ms in 1_001..3_000 {
+        b.poll(t(ms));
+        let frames = sent(&mut b);
+        fov.extend(
+            of::<CameraFovStatus>(&frames)
+                .iter()
+                .map(|s| s.time_boot_ms),
+        );
+        capture.extend(
+            of::<CameraCaptureStatus>(&frames)
+                .iter()
+                .map(|s| s.time_boot_ms),
+        );
+        tracking += of::<CameraTrackingImageStatus>(&frames).len();
+    }
+    // Due from the request at 1,000, first sent at the next poll, then every 200 ms.
+    assert_eq!(
+        fov,
+        [1_001, 1_201, 1_401, 1_601, 1_801, 2_001, 2_201, 2_401, 2_601, 2_801]
+    );
+    assert_eq!(capture, [2_000]);
+    assert_eq!(tracking, 0);
 }

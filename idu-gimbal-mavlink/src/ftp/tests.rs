@@ -1181,3 +1181,30 @@ fn sessions_are_the_clients_numbers_and_each_clients_own() {
     // The client's own session 0 is untouched.
     assert_ack(&send(&mut s, &packet(9, 0, READ, 1, 0, &[]), 0));
 }
+
+#[test]
+fn a_file_is_empty_only_when_every_part_is() {
+    assert!(File::new("/a", b"").is_empty());
+    assert!(!File::new("/a", b"x").is_empty());
+    let last_part_only = File {
+        path: "/a",
+        parts: [b"", b"", b"x"],
+    };
+    assert!(!last_part_only.is_empty());
+    assert_eq!(last_part_only.len(), 1);
+}
+
+#[test]
+fn a_retransmitted_open_keeps_its_session_from_being_reclaimed() {
+    let mut s = server();
+    let request = with_path(10, 0, OPEN, 0, "/readme.txt");
+    let mut reply = [0; 251];
+    assert!(s.request(GCS, &request, at(0), &mut reply));
+    // The open again at 4 s: session 0 was used then, not at 0.
+    assert!(s.request(GCS, &request, at(4_000), &mut reply));
+    assert_eq!(s.stats().retransmissions, 1);
+    assert_ack(&open_in(&mut s, 1, 11, "/readme.txt", 4_000));
+    // At 5.5 s neither session has been idle SESSION_IDLE_TIMEOUT_MS: none reclaimed.
+    assert_nak(&open_in(&mut s, 2, 12, "/readme.txt", 5_500), E_NO_SESSIONS);
+    assert_eq!(s.stats().sessions_reclaimed, 0);
+}
