@@ -188,6 +188,10 @@ fn information_by_request_message_and_by_the_legacy_command() {
         assert!(f.contains(CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE));
         assert!(f.contains(CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE));
         assert!(!f.contains(CameraCapFlags::HAS_TRACKING_GEO_STATUS));
+        // Exactly those (common.xml's CAMERA_CAP_FLAGS: VIDEO 1, IMAGE 2, MODES 4, IMAGE IN
+        // VIDEO MODE 8, VIDEO IN IMAGE MODE 16, ZOOM 64, FOCUS 128, VIDEO_STREAM 256,
+        // TRACKING_POINT 512, TRACKING_RECTANGLE 1024): no survey mode, no geo status.
+        assert_eq!(f.bits(), 1 + 2 + 4 + 8 + 16 + 64 + 128 + 256 + 512 + 1024);
         assert_eq!(info[0].gimbal_device_id, 154);
         assert_eq!(&info[0].model_name[..10], b"X30-X30GT\0");
         // The definition, in the one form QGroundControl and MAVSDK both read.

@@ -247,6 +247,16 @@ fn the_motor_angle_turns_with_the_vehicle_and_the_longitude_wraps() {
     assert!((s.lon_image - want).abs() <= 2, "{} vs {want}", s.lon_image);
     assert!(s.lat_image.abs() <= 2, "{}", s.lat_image);
     assert_eq!(s.alt_image, 0);
+    // The mirror image: just east of it, the motor 90° left, across −180°.
+    let mut b = placed(position(0, -lon, 500_000, 500_000), 0.0, -4_500, -9_000);
+    let s = fov_status(&mut b, 30);
+    assert!(
+        (s.lon_image + want).abs() <= 2,
+        "{} vs {}",
+        s.lon_image,
+        -want
+    );
+    assert!(s.lat_image.abs() <= 2, "{}", s.lat_image);
 }
 
 #[test]
@@ -276,6 +286,11 @@ fn at_or_above_the_horizon_the_centre_is_at_infinity_and_below_home_unknown() {
     assert_eq!(fov_status(&mut b, 30).lat_image, i32::MAX);
     let mut b = placed(position(0, 0, i32::MIN, i32::MAX), 0.0, -4_500, 0);
     assert_eq!(fov_status(&mut b, 30).alt_image, i32::MAX);
+    // 11 m from the north pole, looking north 100 m out: past the pole, beyond ±90° of
+    // latitude, unknown rather than a latitude no receiver takes.
+    let mut b = placed(position(899_999_000, 0, 100_000, 100_000), 0.0, -4_500, 0);
+    let s = fov_status(&mut b, 30);
+    assert_eq!([s.lat_image, s.lon_image, s.alt_image], [i32::MAX; 3]);
 }
 
 #[test]
@@ -359,4 +374,24 @@ fn each_periodic_message_keeps_its_own_rate() {
     );
     assert_eq!(capture, [2_000]);
     assert_eq!(tracking, 0);
+}
+
+#[test]
+fn looking_north_the_image_centre_is_north() {
+    // As above, the vehicle heading north: the ground 100 m north.
+    let (lat, lon) = (473_977_420, 85_455_940);
+    let mut b = placed(position(lat, lon, 488_123, 100_000), 0.0, -4_500, 0);
+    let s = fov_status(&mut b, 30);
+    // By hand: 100 m over the meridian's radius of curvature, a (1 − e²) / (1 − e² sin² φ)^1.5
+    // + 388 m; 1e-7° of latitude is 11 mm: ±2 units is ±2 cm.
+    let phi = (f64::from(lat) * 1e-7).to_radians();
+    let e2 = 6.694_379_990_14e-3;
+    let m = 6_378_137.0 * (1.0 - e2) / (1.0 - e2 * phi.sin().powi(2)).powf(1.5) + 388.123;
+    let dlat = (100.0 / m).to_degrees() * 1e7;
+    assert!(
+        (f64::from(s.lat_image - lat) - dlat).abs() <= 2.0,
+        "{} vs {dlat}",
+        s.lat_image - lat
+    );
+    assert!((s.lon_image - lon).abs() <= 2, "{}", s.lon_image - lon);
 }

@@ -32,6 +32,18 @@ pub(crate) struct AimTold {
     not_reached: bool,
 }
 
+/// What the gimbal device can do (`GIMBAL_DEVICE_INFORMATION.cap_flags`): two axes, pitch and
+/// yaw, each locked or (yaw) following, a yaw in the earth frame, neutral and retract; no
+/// roll axis, no endless yaw, no RC inputs.
+const CAP_FLAGS: GimbalDeviceCapFlags = GimbalDeviceCapFlags::HAS_NEUTRAL
+    .union(GimbalDeviceCapFlags::HAS_RETRACT)
+    .union(GimbalDeviceCapFlags::HAS_PITCH_AXIS)
+    .union(GimbalDeviceCapFlags::HAS_PITCH_LOCK)
+    .union(GimbalDeviceCapFlags::HAS_YAW_AXIS)
+    .union(GimbalDeviceCapFlags::HAS_YAW_FOLLOW)
+    .union(GimbalDeviceCapFlags::HAS_YAW_LOCK)
+    .union(GimbalDeviceCapFlags::SUPPORTS_YAW_IN_EARTH_FRAME);
+
 impl State {
     /// Says in a `STATUSTEXT` (severity warning, from the gimbal device) when the aim held
     /// begins to need the yaw beyond the motor's travel, or is not reached: the failure
@@ -111,14 +123,7 @@ impl State {
             firmware_version: 0,
             hardware_version: 0,
             uid: 0,
-            cap_flags: GimbalDeviceCapFlags::HAS_NEUTRAL
-                | GimbalDeviceCapFlags::HAS_RETRACT
-                | GimbalDeviceCapFlags::HAS_PITCH_AXIS
-                | GimbalDeviceCapFlags::HAS_PITCH_LOCK
-                | GimbalDeviceCapFlags::HAS_YAW_AXIS
-                | GimbalDeviceCapFlags::HAS_YAW_FOLLOW
-                | GimbalDeviceCapFlags::HAS_YAW_LOCK
-                | GimbalDeviceCapFlags::SUPPORTS_YAW_IN_EARTH_FRAME,
+            cap_flags: CAP_FLAGS,
             custom_cap_flags: 0,
             // No roll axis: unknown, as the message says to give it.
             roll_min: f32::NAN,

@@ -133,7 +133,9 @@ impl Camera {
                 if !(v.is_finite() && v == libm::truncf(v) && v != 0.0) {
                     return MavResult::Denied;
                 }
-                let z = if v > 0.0 { Zoom::Double } else { Zoom::Half };
+                // Not 0 (above): in or out.
+                let zoom_in = v > 0.0;
+                let z = if zoom_in { Zoom::Double } else { Zoom::Half };
                 // A step doubles or halves the ratio: MAX_STEPS of them span the document's
                 // ranges (2^5 = 32 ≥ 30), and further ones would reach a gimbal already at
                 // its end. Whole and at most 5: exact.
@@ -146,7 +148,7 @@ impl Camera {
                 // the arithmetic: f32::max/min would turn it into a bound).
                 // 2^n for n ≤ 5: a shift, exact (no powf).
                 let factor = (1u8 << n) as f32;
-                let stepped = if v > 0.0 {
+                let stepped = if zoom_in {
                     self.zoom * factor
                 } else {
                     self.zoom / factor

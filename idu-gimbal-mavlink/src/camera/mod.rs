@@ -285,6 +285,19 @@ pub(crate) fn low_bits(n: usize) -> u8 {
         .unwrap_or(0)
 }
 
+/// What the camera can do (`CAMERA_INFORMATION.flags`): photos and video in either mode, the
+/// photo/video switch, zoom and focus, video streams, tracking a point or a rectangle.
+const CAP_FLAGS: CameraCapFlags = CameraCapFlags::CAPTURE_IMAGE
+    .union(CameraCapFlags::CAPTURE_VIDEO)
+    .union(CameraCapFlags::HAS_MODES)
+    .union(CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE)
+    .union(CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE)
+    .union(CameraCapFlags::HAS_BASIC_ZOOM)
+    .union(CameraCapFlags::HAS_BASIC_FOCUS)
+    .union(CameraCapFlags::HAS_VIDEO_STREAM)
+    .union(CameraCapFlags::HAS_TRACKING_POINT)
+    .union(CameraCapFlags::HAS_TRACKING_RECTANGLE);
+
 /// Messages other than commands the camera answers.
 pub(crate) fn handles(id: u32) -> bool {
     id == id_of::<FileTransferProtocol>()
@@ -802,16 +815,7 @@ impl Camera {
             resolution_h,
             resolution_v,
             lens_id: 0,
-            flags: CameraCapFlags::CAPTURE_IMAGE
-                | CameraCapFlags::CAPTURE_VIDEO
-                | CameraCapFlags::HAS_MODES
-                | CameraCapFlags::CAN_CAPTURE_IMAGE_IN_VIDEO_MODE
-                | CameraCapFlags::CAN_CAPTURE_VIDEO_IN_IMAGE_MODE
-                | CameraCapFlags::HAS_BASIC_ZOOM
-                | CameraCapFlags::HAS_BASIC_FOCUS
-                | CameraCapFlags::HAS_VIDEO_STREAM
-                | CameraCapFlags::HAS_TRACKING_POINT
-                | CameraCapFlags::HAS_TRACKING_RECTANGLE,
+            flags: CAP_FLAGS,
             cam_definition_version: definition::VERSION,
             cam_definition_uri: name(definition::URI),
             // The component id of the gimbal this camera is on (common.xml); ArduPilot's
