@@ -16,7 +16,7 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraImageCaptured, CameraInformation, CameraSettings, CommandAck,
-    GimbalDeviceInformation, Heartbeat, StorageInformation, VideoStreamInformation,
+    GimbalDeviceInformation, Heartbeat, StorageInformation, SystemTime, VideoStreamInformation,
     VideoStreamStatus,
 };
 use mavio::protocol::{Frame, V2};
@@ -598,9 +598,20 @@ fn zoom_by_range_continuous_and_step() {
     assert_eq!(kept, level);
     // QGroundControl's pinch out: round(scale × −10) steps (FlightDisplayViewVideo.qml), here
     // −10: five halvings take any level of the range to its wide end, 1×.
+    // Room for exactly the five: taken.
+    while b.gimbal_mut().command_room() > 5 {
+        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    }
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
     assert_eq!(ack.result, MavResult::Accepted);
-    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(Zoom::Half); 5]);
+    assert_eq!(
+        queued(b.gimbal_mut()),
+        [
+            [GimbalCommand::Recenter; 3].as_slice(),
+            &[GimbalCommand::Zoom(Zoom::Half); 5]
+        ]
+        .concat()
+    );
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 0.0);
     // And 7 steps in from 1×: five doublings, 30× (32 beyond the range's end).
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
@@ -746,4 +757,47 @@ fn a_uri_longer_than_the_field_is_a_configuration_error() {
     assert_eq!(StreamError::Video(video).to_string(), video.to_string());
     // The main stream's URI is the one given.
     assert_eq!(CameraConfig::new(URI).unwrap().uri(), URI);
+}
+
+#[test]
+fn an_interval_for_a_message_neither_component_sends_is_left_to_others() {
+    let mut b = bridge();
+    postback(&mut b, GimbalType::X30, 5);
+    let _ = sent(&mut b);
+    // GLOBAL_POSITION_INT (33), to every component: another's to answer, not the camera's
+    // nor the gimbal's.
+    let c = command((AP.0, 0), MavCmd::SetMessageInterval, 33.0, 100_000.0);
+    b.receive_all(&frame(GCS, 0, &c), t(10));
+    assert!(of::<CommandAck>(&sent(&mut b)).is_empty());
+    // CAMERA_FOV_STATUS (271) to every component: the camera's.
+    let c = command((AP.0, 0), MavCmd::SetMessageInterval, 271.0, 100_000.0);
+    b.receive_all(&frame(GCS, 1, &c), t(20));
+    let frames = sent(&mut b);
+    let acks: Vec<(u8, MavResult)> = frames
+        .iter()
+        .filter(|f| f.message_id() == 77)
+        .map(|f| {
+            let a: CommandAck = f.decode_message().unwrap();
+            (f.component_id(), a.result)
+        })
+        .collect();
+    assert_eq!(acks, [(100, MavResult::Accepted)]);
+}
+
+#[test]
+fn messages_no_component_handles_are_neither_bad_nor_answered() {
+    let mut b = bridge();
+    postback(&mut b, GimbalType::X30, 5);
+    let _ = sent(&mut b);
+    let before = b.stats().reader;
+    let time = SystemTime {
+        time_unix_usec: 1_700_000_000_000_000,
+        time_boot_ms: 2,
+    };
+    b.receive_all(&frame(AP, 1, &time), t(10));
+    b.receive_all(&frame(GCS, 2, &time), t(10));
+    let after = b.stats().reader;
+    assert_eq!(after.frames - before.frames, 2);
+    assert_eq!(after.bad_frames, before.bad_frames);
+    assert!(sent(&mut b).is_empty());
 }

@@ -335,6 +335,14 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
         listed.iter().any(|(_, v, _, _)| *v == 9),
         "the palette kept: {listed:?}"
     );
+    // Room for exactly the three: reset.
+    let _ = queued_all(b.gimbal_mut());
+    while b.gimbal_mut().command_room() > 3 {
+        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    }
+    let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
+    assert_eq!(result, MavResult::Accepted);
+    assert_eq!(queued_all(b.gimbal_mut()).len(), 5 + 3);
 }
 
 #[test]
