@@ -801,3 +801,37 @@ fn messages_no_component_handles_are_neither_bad_nor_answered() {
     assert_eq!(after.bad_frames, before.bad_frames);
     assert!(sent(&mut b).is_empty());
 }
+
+#[test]
+fn images_asked_again_beyond_the_outboxs_room_wait_for_it_and_none_is_lost() {
+    let mut b = bridge();
+    for k in 0..16u32 {
+        let _ = ask4(
+            &mut b,
+            100,
+            MavCmd::ImageStartCapture,
+            [0.0, 0.0, 1.0, 0.0],
+            k * 10,
+        );
+        assert_eq!(queued(b.gimbal_mut()).len(), 1);
+    }
+    let _ = sent(&mut b);
+    // The outbox part-filled by answers not yet sent (the gimbal's information, asked
+    // again and again), so that the sixteen images cannot all follow at once.
+    let mut seq = 0;
+    while b.transmit_bytes().len() < 300 {
+        let c = command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0);
+        b.receive_all(&frame(GCS, seq, &c), t(200));
+        seq += 1;
+    }
+    let c = command((AP.0, 100), MavCmd::RequestMessage, 263.0, -1.0);
+    b.receive_all(&frame(GCS, seq, &c), t(300));
+    let mut frames = sent(&mut b);
+    assert!(indexes(&frames).len() < 16, "some wait for room");
+    for ms in 301..310 {
+        b.poll(t(ms));
+        frames.extend(sent(&mut b));
+    }
+    assert_eq!(indexes(&frames), (0..16).collect::<Vec<_>>());
+    assert_eq!(b.stats().outbox_full, 0);
+}

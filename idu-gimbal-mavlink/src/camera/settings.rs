@@ -295,6 +295,21 @@ mod tests {
     }
 
     #[test]
+    fn a_camera_without_thermal_has_no_thermal_values() {
+        let visible = Settings::new(false);
+        let count = parameters(false).len();
+        assert_eq!(
+            visible.value(count - 1),
+            Some(PARAMETERS[count - 1].default)
+        );
+        assert_eq!(visible.value(count), None);
+        assert_eq!(
+            Settings::new(true).value(count),
+            Some(PARAMETERS[count].default)
+        );
+    }
+
+    #[test]
     fn low_bits_masks_the_first_n() {
         let masks: Vec<u8> = (0..=9).map(crate::camera::low_bits).collect();
         assert_eq!(masks, [0, 1, 3, 7, 15, 31, 63, 127, 255, 255]);
