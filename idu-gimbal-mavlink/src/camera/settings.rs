@@ -145,8 +145,8 @@ impl Settings {
     /// one of the parameters.
     pub(crate) fn read(&mut self, id: &[u8; 16], index: i16, component: u8, tx: &mut Tx<'_>) {
         let i = match usize::try_from(index) {
-            Ok(i) if i < self.count => Some(i),
-            Ok(_) => None,
+            // One past the parameters names none: `send_value` sends nothing for it.
+            Ok(i) => Some(i),
             Err(_) => self.index_of(id),
         };
         if let Some(i) = i {
