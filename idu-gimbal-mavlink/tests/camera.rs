@@ -4,7 +4,7 @@ mod common;
 use common::*;
 
 use idu_gimbal::link::{Config, Link};
-use idu_gimbal::video::{Camera as VideoCamera, Family, Stream, VideoError};
+use idu_gimbal::video::{Camera as VideoCamera, Credentials, Family, Stream, VideoError};
 use idu_gimbal::wire::control::{GimbalCommand, Photo, Video, Zoom};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
@@ -833,5 +833,40 @@ fn images_asked_again_beyond_the_outboxs_room_wait_for_it_and_none_is_lost() {
         frames.extend(sent(&mut b));
     }
     assert_eq!(indexes(&frames), (0..16).collect::<Vec<_>>());
+    assert_eq!(b.stats().outbox_full, 0);
+}
+
+#[test]
+fn stream_information_beyond_the_outboxs_room_waits_for_it_and_none_is_lost() {
+    // The longest credentials make URIs of 125 bytes: three VIDEO_STREAM_INFORMATION do
+    // not fit behind a part-filled outbox at once.
+    let (user, password) = ("u".repeat(32), "p".repeat(32));
+    let camera = VideoCamera {
+        credentials: Credentials::new(&user, &password),
+        ..VideoCamera::new(Family::DualLight)
+    };
+    let mut b = camera_bridge(CameraConfig::with_streams_of(&camera).unwrap());
+    postback(&mut b, GimbalType::DualLight30x, 5);
+    let _ = sent(&mut b);
+    let mut seq = 0;
+    while b.transmit_bytes().len() < 300 {
+        let c = command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0);
+        b.receive_all(&frame(GCS, seq, &c), t(200));
+        seq += 1;
+    }
+    // VIDEO_STREAM_INFORMATION (269), param2 0: every stream.
+    let c = command((AP.0, 100), MavCmd::RequestMessage, 269.0, 0.0);
+    b.receive_all(&frame(GCS, seq, &c), t(300));
+    let mut frames = sent(&mut b);
+    assert!(frames.iter().filter(|f| f.message_id() == 269).count() < 3);
+    for ms in 301..310 {
+        b.poll(t(ms));
+        frames.extend(sent(&mut b));
+    }
+    let ids: Vec<u8> = of::<VideoStreamInformation>(&frames)
+        .iter()
+        .map(|s| s.stream_id)
+        .collect();
+    assert_eq!(ids, [1, 2, 3]);
     assert_eq!(b.stats().outbox_full, 0);
 }
