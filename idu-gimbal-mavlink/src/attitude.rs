@@ -128,6 +128,17 @@ mod tests {
         }
         assert!(worst < 3e-7, "worst error {worst:e}");
     }
+
+    #[test]
+    fn wrap_pi_gives_the_half_open_turn() {
+        // −π is π's other name: (−π, π] holds π (2π in f32 is PI doubled, exact, and so is
+        // −PI + 2·PI).
+        assert_eq!(wrap_pi(-PI), PI);
+        assert_eq!(wrap_pi(PI), PI);
+        assert_eq!(wrap_pi(-0.5), -0.5);
+        assert_eq!(wrap_pi(3.0), 3.0);
+    }
+
     use proptest::prelude::*;
 
     fn deg(d: f32) -> f32 {
