@@ -139,6 +139,27 @@ mod tests {
         assert_eq!(wrap_pi(3.0), 3.0);
     }
 
+    #[test]
+    fn a_quaternion_pitched_half_a_turn_has_no_yaw() {
+        // w = z = 0: turned 180° about a horizontal axis, no heading to read.
+        assert_eq!(YawPitch::from_quaternion([0.0, 1.0, 0.0, 0.0]), None);
+        assert_eq!(YawPitch::from_quaternion([0.0, 0.6, 0.8, 0.0]), None);
+    }
+
+    #[test]
+    fn roll_is_read_from_a_quaternion_of_any_length_the_bridge_takes() {
+        // 10° of roll, q = (cos 5°, sin 5°, 0, 0): 2·w·x = sin 10°, at length 1 and 1.05.
+        let (s, c) = 5f32.to_radians().sin_cos();
+        for k in [1.0f32, 1.05, 0.95] {
+            let roll = YawPitch::roll_of([k * c, k * s, 0.0, 0.0]);
+            // f32 products and one division: a few ulps of 0.17.
+            assert!(
+                (roll - 10f32.to_radians().sin()).abs() < 1e-6,
+                "{k}: {roll}"
+            );
+        }
+    }
+
     use proptest::prelude::*;
 
     fn deg(d: f32) -> f32 {

@@ -260,3 +260,11 @@ proptest! {
         assert_all_answered(&a, &asked, &b);
     }
 }
+
+#[test]
+fn the_room_a_frame_waits_for_is_a_signed_ack_and_two_whole_frames() {
+    // MAVLink 2: a 10-byte header, COMMAND_ACK's 10-byte payload (command u16, result,
+    // progress, result_param2 i32, target system and component), a 2-byte checksum and a
+    // 13-byte signature: 35; the largest frame is 280 bytes, signed.
+    assert_eq!(ANSWER_ROOM, 35 + 2 * 280);
+}
