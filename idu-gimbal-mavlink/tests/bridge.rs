@@ -351,6 +351,50 @@ fn status_after(b: &mut Bridge<Link>, p: &Postback, ms: u32) -> GimbalDeviceAtti
 }
 
 #[test]
+fn delta_yaw_is_the_vehicle_heading_when_the_gimbal_reported() {
+    let mut b = bridge();
+    let p = Postback {
+        motor_heading: 1_000,
+        ..Postback::default()
+    };
+    let postback_at = |b: &mut Bridge<Link>, ms: u32| {
+        for data in p.to_can_frames() {
+            b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+        }
+    };
+    let delta_yaw_at = |b: &mut Bridge<Link>, ms: u32| {
+        let _ = sent(b);
+        let c = command((0, 154), MavCmd::RequestMessage, 285.0, 0.0);
+        b.receive_all(&frame(GCS, 0, &c), t(ms));
+        of::<GimbalDeviceAttitudeStatus>(&sent(b))
+            .remove(0)
+            .delta_yaw
+            .to_degrees()
+    };
+    // f32 quaternion to yaw and back: well within 1e-3°.
+    let close = |a: f32, e: f32| (a - e).abs() < 1e-3;
+    b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(90));
+    postback_at(&mut b, 100);
+    b.poll(t(100));
+    // The vehicle turns to 30° with no postback since: the motor angle reported is still
+    // the one from when it headed 0°.
+    b.receive_all(&frame(AP, 1, &autopilot_state(30.0)), t(150));
+    let d = delta_yaw_at(&mut b, 160);
+    assert!(close(d, 0.0), "{d}");
+    // A postback at 200, noted: the heading then, 30°, even after a turn to 60°.
+    postback_at(&mut b, 200);
+    b.poll(t(200));
+    b.receive_all(&frame(AP, 2, &autopilot_state(60.0)), t(205));
+    let d = delta_yaw_at(&mut b, 210);
+    assert!(close(d, 30.0), "{d}");
+    // A postback not yet noted (asked before the next poll): the heading now.
+    postback_at(&mut b, 300);
+    b.receive_all(&frame(AP, 3, &autopilot_state(90.0)), t(300));
+    let d = delta_yaw_at(&mut b, 300);
+    assert!(close(d, 90.0), "{d}");
+}
+
+#[test]
 fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
     let mut b = bridge();
     let p = Postback {
@@ -1025,4 +1069,34 @@ fn a_pitch_is_rounded_to_the_wires_tenth_before_its_range_is_checked() {
             }
         }
     }
+}
+
+#[test]
+fn setpoints_and_vehicle_states_for_another_gimbal_are_not_followed() {
+    let mut b = fresh();
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
+    let _ = queued_all(b.gimbal_mut());
+    let mut set = set_attitude(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 30.0, -20.0);
+    let mut state = autopilot_state(45.0);
+    // Another component of this system, and this component of another system.
+    for (i, (system, component)) in [(AP.0, 155), (42, 154)].into_iter().enumerate() {
+        set.target_system = system;
+        set.target_component = component;
+        state.target_system = system;
+        state.target_component = component;
+        b.receive_all(&frame(AP, 2 * i as u8, &set), t(10));
+        b.receive_all(&frame(AP, 2 * i as u8 + 1, &state), t(10));
+    }
+    let s = b.stats();
+    assert_eq!((s.angle_setpoints, s.vehicle_updates), (0, 0));
+    assert_eq!(s.not_for_us, 4);
+    assert!(queued_all(b.gimbal_mut()).is_empty());
+    assert_eq!(b.gimbal().attitude(), None);
+    // To every component of every system, and to this one's: followed.
+    for (i, (system, component)) in [(0, 0), (AP.0, 154)].into_iter().enumerate() {
+        set.target_system = system;
+        set.target_component = component;
+        b.receive_all(&frame(AP, 10 + i as u8, &set), t(20));
+    }
+    assert_eq!(b.stats().angle_setpoints, 2);
 }
