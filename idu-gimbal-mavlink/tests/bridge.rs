@@ -89,7 +89,9 @@ fn the_first_autopilot_is_kept_until_it_falls_silent() {
     let hb_at = |b: &mut Bridge<Link>, from: (u8, u8), ms: u32| {
         b.receive_all(&frame(from, 0, &heartbeat()), t(ms));
     };
+    assert_eq!(b.system_id(), 1);
     hb_at(&mut b, AP, 0);
+    assert_eq!(b.system_id(), AP.0);
     assert_eq!(system_id_after(&mut b, 0), AP.0);
     // Another autopilot, a forged heartbeat, system 0, or a component-1 heartbeat that says
     // it is no autopilot: the one followed is heard, so none moves the system id.
@@ -1099,4 +1101,23 @@ fn setpoints_and_vehicle_states_for_another_gimbal_are_not_followed() {
         b.receive_all(&frame(AP, 10 + i as u8, &set), t(20));
     }
     assert_eq!(b.stats().angle_setpoints, 2);
+}
+
+#[test]
+fn a_frame_cut_at_a_datagrams_end_is_dropped_there_and_counted() {
+    let mut b = fresh();
+    let whole = frame(
+        GCS,
+        0,
+        &command((0, 154), MavCmd::RequestMessage, 283.0, 0.0),
+    );
+    // Its first 20 bytes alone: nothing acted on, the 20 dropped at the datagram's end.
+    let taken = b.receive_datagram(&whole[..20], t(0));
+    assert_eq!((taken.bytes, taken.good), (20, 0));
+    assert_eq!(b.stats().reader.skipped_bytes, 20);
+    // The next datagram starts afresh: the whole request, answered once.
+    let taken = b.receive_datagram(&whole, t(1));
+    assert_eq!((taken.bytes, taken.good), (whole.len(), 1));
+    assert_eq!(of::<CommandAck>(&sent(&mut b)).len(), 1);
+    assert_eq!(b.stats().reader.skipped_bytes, 20);
 }

@@ -870,3 +870,25 @@ fn stream_information_beyond_the_outboxs_room_waits_for_it_and_none_is_lost() {
     assert_eq!(ids, [1, 2, 3]);
     assert_eq!(b.stats().outbox_full, 0);
 }
+
+#[test]
+fn an_image_taken_while_the_gimbal_link_is_down_has_no_attitude() {
+    let mut b = bridge();
+    // The image taken at `ms`, its report's quaternion.
+    let image_q = |b: &mut Bridge<Link>, ms: u32| {
+        let (_, mut frames) = ask4(b, 100, MavCmd::ImageStartCapture, [0.0, 0.0, 1.0, 0.0], ms);
+        b.poll(t(ms));
+        frames.extend(sent(b));
+        let _ = queued(b.gimbal_mut());
+        of::<CameraImageCaptured>(&frames)[0].q
+    };
+    postback(&mut b, GimbalType::X30, 0);
+    b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(10));
+    assert!(image_q(&mut b, 20).iter().all(|v| v.is_finite()));
+    // No postback for longer than the link's timeout (1.5 s), the vehicle's heading fresh:
+    // the last postback's angles are stale, the attitude unknown.
+    b.receive_all(&frame(AP, 1, &autopilot_state(0.0)), t(1_600));
+    b.gimbal_mut().poll(t(1_600));
+    assert!(!b.gimbal().is_up());
+    assert!(image_q(&mut b, 1_610).iter().all(|v| v.is_nan()));
+}

@@ -422,6 +422,13 @@ fn fast_calibration_is_the_gyroscope_calibration_addressed_to_the_gimbal() {
             vec![GimbalCommand::FastCalibration.into()]
         )
     );
+    assert_eq!(b.stats().queue_full, 0);
+    // No room in the gimbal's queue: try again, and counted.
+    while b.gimbal_mut().send(GimbalCommand::Recenter).is_ok() {}
+    let (r, _, _) = ask(&mut b, GIMBAL, cal, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 10);
+    assert_eq!(r, MavResult::TemporarilyRejected);
+    assert_eq!(b.stats().queue_full, 1);
+    let _ = queued_all(b.gimbal_mut());
     // Any other calibration, or more than the gyroscope's: denied, nothing sent.
     for p in [
         [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],

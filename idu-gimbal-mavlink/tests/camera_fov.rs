@@ -286,8 +286,8 @@ fn at_or_above_the_horizon_the_centre_is_at_infinity_and_below_home_unknown() {
     assert_eq!(fov_status(&mut b, 30).lat_image, i32::MAX);
     let mut b = placed(position(0, 0, i32::MIN, i32::MAX), 0.0, -4_500, 0);
     assert_eq!(fov_status(&mut b, 30).alt_image, i32::MAX);
-    // 11 m from the north pole, looking north 100 m out: past the pole, beyond ±90° of
-    // latitude, unknown rather than a latitude no receiver takes.
+    // 11 m from the north pole: beyond the ±85° the ground hit is computed for
+    // (`geo::GROUND_HIT_LAT_MAX_DEG`), unknown rather than a point past the pole.
     let mut b = placed(position(899_999_000, 0, 100_000, 100_000), 0.0, -4_500, 0);
     let s = fov_status(&mut b, 30);
     assert_eq!([s.lat_image, s.lon_image, s.alt_image], [i32::MAX; 3]);

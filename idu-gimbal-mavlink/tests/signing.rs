@@ -156,3 +156,21 @@ fn without_a_key_nothing_is_signed_or_checked() {
     let out = output(&mut b, &key(KEY_PASSPHRASE));
     assert_eq!(out, [(77, false), (283, false)]);
 }
+
+#[test]
+fn the_timestamps_sent_start_from_the_time_given() {
+    let k = key(KEY_PASSPHRASE);
+    let mut b = signing_bridge();
+    // The host's clock, far past anything received: the answers' timestamps go on from it.
+    b.signing_time_at_least(T + 1_000_000);
+    b.receive_all(
+        &sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T + 5_000),
+        t(10),
+    );
+    let bytes = b.transmit_bytes();
+    assert!(bytes.len() > 12);
+    let total = 10 + usize::from(bytes[1]) + 2 + 13;
+    let mut ts = [0u8; 8];
+    ts[..6].copy_from_slice(&bytes[total - 12..total - 6]);
+    assert!(u64::from_le_bytes(ts) >= T + 1_000_000);
+}
