@@ -341,12 +341,11 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     assert!(queued(b.gimbal_mut()).is_empty());
 }
 
-#[test]
-fn images_are_sent_again_on_request_from_the_kept_history() {
-    let mut b = bridge();
-    for k in 0..20u32 {
+/// `n` single images, 10 ms apart from 0, each one photo command for the gimbal.
+fn take_single_images(b: &mut Bridge<Link>, n: u32) {
+    for k in 0..n {
         let _ = ask4(
-            &mut b,
+            b,
             100,
             MavCmd::ImageStartCapture,
             [0.0, 0.0, 1.0, 0.0],
@@ -354,6 +353,12 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
         );
         assert_eq!(queued(b.gimbal_mut()).len(), 1);
     }
+}
+
+#[test]
+fn images_are_sent_again_on_request_from_the_kept_history() {
+    let mut b = bridge();
+    take_single_images(&mut b, 20);
     // By index (REQUEST_MESSAGE param2), and by the superseded command MAVSDK falls back to.
     let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, 17.0, 0.0], 300);
     assert_eq!(ack.result, MavResult::Accepted);
@@ -805,16 +810,7 @@ fn messages_no_component_handles_are_neither_bad_nor_answered() {
 #[test]
 fn images_asked_again_beyond_the_outboxs_room_wait_for_it_and_none_is_lost() {
     let mut b = bridge();
-    for k in 0..16u32 {
-        let _ = ask4(
-            &mut b,
-            100,
-            MavCmd::ImageStartCapture,
-            [0.0, 0.0, 1.0, 0.0],
-            k * 10,
-        );
-        assert_eq!(queued(b.gimbal_mut()).len(), 1);
-    }
+    take_single_images(&mut b, 16);
     let _ = sent(&mut b);
     // The outbox part-filled by answers not yet sent (the gimbal's information, asked
     // again and again), so that the sixteen images cannot all follow at once.
