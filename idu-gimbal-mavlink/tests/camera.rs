@@ -807,19 +807,26 @@ fn messages_no_component_handles_are_neither_bad_nor_answered() {
     assert!(sent(&mut b).is_empty());
 }
 
-#[test]
-fn images_asked_again_beyond_the_outboxs_room_wait_for_it_and_none_is_lost() {
-    let mut b = bridge();
-    take_single_images(&mut b, 16);
-    let _ = sent(&mut b);
-    // The outbox part-filled by answers not yet sent (the gimbal's information, asked
-    // again and again), so that the sixteen images cannot all follow at once.
+/// Fills the outbox with 300 bytes or more of answers not yet sent (the gimbal's
+/// information, asked again and again), still short of what a request waits for; the next
+/// sequence number.
+fn part_fill_outbox(b: &mut Bridge<Link>) -> u8 {
     let mut seq = 0;
     while b.transmit_bytes().len() < 300 {
         let c = command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0);
         b.receive_all(&frame(GCS, seq, &c), t(200));
         seq += 1;
     }
+    seq
+}
+
+#[test]
+fn images_asked_again_beyond_the_outboxs_room_wait_for_it_and_none_is_lost() {
+    let mut b = bridge();
+    take_single_images(&mut b, 16);
+    let _ = sent(&mut b);
+    // The sixteen images cannot all follow at once.
+    let seq = part_fill_outbox(&mut b);
     let c = command((AP.0, 100), MavCmd::RequestMessage, 263.0, -1.0);
     b.receive_all(&frame(GCS, seq, &c), t(300));
     let mut frames = sent(&mut b);
@@ -844,12 +851,7 @@ fn stream_information_beyond_the_outboxs_room_waits_for_it_and_none_is_lost() {
     let mut b = camera_bridge(CameraConfig::with_streams_of(&camera).unwrap());
     postback(&mut b, GimbalType::DualLight30x, 5);
     let _ = sent(&mut b);
-    let mut seq = 0;
-    while b.transmit_bytes().len() < 300 {
-        let c = command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0);
-        b.receive_all(&frame(GCS, seq, &c), t(200));
-        seq += 1;
-    }
+    let seq = part_fill_outbox(&mut b);
     // VIDEO_STREAM_INFORMATION (269), param2 0: every stream.
     let c = command((AP.0, 100), MavCmd::RequestMessage, 269.0, 0.0);
     b.receive_all(&frame(GCS, seq, &c), t(300));
