@@ -23,7 +23,8 @@
 #   and tests/defmt_format.rs (the driver errors' counters and defmt encoding),
 #   tests/serial.rs (the serial driver and link over the mock pipe) and tests/bounds.rs
 #   (the parsers and the link under floods), tests/blocking_adapter.rs (the Blocking
-#   adapter's classifier) and tests/next_deadline.rs (the drivers' next_deadline). Left out: tests/no_panic.rs
+#   adapter's classifier), tests/next_deadline.rs (the drivers' next_deadline) and
+#   tests/aiming.rs (the closed-loop aim against the simulator). Left out: tests/no_panic.rs
 #   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
 #   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
 #   scope) and doctests (examples, not checks).
@@ -84,7 +85,7 @@ cargo mutants \
     "$@" \
     -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
     --test serial --test bounds --test api_contracts --test blocking_adapter \
-    --test next_deadline || rc=$?
+    --test next_deadline --test aiming || rc=$?
 fi
 echo "wall time: $(($(date +%s) - start)) s"
 
