@@ -91,7 +91,15 @@ stage_fast() {
     step "packages: cargo publish --dry-run of the library crates (idu-gimbal, idu-gimbal-mavlink)"
     # The bridge depends on the unpublished core: cargo packages the workspace's crates
     # together. --allow-dirty: tests may append to proptest-regressions files; the package's
-    # contents are fixed by each crate's `include`.
+    # contents are fixed by each crate's `include`. cargo unpacks the packaged crates into
+    # its registry cache under a name keyed by the target directory's path and the version,
+    # and reuses what it finds there: a copy from an earlier run of an older tree would be
+    # built instead of this one. Those copies of these two crates go first.
+    cargo_home=${CARGO_HOME:-$HOME/.cargo}
+    rm -rf "$cargo_home"/registry/src/-*/idu-gimbal-[0-9]* \
+        "$cargo_home"/registry/src/-*/idu-gimbal-mavlink-[0-9]* \
+        "$cargo_home"/registry/cache/-*/idu-gimbal-[0-9]*.crate \
+        "$cargo_home"/registry/cache/-*/idu-gimbal-mavlink-[0-9]*.crate
     cargo publish --dry-run --workspace --exclude gimbalctl --allow-dirty 2>&1 |
         grep -v '^warning: ignoring \(test\|example\)'
 
