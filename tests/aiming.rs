@@ -15,7 +15,7 @@ use idu_gimbal::wire::control::{
     Command, GimbalCommand, Heading, ImagePoint, Pitch, Rate, TrackingBox,
 };
 use idu_gimbal::wire::ids;
-use idu_gimbal::wire::postback::GimbalType;
+use idu_gimbal::wire::postback::{ControlMode, GimbalType, Postback};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, GimbalControl, Instant};
 
@@ -469,6 +469,26 @@ fn a_gimbal_that_does_not_move_is_tried_three_times_then_reported() {
         rig.run(100);
         assert!(!rig.aim_state().unwrap().not_reached);
         assert_eq!(rig.headings.len(), 2 + usize::from(aim::ATTEMPTS));
+        rig.run(20_000);
+        assert!(rig.aim_state().unwrap().not_reached, "{wire:?}");
+        assert_eq!(rig.stats().aim_not_reached, 2, "{wire:?}");
+        // So is the gimbal restarting: its first postback, no closer than the last one
+        // before, is the first of the attempts again, which end as before.
+        rig.reboot();
+        rig.run(3000 + 500 + 100);
+        assert!(!rig.aim_state().unwrap().not_reached, "{wire:?}");
+        rig.run(20_000);
+        let stats = rig.stats();
+        assert_eq!(
+            (stats.aim_recommands, stats.aim_not_reached),
+            (3 * u32::from(aim::ATTEMPTS), 3),
+            "{wire:?}"
+        );
+        assert_eq!(
+            rig.headings.len(),
+            2 + 3 * usize::from(aim::ATTEMPTS),
+            "{wire:?}"
+        );
     }
 }
 
@@ -493,6 +513,13 @@ fn a_yaw_beyond_the_motors_travel_stops_at_the_limit_reported_and_not_hammered()
             rig.run(3000);
             assert!(off(rig.earth_yaw(), 175.0) < 0.11, "{what}");
             assert!(!rig.aim_state().unwrap().at_yaw_limit, "{what}");
+            // The limit itself is in reach; a tenth of a degree past it is not.
+            rig.aim(vehicle(170.0), 0.0).unwrap();
+            rig.run(1000);
+            assert!(!rig.aim_state().unwrap().at_yaw_limit, "{what}");
+            rig.aim(vehicle(-170.1), 0.0).unwrap();
+            rig.run(1000);
+            assert!(rig.aim_state().unwrap().at_yaw_limit, "{what}");
         }
     }
 }
@@ -554,10 +581,18 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
             rig.run(12_000);
             assert_eq!(rig.state().targets_lost, 1, "{what}");
             assert!(off(rig.motor(), 0.0) < 0.11, "{what}: {}", rig.motor());
-            // And a new aim takes the gimbal from the tracker.
+            // Stopped before any postback showed it tracking: the aim is back at once.
+            rig.send(GimbalCommand::StartTracking(track));
+            assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
+            rig.send(GimbalCommand::StopTracking);
+            assert!(!rig.aim_state().unwrap().yielded_to_tracker, "{what}");
+            rig.run(1000);
+            // And a new aim takes the gimbal from the tracker, at once.
             rig.send(GimbalCommand::StartTracking(track));
             rig.run(1000);
+            assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
             rig.aim(vehicle(10.0), 0.0).unwrap();
+            assert!(!rig.aim_state().unwrap().yielded_to_tracker, "{what}");
             rig.run(1000);
             assert!(!rig.state().tracking, "{what}");
             assert!(off(rig.motor(), 10.0) < 0.11, "{what}: {}", rig.motor());
@@ -683,5 +718,140 @@ fn point_at_holds_a_ground_target_while_the_vehicle_turns_in_place() {
             assert!((rig.state().pitch_deg - elevation).abs() < 0.06, "{what}");
             assert!(rig.aim_state().unwrap().aim.yaw.is_earth());
         }
+    }
+}
+
+#[test]
+fn a_point_at_moving_with_the_vehicle_leaves_the_gimbal_to_a_tracker_started_through_the_link() {
+    // 200 m south of the target, then flying 100 m east in 3 s: the bearing turns from
+    // north to about 26.6° west of it, far past the dead-band.
+    let target = Position::new(47.0018, 8.0, 400.0).unwrap();
+    let east = 8.0 + 100.0 / (111_320.0 * 47.0f64.to_radians().cos());
+    for wire in WIRES {
+        let what = format!("{wire:?}");
+        let mut rig = Rig::new(wire, LockHolds::North);
+        rig.position = Some((Gps::new(47.0, 8.0).unwrap(), Altitude::new(500.0).unwrap()));
+        rig.run(100);
+        match wire {
+            Wire::Can => rig.can.point_at(target),
+            Wire::Uart => rig.uart.point_at(target),
+        }
+        rig.run(3000);
+        let sent = rig.headings.len();
+        let centre = ImagePoint::new(4096, 4096).unwrap();
+        rig.send(GimbalCommand::StartTracking(
+            TrackingBox::new(centre, 256.0, 256.0).unwrap(),
+        ));
+        for ms in 1..=3000u32 {
+            let lon = 8.0 + (east - 8.0) * f64::from(ms) / 3000.0;
+            rig.position = Some((Gps::new(47.0, lon).unwrap(), Altitude::new(500.0).unwrap()));
+            rig.tick();
+        }
+        assert!(rig.state().tracking, "{what}");
+        assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
+        assert_eq!(
+            rig.headings.len(),
+            sent,
+            "{what}: nothing sent while tracking"
+        );
+        // The tracker stopped: the aim at the target from where the vehicle is now.
+        rig.send(GimbalCommand::StopTracking);
+        rig.run(3000);
+        let here = Position::new(47.0, east, 500.0).unwrap();
+        let bearing = wrap(look_at(&here, &target).unwrap().bearing_deg as f32);
+        assert!(bearing < -26.0 && bearing > -27.0, "{bearing}");
+        assert!(
+            off(rig.earth_yaw(), bearing) < 0.11,
+            "{what}: {} against {bearing}",
+            rig.earth_yaw()
+        );
+    }
+}
+
+#[test]
+fn an_earth_yaw_waits_for_the_vehicle_heading_while_it_is_stale() {
+    // The link alone: the aim's state as the attitude goes stale and comes back.
+    let mut link: Link = Link::new(Config::default());
+    let at = |ms| Instant::from_millis(ms);
+    link.set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), at(0));
+    link.aim(
+        Aim {
+            yaw: earth(100.0),
+            pitch: Pitch::LEVEL,
+        },
+        at(0),
+    )
+    .unwrap();
+    // Nose-referenced (no attitude has reached the gimbal yet when the aim went): 100 - 30.
+    assert_eq!(poll_headings(&mut link, 0), [700]);
+    assert!(!link.aim_state().unwrap().waiting_for_heading);
+    // No attitude since 0: stale past 1,000 ms (the default `vehicle_stale_ms`).
+    for ms in (50..=1500).step_by(50) {
+        poll_headings(&mut link, ms);
+    }
+    assert!(link.aim_state().unwrap().waiting_for_heading);
+    link.set_attitude(Attitude::new(0.0, 0.0, 40.0).unwrap(), at(1510));
+    for ms in (1510..=1600).step_by(10) {
+        poll_headings(&mut link, ms);
+    }
+    assert!(!link.aim_state().unwrap().waiting_for_heading);
+}
+
+/// Polls the link alone at `ms`, every frame taken: the heading commands among them, 0.1°.
+fn poll_headings(link: &mut Link, ms: u32) -> Vec<u16> {
+    link.poll(Instant::from_millis(ms));
+    let mut headings = Vec::new();
+    while let Some(f) = link.next_transmit() {
+        link.transmit_done(None);
+        if let Ok(Command::Gimbal(GimbalCommand::Heading(h))) = Command::decode(&f.data) {
+            headings.push(h.deci());
+        }
+    }
+    headings
+}
+
+/// A postback of the gimbal holding its angle (lock mode) with its motor at `motor_cdeg`.
+fn lock_postback(link: &mut Link, motor_cdeg: i16, now: Instant) {
+    let p = Postback {
+        mode: ControlMode::Lock,
+        motor_heading: motor_cdeg,
+        ..Postback::default()
+    };
+    for d in p.to_can_frames() {
+        link.receive(ids::POSTBACK, &d, now);
+    }
+}
+
+#[test]
+fn getting_closer_means_by_more_than_the_tolerance() {
+    // The link alone, its postbacks made here: a vehicle yaw of 10° (motor 1,000 in
+    // 0.01°), the default tolerance 0.5° (50) and loop period 50 ms. The first postback
+    // after the command is not judged (it may predate any movement); each later one is,
+    // against the one before: an error that shrank by more than the tolerance is getting
+    // closer; one that shrank by the tolerance or less is an attempt (a re-command).
+    for (second_motor, recommands) in [(51, 0), (50, 1)] {
+        let mut link: Link = Link::new(Config::default());
+        let at = Instant::from_millis;
+        lock_postback(&mut link, 0, at(0));
+        link.aim(
+            Aim {
+                yaw: vehicle(10.0),
+                pitch: Pitch::LEVEL,
+            },
+            at(0),
+        )
+        .unwrap();
+        assert_eq!(poll_headings(&mut link, 0), [100]);
+        // Error 1,000 (not judged), then 1,000 - motor.
+        lock_postback(&mut link, 0, at(10));
+        poll_headings(&mut link, 50);
+        lock_postback(&mut link, second_motor, at(60));
+        poll_headings(&mut link, 100);
+        poll_headings(&mut link, 150);
+        assert_eq!(
+            link.stats().aim_recommands,
+            recommands,
+            "motor {second_motor}"
+        );
     }
 }

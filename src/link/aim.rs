@@ -140,7 +140,8 @@ pub struct AimState {
     pub waiting_for_heading: bool,
     /// The gimbal's tracker was started (a start-tracking command went through the link):
     /// it owns the gimbal, and the aim sends nothing until the tracker is stopped through
-    /// the link, its postback stops saying it tracks, or a new aim is given.
+    /// the link, its postback stops saying it tracks, or a new aim or point-at target is
+    /// given. A point-at's aim moving with the vehicle leaves the tracker in charge.
     pub yielded_to_tracker: bool,
 }
 
@@ -225,15 +226,19 @@ impl<const Q: usize, const T: usize> Hold<Q, T> {
         }
     }
 
-    /// Takes `aim` as new: commanded at the next step, the loop's judgement restarted.
+    /// Takes `aim` as new: commanded at the next step, the loop's judgement restarted; or,
+    /// while the hold has yielded to a tracker, once the tracker lets go.
     fn set_aim(&mut self, aim: Aim) {
         self.yaw = aim.yaw.heading();
         self.pitch = aim.pitch;
+        let when = if self.state & SUSPENDED != 0 {
+            PENDING
+        } else {
+            NEW
+        };
         self.flags =
-            (self.flags & (SENT | SENT_NORTH)) | NEW | if aim.yaw.is_earth() { EARTH } else { 0 };
+            (self.flags & (SENT | SENT_NORTH)) | when | if aim.yaw.is_earth() { EARTH } else { 0 };
         self.attempts = 0;
-        // A new aim takes the gimbal back from a tracker, as any manual pointing does.
-        self.state &= !(SUSPENDED | TRACK_SEEN);
     }
 
     /// The gimbal's tracker was started: nothing is sent but a new aim until it lets go.
@@ -262,8 +267,9 @@ impl<const Q: usize, const T: usize> Hold<Q, T> {
                 > band_cdeg
     }
 
-    /// Takes `aim` when it differs from the aim held past the dead-band (a point-at's
-    /// target moving, a setpoint stream).
+    /// Takes `aim` when it differs from the aim held past the dead-band (a point-at's aim
+    /// moving with the vehicle). A tracker the hold yielded to keeps the gimbal: the aim
+    /// goes once it lets go.
     pub(crate) fn update(&mut self, aim: Aim, band_cdeg: i32) {
         if self.differs(aim, band_cdeg) {
             self.set_aim(aim);
@@ -311,18 +317,16 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             return Err(AimError::NoVehicleHeading);
         }
         let band = i32::from(self.config.aim_deadband_mdeg) / 10;
-        let mut hold = match self.steering {
-            Steering::Aim(h) if !h.differs(aim, band) => return Ok(()),
-            Steering::Aim(mut h) => {
-                h.set_aim(aim);
-                h
+        if let Steering::Aim(h) = &self.steering {
+            if !h.differs(aim, band) {
+                return Ok(());
             }
-            _ => {
-                // A zero-rate frame still waiting would arrive after the aim and undo it.
-                self.tx.cancel_zero_rate();
-                Hold::new(aim, Self::aim_step)
-            }
-        };
+        }
+        // A zero-rate frame still waiting would arrive after the aim and undo it.
+        self.tx.cancel_zero_rate();
+        // A new hold: a new aim takes the gimbal back from a tracker, as any manual
+        // pointing does, and starts the loop's judgement afresh.
+        let mut hold = Hold::new(aim, Self::aim_step);
         // Commanded now rather than at the next poll: a setpoint's latency.
         let mut earliest = Earliest {
             now,

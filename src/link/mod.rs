@@ -35,7 +35,7 @@ mod command;
 mod event;
 mod point;
 pub mod postback;
-pub mod queue;
+mod queue;
 mod quiet;
 mod rate;
 mod receive;

@@ -23,7 +23,7 @@ use crate::wire::ids;
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
-pub enum VehicleSlot {
+pub(crate) enum VehicleSlot {
     /// Attitude, `0x0000FF13`.
     Attitude = 0,
     /// GPS, `0x0000FF15`.
@@ -34,7 +34,7 @@ pub enum VehicleSlot {
 
 impl VehicleSlot {
     /// Every slot, in CAN priority order.
-    pub const ALL: [VehicleSlot; 3] = [
+    pub(crate) const ALL: [VehicleSlot; 3] = [
         VehicleSlot::Attitude,
         VehicleSlot::Gps,
         VehicleSlot::Altitude,
@@ -42,17 +42,8 @@ impl VehicleSlot {
 
     /// The slot's index (0 to 2), for per-slot arrays.
     #[inline(always)]
-    pub const fn index(self) -> usize {
+    pub(crate) const fn index(self) -> usize {
         self as usize
-    }
-
-    /// The slot's frame ID.
-    pub const fn id(self) -> u32 {
-        match self {
-            VehicleSlot::Attitude => ids::ATTITUDE,
-            VehicleSlot::Gps => ids::GPS,
-            VehicleSlot::Altitude => ids::ALTITUDE,
-        }
     }
 
     /// The slot's bit in a per-slot bit set (bit 0 attitude, 1 GPS, 2 altitude).
@@ -80,7 +71,7 @@ impl VehicleSlot {
 /// The priority class of a frame.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Class {
+pub(crate) enum Class {
     /// Control commands (`0x00000F01`).
     Control,
     /// Vehicle frames (attitude, GPS, altitude).
@@ -93,7 +84,7 @@ pub enum Class {
 
 impl Class {
     /// The class of a frame with this ID.
-    pub const fn of(id: u32) -> Class {
+    pub(crate) const fn of(id: u32) -> Class {
         match id {
             ids::CONTROL => Class::Control,
             ids::ATTITUDE => Class::Vehicle(VehicleSlot::Attitude),

@@ -799,3 +799,31 @@ mod fast_path {
         }
     }
 }
+
+#[test]
+fn a_refused_first_attitude_leaves_the_gimbal_nose_referenced_and_a_later_one_does_not() {
+    let mut link: Link = Link::new(Config::default());
+    let at = Instant::from_millis;
+    let attitude = |link: &mut Link| {
+        let f = link.next_transmit().unwrap();
+        assert_eq!(f.id, ids::ATTITUDE);
+        f
+    };
+    link.set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), at(0));
+    link.poll(at(0));
+    let f = attitude(&mut link);
+    link.transmit_refused(f);
+    assert!(
+        !link.north_referenced(at(0)),
+        "the gimbal has no attitude yet"
+    );
+    attitude(&mut link);
+    link.transmit_done(None);
+    assert!(link.north_referenced(at(0)));
+    // The next push refused: the gimbal still has the one before.
+    link.set_attitude(Attitude::new(0.0, 0.0, 31.0).unwrap(), at(100));
+    link.poll(at(100));
+    let f = attitude(&mut link);
+    link.transmit_refused(f);
+    assert!(link.north_referenced(at(100)));
+}
