@@ -48,7 +48,7 @@ board_target() {
 ensure_rust_target() {
     if command -v rustup >/dev/null 2>&1 && ! rustup target list --installed 2>/dev/null | grep -qx "$1"; then
         echo "installing the $1 Rust target" >&2
-        rustup target add "$1"
+        _quiet rustup target add "$1"
     fi
 }
 

@@ -11,4 +11,5 @@ cd "$(dirname "$0")/.."
 
 ensure_target
 ensure_qemu
-firmware_cargo boards/stm32f405_qemu run --release --locked --bin qemu_demo
+echo "building the firmware (boards/stm32f405_qemu, release), then running it on QEMU" >&2
+firmware_cargo boards/stm32f405_qemu run --quiet --release --locked --bin qemu_demo

@@ -15,6 +15,20 @@ _as_root() {
     if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
 
+# `_quiet CMD…`: runs CMD with its output kept aside, shown only when it fails (an install
+# is a line of its own, said by the caller, not dpkg's log).
+_quiet() {
+    local log rc=0
+    log=$(mktemp)
+    "$@" >"$log" 2>&1 || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        cat "$log" >&2
+        echo "error: '$*' failed (exit $rc)" >&2
+    fi
+    rm -f "$log"
+    return "$rc"
+}
+
 _apt_updated=
 _apt_install() {
     if ! command -v apt-get >/dev/null 2>&1; then
@@ -22,10 +36,10 @@ _apt_install() {
         return 1
     fi
     if [ -z "$_apt_updated" ]; then
-        _as_root apt-get update -qq
+        _quiet _as_root apt-get update -qq
         _apt_updated=1
     fi
-    _as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
+    _quiet _as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
 }
 
 ensure_target() {
@@ -36,7 +50,7 @@ ensure_target() {
     if command -v rustup >/dev/null 2>&1; then
         if ! rustup target list --installed 2>/dev/null | grep -qx "$TARGET"; then
             echo "installing the $TARGET Rust target" >&2
-            rustup target add "$TARGET"
+            _quiet rustup target add "$TARGET"
         fi
     fi
 }
@@ -68,11 +82,11 @@ ensure_bench_toolchain() {
     fi
     if ! rustup toolchain list | grep -q "^$BENCH_TOOLCHAIN-"; then
         echo "installing the Rust $BENCH_TOOLCHAIN toolchain (minimal profile) for the budgets" >&2
-        rustup toolchain install "$BENCH_TOOLCHAIN" --profile minimal
+        _quiet rustup toolchain install "$BENCH_TOOLCHAIN" --profile minimal
     fi
     if ! rustup target list --installed --toolchain "$BENCH_TOOLCHAIN" | grep -qx "$TARGET"; then
         echo "installing the $TARGET target for Rust $BENCH_TOOLCHAIN" >&2
-        rustup target add --toolchain "$BENCH_TOOLCHAIN" "$TARGET"
+        _quiet rustup target add --toolchain "$BENCH_TOOLCHAIN" "$TARGET"
     fi
 }
 

@@ -37,14 +37,26 @@ export CARGO_PROFILE_RELEASE_DEBUG="${CARGO_PROFILE_RELEASE_DEBUG:-0}"
 step() { printf '\n=== %s\n' "$*"; }
 
 as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
+# `quiet CMD…`: CMD's output shown only when it fails (an install is one line, not dpkg's log).
+quiet() {
+    local log rc=0
+    log=$(mktemp)
+    "$@" >"$log" 2>&1 || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        cat "$log" >&2
+        echo "error: '$*' failed (exit $rc)" >&2
+    fi
+    rm -f "$log"
+    return "$rc"
+}
 apt_updated=
 apt_install() {
     echo "installing (apt): $*"
     if [ -z "$apt_updated" ]; then
-        as_root apt-get update -qq
+        quiet as_root apt-get update -qq
         apt_updated=1
     fi
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
+    quiet as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
 }
 pip_install() {
     echo "installing (pip): $*"
