@@ -14,16 +14,16 @@ use crate::wire::Frame;
 /// The one ID the driver takes frames on; every other frame is counted as ignored.
 const POSTBACK_ID: Id = match ExtendedId::new(crate::wire::ids::POSTBACK) {
     Some(id) => Id::Extended(id),
-    // Not taken: the ID fits in 29 bits (a test checks the constant).
-    None => Id::Extended(ExtendedId::ZERO),
+    // Evaluated at compile time: an ID beyond 29 bits would not build.
+    None => panic!("the postback ID is a 29-bit ID"),
 };
 
 /// The ID of control frames, checked once (at compile time): the transmit path builds the
 /// CAN driver's frame with it and need not check it again.
 const CONTROL_ID: ExtendedId = match ExtendedId::new(crate::wire::ids::CONTROL) {
     Some(id) => id,
-    // Not taken: the ID fits in 29 bits (a test checks the constant).
-    None => ExtendedId::ZERO,
+    // Evaluated at compile time: an ID beyond 29 bits would not build.
+    None => panic!("the control ID is a 29-bit ID"),
 };
 
 /// CAN driver errors by kind.

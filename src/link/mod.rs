@@ -105,6 +105,12 @@ pub struct Config {
     pub max_rx_per_poll: core::num::NonZeroU16,
 }
 
+/// [`Config::max_rx_per_poll`]'s default, checked non-zero at compile time.
+const DEFAULT_MAX_RX_PER_POLL: core::num::NonZeroU16 = match core::num::NonZeroU16::new(32) {
+    Some(n) => n,
+    None => panic!("the default receive bound is not zero"),
+};
+
 impl Default for Config {
     fn default() -> Self {
         Config {
@@ -120,11 +126,7 @@ impl Default for Config {
             aim_deadband_mdeg: 200,
             aim_tolerance_mdeg: 500,
             aim_period_ms: 50,
-            // 32 is not zero.
-            max_rx_per_poll: match core::num::NonZeroU16::new(32) {
-                Some(n) => n,
-                None => core::num::NonZeroU16::MIN,
-            },
+            max_rx_per_poll: DEFAULT_MAX_RX_PER_POLL,
         }
     }
 }

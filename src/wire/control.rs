@@ -73,7 +73,6 @@
 
 use core::fmt;
 use core::num::NonZeroU8;
-use core::ops::Range;
 
 use super::{ids, round_f32, Frame, RangeError};
 
@@ -116,28 +115,24 @@ const _: () = {
     assert!(field::MODE >= field::DATA.start && field::PARAM < field::DATA.end);
 };
 
-fn get_u8(data: &[u8; 8], at: usize) -> u8 {
-    data.get(at).copied().unwrap_or(0)
+// The accessors take their field as a constant: every index is checked at compile time
+// (the assertions above, and rustc's own bound check of a constant index), so none can miss
+// at run time and none needs a fallback.
+
+/// A two-byte field's bytes (its start and end, `Range`'s fields, as constants).
+macro_rules! get_2 {
+    ($data:expr, $field:expr) => {
+        [$data[$field.start], $data[$field.end - 1]]
+    };
 }
 
-fn get_2(data: &[u8; 8], at: Range<usize>) -> [u8; 2] {
-    match data.get(at) {
-        Some(&[lo, hi]) => [lo, hi],
-        _ => [0, 0],
-    }
-}
-
-fn put_u8(buf: &mut [u8; 8], at: usize, value: u8) {
-    if let Some(b) = buf.get_mut(at) {
-        *b = value;
-    }
-}
-
-fn put_2(buf: &mut [u8; 8], at: Range<usize>, [lo, hi]: [u8; 2]) {
-    if let Some([a, b]) = buf.get_mut(at) {
-        *a = lo;
-        *b = hi;
-    }
+/// Writes a two-byte field.
+macro_rules! put_2 {
+    ($buf:expr, $field:expr, $bytes:expr) => {{
+        let [lo, hi] = $bytes;
+        $buf[$field.start] = lo;
+        $buf[$field.end - 1] = hi;
+    }};
 }
 
 /// [`RangeError::check`] of a value in wire units; the error speaks the physical unit
@@ -855,24 +850,24 @@ const ANGLE_ZOOM: u8 = 3;
 const POINTING_FOCUS_SIZE: u8 = 25;
 
 fn put_offset(buf: &mut [u8; 8], o: ImageOffset) {
-    put_2(buf, field::X, o.x.to_le_bytes());
-    put_2(buf, field::Y, o.y.to_le_bytes());
+    put_2!(buf, field::X, o.x.to_le_bytes());
+    put_2!(buf, field::Y, o.y.to_le_bytes());
 }
 
 fn put_rate(buf: &mut [u8; 8], r: Rate) {
-    put_2(buf, field::X, r.yaw.to_le_bytes());
-    put_2(buf, field::Y, r.pitch.to_le_bytes());
+    put_2!(buf, field::X, r.yaw.to_le_bytes());
+    put_2!(buf, field::Y, r.pitch.to_le_bytes());
 }
 
 fn put_point(buf: &mut [u8; 8], p: ImagePoint) {
-    put_2(buf, field::X, p.x.to_le_bytes());
-    put_2(buf, field::Y, p.y.to_le_bytes());
+    put_2!(buf, field::X, p.x.to_le_bytes());
+    put_2!(buf, field::Y, p.y.to_le_bytes());
 }
 
 fn put_box(buf: &mut [u8; 8], b: TrackingBox) {
     put_point(buf, b.centre);
-    put_u8(buf, field::BOX_WIDTH, b.width16);
-    put_u8(buf, field::BOX_HEIGHT, b.height16);
+    buf[field::BOX_WIDTH] = b.width16;
+    buf[field::BOX_HEIGHT] = b.height16;
 }
 
 /// Reads DATA fields for decoding; every failure carries the whole frame.
@@ -889,7 +884,7 @@ impl Reader<'_> {
     }
 
     fn mode(&self) -> u8 {
-        get_u8(self.data, field::MODE)
+        self.data[field::MODE]
     }
 
     fn sub_code<T>(
@@ -901,37 +896,37 @@ impl Reader<'_> {
     }
 
     fn offset(&self) -> Result<ImageOffset, DecodeError> {
-        let x = i16::from_le_bytes(get_2(self.data, field::X));
-        let y = i16::from_le_bytes(get_2(self.data, field::Y));
+        let x = i16::from_le_bytes(get_2!(self.data, field::X));
+        let y = i16::from_le_bytes(get_2!(self.data, field::Y));
         ImageOffset::new(x.into(), y.into()).map_err(|e| self.invalid(e.field))
     }
 
     fn rate(&self) -> Result<Rate, DecodeError> {
-        let yaw = i16::from_le_bytes(get_2(self.data, field::X));
-        let pitch = i16::from_le_bytes(get_2(self.data, field::Y));
+        let yaw = i16::from_le_bytes(get_2!(self.data, field::X));
+        let pitch = i16::from_le_bytes(get_2!(self.data, field::Y));
         Rate::from_centi(yaw, pitch).map_err(|e| self.invalid(e.field))
     }
 
     fn point(&self) -> Result<ImagePoint, DecodeError> {
-        let x = u16::from_le_bytes(get_2(self.data, field::X));
-        let y = u16::from_le_bytes(get_2(self.data, field::Y));
+        let x = u16::from_le_bytes(get_2!(self.data, field::X));
+        let y = u16::from_le_bytes(get_2!(self.data, field::Y));
         ImagePoint::new(x.into(), y.into()).map_err(|e| self.invalid(e.field))
     }
 
     fn tracking_box(&self) -> Result<TrackingBox, DecodeError> {
         Ok(TrackingBox::from_raw(
             self.point()?,
-            get_u8(self.data, field::BOX_WIDTH),
-            get_u8(self.data, field::BOX_HEIGHT),
+            self.data[field::BOX_WIDTH],
+            self.data[field::BOX_HEIGHT],
         ))
     }
 
     fn angle_u16(&self) -> u16 {
-        u16::from_le_bytes(get_2(self.data, field::ANGLE))
+        u16::from_le_bytes(get_2!(self.data, field::ANGLE))
     }
 
     fn angle_i16(&self) -> i16 {
-        i16::from_le_bytes(get_2(self.data, field::ANGLE))
+        i16::from_le_bytes(get_2!(self.data, field::ANGLE))
     }
 }
 
@@ -956,52 +951,52 @@ impl GimbalCommand {
             GimbalCommand::StopTracking => 0x06,
             GimbalCommand::LookDown => 0x07,
             GimbalCommand::Heading(h) => {
-                put_u8(buf, field::MODE, ANGLE_HEADING);
-                put_2(buf, field::ANGLE, h.0.to_le_bytes());
+                buf[field::MODE] = ANGLE_HEADING;
+                put_2!(buf, field::ANGLE, h.0.to_le_bytes());
                 0x08
             }
             GimbalCommand::Pitch(p) => {
-                put_u8(buf, field::MODE, ANGLE_PITCH);
-                put_2(buf, field::ANGLE, p.0.to_le_bytes());
+                buf[field::MODE] = ANGLE_PITCH;
+                put_2!(buf, field::ANGLE, p.0.to_le_bytes());
                 0x08
             }
             GimbalCommand::ZoomRatio(z) => {
-                put_u8(buf, field::MODE, ANGLE_ZOOM);
-                put_2(buf, field::ANGLE, z.0.to_le_bytes());
+                buf[field::MODE] = ANGLE_ZOOM;
+                put_2!(buf, field::ANGLE, z.0.to_le_bytes());
                 0x08
             }
             GimbalCommand::Photo(p) => {
                 let (mode, param) = p.codes();
-                put_u8(buf, field::MODE, mode);
-                put_u8(buf, field::PARAM, param);
+                buf[field::MODE] = mode;
+                buf[field::PARAM] = param;
                 0x10
             }
             GimbalCommand::Video(v) => {
-                put_u8(buf, field::MODE, v.code());
+                buf[field::MODE] = v.code();
                 0x11
             }
             GimbalCommand::Zoom(z) => {
-                put_u8(buf, field::MODE, z.code());
+                buf[field::MODE] = z.code();
                 0x12
             }
             GimbalCommand::Focus(f) => {
-                put_u8(buf, field::MODE, f.code());
+                buf[field::MODE] = f.code();
                 0x13
             }
             GimbalCommand::PointingFocus(p) => {
                 put_point(buf, p);
-                put_u8(buf, field::BOX_WIDTH, POINTING_FOCUS_SIZE);
-                put_u8(buf, field::BOX_HEIGHT, POINTING_FOCUS_SIZE);
+                buf[field::BOX_WIDTH] = POINTING_FOCUS_SIZE;
+                buf[field::BOX_HEIGHT] = POINTING_FOCUS_SIZE;
                 0x14
             }
             GimbalCommand::FastCalibration => 0xF0,
         };
-        put_u8(buf, field::CMD, cmd);
+        buf[field::CMD] = cmd;
     }
 
     /// Reads CMD and the DATA it uses (padding is checked by the caller).
     fn read(r: &Reader<'_>) -> Result<Self, DecodeError> {
-        Ok(match get_u8(r.data, field::CMD) {
+        Ok(match r.data[field::CMD] {
             0x01 => GimbalCommand::PointingZoom(r.offset()?),
             0x02 => GimbalCommand::NoseFollowing,
             0x03 => GimbalCommand::Recenter,
@@ -1025,7 +1020,7 @@ impl GimbalCommand {
                 }
             }
             0x10 => GimbalCommand::Photo(
-                Photo::from_codes(r.mode(), get_u8(r.data, field::PARAM))
+                Photo::from_codes(r.mode(), r.data[field::PARAM])
                     .map_err(|field| r.invalid(field))?,
             ),
             0x11 => GimbalCommand::Video(r.sub_code(Video::from_code, Video::FIELD)?),
@@ -1033,8 +1028,8 @@ impl GimbalCommand {
             0x13 => GimbalCommand::Focus(r.sub_code(Focus::from_code, Focus::FIELD)?),
             0x14 => {
                 let point = r.point()?;
-                if get_u8(r.data, field::BOX_WIDTH) != POINTING_FOCUS_SIZE
-                    || get_u8(r.data, field::BOX_HEIGHT) != POINTING_FOCUS_SIZE
+                if r.data[field::BOX_WIDTH] != POINTING_FOCUS_SIZE
+                    || r.data[field::BOX_HEIGHT] != POINTING_FOCUS_SIZE
                 {
                     return Err(r.invalid("focus_box"));
                 }
@@ -1069,7 +1064,7 @@ impl DualLightCommand {
                 0x01
             }
             DualLightCommand::Palette(p) => {
-                put_u8(buf, field::MODE, p.code());
+                buf[field::MODE] = p.code();
                 0x02
             }
             DualLightCommand::Rate(r) => {
@@ -1082,16 +1077,16 @@ impl DualLightCommand {
             }
             DualLightCommand::StopTracking => 0x07,
             DualLightCommand::ElectronicZoom(z) => {
-                put_u8(buf, field::MODE, z.code());
+                buf[field::MODE] = z.code();
                 0x12
             }
         };
-        put_u8(buf, field::CMD, cmd);
+        buf[field::CMD] = cmd;
     }
 
     /// Reads CMD and the DATA it uses (padding is checked by the caller).
     fn read(r: &Reader<'_>) -> Result<Self, DecodeError> {
-        Ok(match get_u8(r.data, field::CMD) {
+        Ok(match r.data[field::CMD] {
             0x01 => DualLightCommand::PointingZoom(r.offset()?),
             0x02 => DualLightCommand::Palette(r.sub_code(Palette::from_code, "palette")?),
             0x04 => DualLightCommand::Rate(r.rate()?),
@@ -1175,7 +1170,7 @@ impl Command {
     #[inline(never)]
     fn encode_fields(&self) -> u64 {
         let mut buf = [0u8; Self::LEN];
-        put_u8(&mut buf, field::PERIPHERAL, self.peripheral().code());
+        buf[field::PERIPHERAL] = self.peripheral().code();
         match self {
             Command::Gimbal(c) => c.write(&mut buf),
             Command::DualLight(c) => c.write(&mut buf),
@@ -1191,7 +1186,7 @@ impl Command {
             .try_into()
             .map_err(|_| DecodeError::WrongLength { len: data.len() })?;
         let r = Reader { data: &data };
-        let command = match Peripheral::from_code(get_u8(&data, field::PERIPHERAL)) {
+        let command = match Peripheral::from_code(data[field::PERIPHERAL]) {
             Some(Peripheral::Gimbal) => Command::Gimbal(GimbalCommand::read(&r)?),
             Some(Peripheral::DualLight) => Command::DualLight(DualLightCommand::read(&r)?),
             None => return Err(DecodeError::UnknownPeripheral { data }),
