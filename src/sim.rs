@@ -186,18 +186,23 @@ use crate::wire::postback::{self, ControlMode, DataId, GimbalType, Postback};
 use crate::wire::vehicle::{self, Altitude, Attitude, Gps, VehicleFrame};
 use crate::wire::{ids, text, Frame};
 
-/// The lowest pitch the gimbal reaches, degrees.
-pub const PITCH_MIN_DEG: f32 = -110.0;
-/// The highest pitch the gimbal reaches, degrees.
-pub const PITCH_MAX_DEG: f32 = 60.0;
+/// The lowest pitch the gimbal's motor reaches, degrees: the postback's range
+/// ([−11000, 6000] in 0.01°). A specify-angle command reaches only
+/// [`Pitch::MIN_DEG`](control::Pitch::MIN_DEG); a rate hold goes further.
+pub const PITCH_TRAVEL_MIN_DEG: f32 = -110.0;
+/// The highest pitch the gimbal's motor reaches, degrees (as commanded:
+/// [`Pitch::MAX_DEG`](control::Pitch::MAX_DEG)).
+pub const PITCH_TRAVEL_MAX_DEG: f32 = control::Pitch::MAX_DEG;
 /// The yaw motor's limit either side of the nose, degrees.
 pub const MOTOR_YAW_LIMIT_DEG: f32 = 170.0;
 /// The pitch "look down" points at, degrees.
 pub const LOOK_DOWN_PITCH_DEG: f32 = -90.0;
 /// The smallest optical zoom ratio.
-pub const ZOOM_MIN: f32 = 1.0;
-/// The largest optical zoom ratio of the simulated camera.
-pub const ZOOM_MAX: f32 = 30.0;
+pub const ZOOM_MIN: f32 = control::ZoomRatio::MIN;
+/// The largest optical zoom ratio of the simulated camera, an X30's 30×. The command
+/// carries up to [`ZoomRatio::MAX`](control::ZoomRatio::MAX) (35×, some models' reach);
+/// the simulated camera stops at 30×, as the document's range for the command says.
+pub const OPTICAL_ZOOM_MAX: f32 = 30.0;
 /// Continuous zoom speed, ratio per second.
 pub const ZOOM_SPEED_PER_S: f32 = 5.0;
 /// The longest text kept, in bytes.
@@ -1182,7 +1187,7 @@ fn image_point((yaw, pitch): (f32, f32), zoom_ratio: f32) -> Option<ImagePoint> 
 }
 
 fn clamp_pitch(deg: f32) -> f32 {
-    deg.clamp(PITCH_MIN_DEG, PITCH_MAX_DEG)
+    deg.clamp(PITCH_TRAVEL_MIN_DEG, PITCH_TRAVEL_MAX_DEG)
 }
 
 fn clamp_yaw(deg: f32) -> f32 {
@@ -1190,7 +1195,7 @@ fn clamp_yaw(deg: f32) -> f32 {
 }
 
 fn clamp_zoom(ratio: f32) -> f32 {
-    ratio.clamp(ZOOM_MIN, ZOOM_MAX)
+    ratio.clamp(ZOOM_MIN, OPTICAL_ZOOM_MAX)
 }
 
 /// `deg` in [0, 360).
@@ -2531,10 +2536,10 @@ mod tests {
                 }
                 prop_assert_eq!(sim.pending_frames() % 4, 0);
                 let s = sim.state();
-                prop_assert!((PITCH_MIN_DEG..=PITCH_MAX_DEG).contains(&s.pitch_deg));
+                prop_assert!((PITCH_TRAVEL_MIN_DEG..=PITCH_TRAVEL_MAX_DEG).contains(&s.pitch_deg));
                 prop_assert!(s.motor_yaw_deg.abs() <= MOTOR_YAW_LIMIT_DEG);
                 prop_assert!((0.0..360.0).contains(&s.heading_deg));
-                prop_assert!((ZOOM_MIN..=ZOOM_MAX).contains(&s.zoom_ratio));
+                prop_assert!((ZOOM_MIN..=OPTICAL_ZOOM_MAX).contains(&s.zoom_ratio));
                 prop_assert!(s.rate.0.is_finite() && s.rate.1.is_finite());
                 prop_assert!((0.0..=1.0).contains(&s.focus));
                 prop_assert_eq!(s.tracking, s.tracking_box.is_some());
