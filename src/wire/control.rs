@@ -782,8 +782,8 @@ impl fmt::Display for Palette {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 // A word-sized tag: `Command` then keeps the dual-light commands in the bytes after it (a
 // niche), so it has no tag of its own and `Command::encode` tests the variant with one load
-// and compare instead of two loads (with the sub-code below, 15 instructions an angle
-// command in the bench against 21; the value grows from 8 to 12 bytes, `Command` from 10).
+// and compare instead of two loads (with the sub-code below, a third of an angle command's
+// encode; the value grows from 8 to 12 bytes, `Command` from 10).
 #[repr(u32)]
 pub enum GimbalCommand {
     /// Bring the point to the image centre and zoom in 2× (`0x01`).
