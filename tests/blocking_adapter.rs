@@ -10,7 +10,7 @@ use std::collections::VecDeque;
 use std::rc::Rc;
 
 use embedded_can::{ErrorKind, ExtendedId, Frame as _, Id};
-use idu_gimbal::driver::{Blocking, DriverErrors};
+use idu_gimbal::driver::{Blocking, Classify, DriverErrors};
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::control::{Command, Focus, GimbalCommand, Heading, Pitch, Zoom};
 use idu_gimbal::wire::{ids, Frame};
@@ -172,14 +172,15 @@ fn commands() -> Vec<Command> {
 /// 40 bytes: five text frames.
 const TEXT: &[u8] = b"IDU over MCP2515: 40 bytes of text here.";
 
-type Driver = Gimbal<Blocking<Mcp2515Like, fn(&mut Mcp2515Like) -> bool, fn(&McpError) -> bool>>;
+type Driver<W = fn(&McpError) -> bool> =
+    Gimbal<Blocking<Mcp2515Like, fn(&mut Mcp2515Like) -> bool, W>>;
 
-/// A gimbal over the stub with the mcp2515 classifier, the commands and the text queued.
-fn setup(classifier: fn(&McpError) -> bool) -> (Driver, Rc<RefCell<Chip>>) {
+/// A gimbal over the stub with the classifier, the commands and the text queued.
+fn setup<W: Classify<McpError>>(classifier: W) -> (Driver<W>, Rc<RefCell<Chip>>) {
     let chip = Mcp2515Like::default();
     let handle = chip.0.clone();
     let can = Blocking::with_classifier(chip, always as fn(&mut Mcp2515Like) -> bool, classifier);
-    let mut gimbal: Driver = Gimbal::new(can, Config::default());
+    let mut gimbal: Driver<W> = Gimbal::new(can, Config::default());
     for c in commands() {
         gimbal.send(c).unwrap();
     }
@@ -191,8 +192,8 @@ fn setup(classifier: fn(&McpError) -> bool) -> (Driver, Rc<RefCell<Chip>>) {
 /// sends one frame from the transmit buffers (the simulator takes it), the simulator's
 /// postbacks arrive in the receive buffer, then the driver polls. Returns the polls that
 /// returned an error.
-fn run(
-    gimbal: &mut Driver,
+fn run<W: Classify<McpError>>(
+    gimbal: &mut Driver<W>,
     chip: &Rc<RefCell<Chip>>,
     sim: &mut Simulator,
     from: u32,
@@ -351,7 +352,36 @@ fn without_the_classifier_every_error_is_a_fault() {
     );
     assert_eq!(gimbal.stats().driver_errors.other, no_message + tx_busy);
     // A classifier that calls nothing "would block" is the same.
-    let (mut gimbal, _chip) = setup(|_| false);
+    let (mut gimbal, _chip) = setup(|_: &McpError| false);
     assert!(gimbal.poll(Instant::from_millis(0)).is_err());
     assert!(gimbal.stats().driver_errors.other > 0);
+}
+
+/// A classifier of a type of its own, as a firmware keeping state in it would write: it
+/// counts the "would block" errors it saw.
+#[derive(Default)]
+struct CountingClassifier(Rc<RefCell<u32>>);
+
+impl Classify<McpError> for CountingClassifier {
+    fn would_block(&mut self, error: &McpError) -> bool {
+        let would = would_block(error);
+        if would {
+            *self.0.borrow_mut() += 1;
+        }
+        would
+    }
+}
+
+#[test]
+fn a_classifier_of_a_type_of_its_own_is_taken() {
+    let classifier = CountingClassifier::default();
+    let seen = classifier.0.clone();
+    let (mut gimbal, chip) = setup(classifier);
+    let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
+    assert_eq!(run(&mut gimbal, &chip, &mut sim, 0, 1600), 0);
+    let c = chip.borrow();
+    assert_eq!(c.on_bus, expected_frames());
+    assert_eq!(gimbal.stats().driver_errors, DriverErrors::default());
+    // It was asked about every error the stub returned, and took them all as would-block.
+    assert_eq!(*seen.borrow(), c.tx_busy + c.no_message);
 }

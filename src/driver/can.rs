@@ -452,12 +452,13 @@ impl<B, R, W> Blocking<B, R, W>
 where
     B: embedded_can::blocking::Can,
     R: FnMut(&mut B) -> bool,
-    W: FnMut(&B::Error) -> bool,
+    W: Classify<B::Error>,
 {
     /// Wraps a driver that returns errors instead of blocking; `rx_ready` says whether a
     /// frame may be waiting (it may always say yes when `receive` does not block), and
     /// `would_block` says which errors mean "would block" rather than a fault (for the
-    /// `mcp2515` crate: `NoMessage` and `TxBusy`).
+    /// `mcp2515` crate: `NoMessage` and `TxBusy`): a closure taking `&E` (its parameter's
+    /// type written out), or any [`Classify`].
     pub fn with_classifier(can: B, rx_ready: R, would_block: W) -> Self {
         Blocking {
             can,
