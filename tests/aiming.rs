@@ -318,6 +318,11 @@ fn an_earth_yaw_is_held_through_a_90_degree_turn() {
                 "{what}: {state:?} {:?}",
                 rig.stats()
             );
+            let given = Aim {
+                yaw: earth(20.0),
+                pitch: Pitch::new(-30.0).unwrap(),
+            };
+            assert_eq!(state.aim, given, "{what}");
         }
     }
 }
@@ -342,6 +347,11 @@ fn a_vehicle_yaw_turns_with_the_vehicle() {
             rig.run(1000);
             assert!(off(rig.motor(), 40.0) < 0.11, "{what}: {}", rig.motor());
             assert!(off(rig.earth_yaw(), 190.0) < 0.11, "{what}");
+            let given = Aim {
+                yaw: vehicle(40.0),
+                pitch: Pitch::new(-10.0).unwrap(),
+            };
+            assert_eq!(rig.aim_state().unwrap().aim, given, "{what}");
         }
     }
 }
@@ -550,10 +560,17 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
             rig.run(200);
             rig.aim(vehicle(0.0), 0.0).unwrap();
             rig.run(1000);
+            // Stop tracking with no tracker running changes nothing: no command goes.
             let sent = rig.headings.len();
-            // Track a target right of the centre: the gimbal turns toward it.
+            rig.send(GimbalCommand::StopTracking);
+            rig.run(500);
+            assert_eq!(rig.headings.len(), sent, "{what}");
+            assert_eq!(rig.stats().aim_recommands, 0, "{what}");
+            // Track a target right of the centre: the gimbal turns toward it. Started twice
+            // (a ground station repeating itself), the tracker still owns the gimbal.
             let centre = ImagePoint::new(6000, 4096).unwrap();
             let track = TrackingBox::new(centre, 256.0, 256.0).unwrap();
+            rig.send(GimbalCommand::StartTracking(track));
             rig.send(GimbalCommand::StartTracking(track));
             // The same aim again (a setpoint stream), and the vehicle turns.
             rig.aim(vehicle(0.0), 0.0).unwrap();

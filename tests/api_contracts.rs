@@ -6,7 +6,7 @@
 #![cfg(feature = "mock")]
 
 use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _};
-use idu_gimbal::driver::DriverError;
+use idu_gimbal::driver::{DriverError, PortError};
 use idu_gimbal::link::{Config, Link, QueueFull, TextQueueError};
 use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
@@ -49,6 +49,10 @@ mod errors {
             e.to_string(),
             format!("CAN driver error: {}", ErrorKind::Overrun)
         );
+        let read: PortError<&str, u8> = PortError::Read("overrun");
+        assert_eq!(read.to_string(), "serial read error: \"overrun\"");
+        let write: PortError<&str, u8> = PortError::Write(7);
+        assert_eq!(write.to_string(), "serial write error: 7");
     }
 
     #[test]

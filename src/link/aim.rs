@@ -236,8 +236,9 @@ impl<const Q: usize, const T: usize> Hold<Q, T> {
         } else {
             NEW
         };
-        self.flags =
-            (self.flags & (SENT | SENT_NORTH)) | when | if aim.yaw.is_earth() { EARTH } else { 0 };
+        // Nothing of the last command is kept: a postback is judged only against an aim
+        // sent.
+        self.flags = when | if aim.yaw.is_earth() { EARTH } else { 0 };
         self.attempts = 0;
     }
 
