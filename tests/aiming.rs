@@ -872,3 +872,50 @@ fn getting_closer_means_by_more_than_the_tolerance() {
         );
     }
 }
+
+#[test]
+fn an_aim_within_the_dead_band_of_the_one_held_changes_nothing() {
+    // The link alone; the default dead-band is 0.2° (`aim_deadband_mdeg` 200): an aim that
+    // far from the one held on each axis is the same aim (a setpoint stream re-sending
+    // it), a tenth of a degree more is a new one, commanded at once.
+    let mut link: Link = Link::new(Config::default());
+    let aim = |yaw: f32, pitch: f32| Aim {
+        yaw: vehicle(yaw),
+        pitch: Pitch::new(pitch).unwrap(),
+    };
+    let now = Instant::from_millis(0);
+    link.aim(aim(10.0, -10.0), now).unwrap();
+    assert_eq!(poll_headings(&mut link, 0), [100]);
+    assert!(!link.holds_earth_yaw());
+    for (yaw, pitch, new) in [
+        (10.2, -10.0, false),
+        (9.8, -10.0, false),
+        (10.0, -10.2, false),
+        (10.0, -9.8, false),
+        (10.3, -10.0, true),
+        (10.3, -10.3, true),
+    ] {
+        link.aim(aim(yaw, pitch), now).unwrap();
+        assert_eq!(link.has_transmit(), new, "{yaw} {pitch}");
+        poll_headings(&mut link, 0);
+        let held = link.aim_state().unwrap().aim;
+        let expected = if new { aim(yaw, pitch) } else { held };
+        assert_eq!(held, expected, "{yaw} {pitch}");
+    }
+    // The frame is part of the aim: the same angle from north is a new aim, held in the
+    // earth frame.
+    link.set_attitude(Attitude::new(0.0, 0.0, 0.0).unwrap(), now);
+    link.aim(
+        Aim {
+            yaw: earth(10.3),
+            pitch: Pitch::new(-10.3).unwrap(),
+        },
+        now,
+    )
+    .unwrap();
+    assert!(link.has_transmit());
+    assert!(link.holds_earth_yaw());
+    link.stop_aiming();
+    assert!(!link.holds_earth_yaw());
+    assert_eq!(link.aim_state(), None);
+}
