@@ -919,3 +919,134 @@ fn an_aim_within_the_dead_band_of_the_one_held_changes_nothing() {
     assert!(!link.holds_earth_yaw());
     assert_eq!(link.aim_state(), None);
 }
+
+/// A postback of the gimbal holding its angle, its tracker tracking or not.
+fn tracking_postback(link: &mut Link, motor_cdeg: i16, tracking: bool, now: Instant) {
+    let p = Postback {
+        mode: ControlMode::Lock,
+        motor_heading: motor_cdeg,
+        tracking,
+        ..Postback::default()
+    };
+    for d in p.to_can_frames() {
+        link.receive(ids::POSTBACK, &d, now);
+    }
+}
+
+#[test]
+fn a_tracker_started_through_the_link_owns_the_gimbal_until_its_postbacks_let_go() {
+    // The link alone, the postbacks made here (the gimbal's motor stays at 0, 10° off the
+    // aim, all along: the tracker holds it elsewhere).
+    let mut link: Link = Link::new(Config::default());
+    let at = Instant::from_millis;
+    let vehicle_10 = Aim {
+        yaw: vehicle(10.0),
+        pitch: Pitch::LEVEL,
+    };
+    tracking_postback(&mut link, 0, false, at(0));
+    link.aim(vehicle_10, at(0)).unwrap();
+    assert_eq!(poll_headings(&mut link, 0), [100]);
+    let track = TrackingBox::new(ImagePoint::new(4096, 4096).unwrap(), 256.0, 256.0).unwrap();
+    link.send(GimbalCommand::StartTracking(track)).unwrap();
+    poll_headings(&mut link, 0);
+    // The first postback after the start may not say it tracks yet: still the tracker's.
+    tracking_postback(&mut link, 0, false, at(10));
+    assert_eq!(poll_headings(&mut link, 50), []);
+    assert!(link.aim_state().unwrap().yielded_to_tracker);
+    // It tracks for a while, the gimbal far off the aim: nothing is sent, nothing judged
+    // (no attempt counted, nothing "not reached").
+    for look in 2..10u32 {
+        tracking_postback(&mut link, 0, true, at(look * 50 - 40));
+        assert_eq!(poll_headings(&mut link, look * 50), [], "look {look}");
+    }
+    let state = link.aim_state().unwrap();
+    assert!(state.yielded_to_tracker && !state.not_reached, "{state:?}");
+    assert_eq!(link.stats().aim_not_reached, 0);
+    assert_eq!(link.stats().aim_recommands, 0);
+    // It lets go (target lost): the aim is sent again at the next look.
+    tracking_postback(&mut link, 0, false, at(510));
+    assert_eq!(poll_headings(&mut link, 550), [100]);
+    assert!(!link.aim_state().unwrap().yielded_to_tracker);
+    assert_eq!(link.stats().aim_recommands, 1);
+}
+
+#[test]
+fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim() {
+    // The link alone, north-referenced (the attitude pushed): a vehicle yaw's command is
+    // the yaw plus the vehicle's heading, so a turn must re-send it; a turn within the
+    // dead-band (0.2°) need not.
+    let mut link: Link = Link::new(Config::default());
+    let at = Instant::from_millis;
+    let heading = |link: &mut Link, deg: f32, ms: u32| {
+        link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
+    };
+    heading(&mut link, 0.0, 0);
+    poll_headings(&mut link, 0);
+    assert!(link.north_referenced(at(0)));
+    link.aim(
+        Aim {
+            yaw: vehicle(10.0),
+            pitch: Pitch::LEVEL,
+        },
+        at(0),
+    )
+    .unwrap();
+    assert_eq!(poll_headings(&mut link, 0), [100]);
+    // The gimbal is there (motor 10°): on target.
+    tracking_postback(&mut link, 1000, false, at(10));
+    poll_headings(&mut link, 50);
+    assert!(link.aim_state().unwrap().on_target);
+    let mut sent = Vec::new();
+    for ms in (60..=600).step_by(10) {
+        heading(&mut link, 0.1, ms);
+        sent.extend(poll_headings(&mut link, ms));
+    }
+    assert_eq!(sent, [], "0.1° of turn");
+    assert!(link.aim_state().unwrap().on_target);
+    for ms in (610..=1000).step_by(10) {
+        heading(&mut link, 0.3, ms);
+        sent.extend(poll_headings(&mut link, ms));
+    }
+    assert_eq!(sent, [103], "0.3° of turn");
+    // Re-commanded: not on target until a postback says so.
+    assert!(!link.aim_state().unwrap().on_target);
+    assert_eq!(link.stats().aim_recommands, 1);
+}
+
+#[test]
+fn an_aim_waiting_for_room_is_not_judged_before_it_is_sent() {
+    // The link alone, its command queue (8) left with one slot: the aim's two commands wait
+    // while postbacks (the gimbal far off the aim) come in at every look.
+    let mut link: Link = Link::new(Config::default());
+    let at = Instant::from_millis;
+    for _ in 0..7 {
+        link.send(GimbalCommand::Zoom(idu_gimbal::wire::control::Zoom::Stop))
+            .unwrap();
+    }
+    link.aim(
+        Aim {
+            yaw: vehicle(10.0),
+            pitch: Pitch::LEVEL,
+        },
+        at(0),
+    )
+    .unwrap();
+    for look in 1..10u32 {
+        tracking_postback(&mut link, 0, false, at(look * 50 - 40));
+        link.poll(at(look * 50));
+    }
+    let state = link.aim_state().unwrap();
+    assert!(!state.not_reached && !state.on_target, "{state:?}");
+    assert_eq!(link.stats().aim_not_reached, 0);
+    // Room again: the aim goes, as a first command (not a re-command).
+    let mut headings = Vec::new();
+    while let Some(f) = link.next_transmit() {
+        link.transmit_done(None);
+        if let Ok(Command::Gimbal(GimbalCommand::Heading(h))) = Command::decode(&f.data) {
+            headings.push(h.deci());
+        }
+    }
+    assert_eq!(headings, []);
+    assert_eq!(poll_headings(&mut link, 500), [100]);
+    assert_eq!(link.stats().aim_recommands, 0);
+}
