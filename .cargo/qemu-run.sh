@@ -1,7 +1,7 @@
 #!/bin/sh
-# Cargo runner for thumbv7em-none-eabihf (see .cargo/config.toml): `cargo run --bin NAME` in
-# boards/stm32f405_qemu or benches/mcu (or an alias from the root) ends up here with the ELF
-# as "$1".
+# Cargo runner for thumbv7em-none-eabihf (see .cargo/config.toml): `cargo run --example
+# qemu_demo` at the root, `cargo run --bin NAME` in boards/stm32f405_qemu or benches/mcu (or
+# an alias from the root) ends up here with the ELF as "$1".
 #
 #   qemu_demo   QEMU netduinoplus2 (STM32F405), semihosting on; QEMU's exit code is the
 #               firmware's (semihosting SYS_EXIT: 0 on success, 1 on failure).

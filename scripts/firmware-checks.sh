@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The firmware stage of the test suite (`scripts/test.sh firmware`):
-#   1. the QEMU demo sessions must pass (exit 0): the core's, and the MAVLink bridge's
-#      (boards/stm32f405_qemu);
+#   1. the QEMU demo sessions must pass (exit 0): the core's (the root crate's example
+#      qemu_demo), and the MAVLink bridge's (boards/stm32f405_qemu);
 #   2. the STM32F405 firmware, CAN, UART and MAVLink bridge (boards/stm32f405), builds in
 #      release mode (sizes printed);
 #   3. every board crate under boards/ (STM32F405, RP2040, ESP32-C3, STM32H743, embassy, …)

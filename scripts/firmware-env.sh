@@ -126,7 +126,18 @@ firmware_cargo() {
     (cd "$dir" && CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR" cargo "$@")
 }
 
-# The path of a release firmware ELF (a program of any firmware crate) for the target.
+# `root_firmware_cargo ARGS…`: cargo for the root crate's firmware examples (qemu_demo),
+# built for the target in the shared target directory, from the repository's root (where
+# `memory.x` and `.cargo/config.toml` are).
+root_firmware_cargo() {
+    (cd "$(dirname "${BASH_SOURCE[0]}")/.." && CARGO_TARGET_DIR="$FIRMWARE_TARGET_DIR" cargo "$@")
+}
+
+# The path of a release firmware ELF (a program of any firmware crate, or the root crate's
+# example qemu_demo) for the target.
 firmware_elf() {
-    echo "$FIRMWARE_TARGET_DIR/$TARGET/release/$1"
+    case "$1" in
+        qemu_demo) echo "$FIRMWARE_TARGET_DIR/$TARGET/release/examples/$1" ;;
+        *) echo "$FIRMWARE_TARGET_DIR/$TARGET/release/$1" ;;
+    esac
 }

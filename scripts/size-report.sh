@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Flash and static RAM of the driver on thumbv7em-none-eabihf (release: opt-level "s", LTO),
-# and of the firmware programs (boards/stm32f405, boards/stm32f405_qemu, benches/mcu).
+# and of the firmware programs (boards/stm32f405, the root crate's qemu_demo, benches/mcu).
 #
 # A driver's share is the difference between two builds that differ only by that driver
 # (benches/mcu/src/bin/): footprint_driver (a static Gimbal with the default queues, driven
@@ -48,7 +48,7 @@ firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" build --release --locked \
     --bin qemu_bench
 firmware_cargo boards/stm32f405 "+$BENCH_TOOLCHAIN" build --release --locked \
     --bin stm32f405 --bin stm32f405_uart --bin stm32f405_mavlink
-firmware_cargo boards/stm32f405_qemu "+$BENCH_TOOLCHAIN" build --release --locked --bin qemu_demo
+root_firmware_cargo "+$BENCH_TOOLCHAIN" build --release --locked --example qemu_demo --target "$TARGET"
 # Signing, in a target directory of its own (the feature would reach every program of
 # benches/mcu in the same one).
 SIGNING_TARGET_DIR="$FIRMWARE_TARGET_DIR-signing"

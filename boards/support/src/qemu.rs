@@ -1,5 +1,5 @@
-//! Support shared by the QEMU firmware (`boards/stm32f405_qemu`'s `qemu_demo` and
-//! `qemu_mavlink`, `benches/mcu`'s `qemu_bench` and `qemu_bench_mavlink`,
+//! Support shared by the QEMU firmware (the root crate's example `qemu_demo`,
+//! `boards/stm32f405_qemu`'s `qemu_mavlink`, `benches/mcu`'s `qemu_bench` and `qemu_bench_mavlink`,
 //! `boards/embassy_qemu`): semihosting output and exit, a panic handler and a HardFault
 //! handler that both exit with status 1. Each program brings the STM32F405's interrupt
 //! vector table if its cortex-m-rt needs one.

@@ -1,7 +1,7 @@
 //! A scripted bench session: the driver against the simulated gimbal, over the in-memory
-//! CAN bus or the in-memory serial line, shared by `host_sim` (host) and `qemu_demo`
-//! (`boards/stm32f405_qemu`, an emulated STM32F405). `no_std`, no allocation; telemetry goes
-//! to any `core::fmt::Write`.
+//! CAN bus or the in-memory serial line, shared by the root crate's two examples, `host_sim`
+//! (host) and `qemu_demo` (an emulated STM32F405). `no_std`, no allocation; telemetry goes to
+//! any `core::fmt::Write`.
 //!
 //! Time is simulated: one loop iteration is one millisecond, so the session is
 //! deterministic whatever the host or emulator speed.

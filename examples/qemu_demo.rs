@@ -21,16 +21,30 @@
 //! seen on both transports; 1 otherwise, on a panic, or on a HardFault.
 //!
 //! ```sh
-//! scripts/demo.sh   # installs the target and qemu-system-arm when missing, then in
-//!                   # boards/stm32f405_qemu:
-//! cargo run --release --bin qemu_demo
+//! scripts/demo.sh   # installs the target and qemu-system-arm when missing, then:
+//! cargo run --release --example qemu_demo --target thumbv7em-none-eabihf
 //! ```
-#![no_std]
-#![no_main]
+//!
+//! Built from the crate's root: `memory.x` there describes the STM32F405RG and
+//! `.cargo/config.toml` links it with cortex-m-rt's `link.x` and runs it on QEMU. On the host
+//! this example is a stub that says how to run it.
+#![cfg_attr(target_os = "none", no_std, no_main)]
 
 // The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
+#[cfg(target_os = "none")]
 use stm32f4xx_hal as _;
 
+/// On the host: what this program is and how to run it.
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!(
+        "qemu_demo is STM32F405 firmware: cargo run --release --example qemu_demo \
+         --target thumbv7em-none-eabihf (or scripts/demo.sh, which installs what it needs)"
+    );
+    std::process::exit(2);
+}
+
+#[cfg(target_os = "none")]
 mod fw {
     use core::fmt::{self, Write};
 
