@@ -36,27 +36,12 @@ export CARGO_PROFILE_RELEASE_DEBUG="${CARGO_PROFILE_RELEASE_DEBUG:-0}"
 
 step() { printf '\n=== %s\n' "$*"; }
 
-as_root() { if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi; }
-# `quiet CMD…`: CMD's output shown only when it fails (an install is one line, not dpkg's log).
-quiet() {
-    local log rc=0
-    log=$(mktemp)
-    "$@" >"$log" 2>&1 || rc=$?
-    if [ "$rc" -ne 0 ]; then
-        cat "$log" >&2
-        echo "error: '$*' failed (exit $rc)" >&2
-    fi
-    rm -f "$log"
-    return "$rc"
-}
-apt_updated=
+# apt-get (quiet: one line an install, its output only when it fails) and the firmware
+# scripts' helpers.
+. scripts/firmware-env.sh
 apt_install() {
     echo "installing (apt): $*"
-    if [ -z "$apt_updated" ]; then
-        quiet as_root apt-get update -qq
-        apt_updated=1
-    fi
-    quiet as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@"
+    _apt_install "$@"
 }
 pip_install() {
     echo "installing (pip): $*"

@@ -622,13 +622,7 @@ fn an_earth_yaw_without_a_fresh_vehicle_heading_is_refused() {
     let mut link: Link = Link::new(Config::default());
     let now = Instant::from_millis(5000);
     assert_eq!(
-        link.aim(
-            Aim {
-                yaw: earth(10.0),
-                pitch: Pitch::LEVEL
-            },
-            now
-        ),
+        link.aim(level(earth(10.0)), now),
         Err(AimError::NoVehicleHeading)
     );
     assert_eq!(link.aim_state(), None);
@@ -637,27 +631,12 @@ fn an_earth_yaw_without_a_fresh_vehicle_heading_is_refused() {
         Instant::from_millis(3000),
     );
     assert_eq!(
-        link.aim(
-            Aim {
-                yaw: earth(10.0),
-                pitch: Pitch::LEVEL
-            },
-            now
-        ),
+        link.aim(level(earth(10.0)), now),
         Err(AimError::NoVehicleHeading),
         "stale (2 s old)"
     );
     // A vehicle yaw needs no heading on a nose-referenced gimbal.
-    assert_eq!(
-        link.aim(
-            Aim {
-                yaw: vehicle(10.0),
-                pitch: Pitch::LEVEL
-            },
-            now
-        ),
-        Ok(())
-    );
+    assert_eq!(link.aim(level(vehicle(10.0)), now), Ok(()));
 }
 
 #[test]
@@ -791,14 +770,7 @@ fn an_earth_yaw_waits_for_the_vehicle_heading_while_it_is_stale() {
     let mut link: Link = Link::new(Config::default());
     let at = |ms| Instant::from_millis(ms);
     link.set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), at(0));
-    link.aim(
-        Aim {
-            yaw: earth(100.0),
-            pitch: Pitch::LEVEL,
-        },
-        at(0),
-    )
-    .unwrap();
+    link.aim(level(earth(100.0)), at(0)).unwrap();
     // Nose-referenced (no attitude has reached the gimbal yet when the aim went): 100 - 30.
     assert_eq!(poll_headings(&mut link, 0), [700]);
     assert!(!link.aim_state().unwrap().waiting_for_heading);
@@ -827,18 +799,6 @@ fn poll_headings(link: &mut Link, ms: u32) -> Vec<u16> {
     headings
 }
 
-/// A postback of the gimbal holding its angle (lock mode) with its motor at `motor_cdeg`.
-fn lock_postback(link: &mut Link, motor_cdeg: i16, now: Instant) {
-    let p = Postback {
-        mode: ControlMode::Lock,
-        motor_heading: motor_cdeg,
-        ..Postback::default()
-    };
-    for d in p.to_can_frames() {
-        link.receive(ids::POSTBACK, &d, now);
-    }
-}
-
 #[test]
 fn getting_closer_means_by_more_than_the_tolerance() {
     // The link alone, its postbacks made here: a vehicle yaw of 10° (motor 1,000 in
@@ -849,20 +809,13 @@ fn getting_closer_means_by_more_than_the_tolerance() {
     for (second_motor, recommands) in [(51, 0), (50, 1)] {
         let mut link: Link = Link::new(Config::default());
         let at = Instant::from_millis;
-        lock_postback(&mut link, 0, at(0));
-        link.aim(
-            Aim {
-                yaw: vehicle(10.0),
-                pitch: Pitch::LEVEL,
-            },
-            at(0),
-        )
-        .unwrap();
+        postback(&mut link, 0, false, at(0));
+        link.aim(level(vehicle(10.0)), at(0)).unwrap();
         assert_eq!(poll_headings(&mut link, 0), [100]);
         // Error 1,000 (not judged), then 1,000 - motor.
-        lock_postback(&mut link, 0, at(10));
+        postback(&mut link, 0, false, at(10));
         poll_headings(&mut link, 50);
-        lock_postback(&mut link, second_motor, at(60));
+        postback(&mut link, second_motor, false, at(60));
         poll_headings(&mut link, 100);
         poll_headings(&mut link, 150);
         assert_eq!(
@@ -920,8 +873,9 @@ fn an_aim_within_the_dead_band_of_the_one_held_changes_nothing() {
     assert_eq!(link.aim_state(), None);
 }
 
-/// A postback of the gimbal holding its angle, its tracker tracking or not.
-fn tracking_postback(link: &mut Link, motor_cdeg: i16, tracking: bool, now: Instant) {
+/// A postback of the gimbal holding its angle (lock mode), its motor at `motor_cdeg`, its
+/// tracker tracking or not.
+fn postback(link: &mut Link, motor_cdeg: i16, tracking: bool, now: Instant) {
     let p = Postback {
         mode: ControlMode::Lock,
         motor_heading: motor_cdeg,
@@ -939,24 +893,20 @@ fn a_tracker_started_through_the_link_owns_the_gimbal_until_its_postbacks_let_go
     // aim, all along: the tracker holds it elsewhere).
     let mut link: Link = Link::new(Config::default());
     let at = Instant::from_millis;
-    let vehicle_10 = Aim {
-        yaw: vehicle(10.0),
-        pitch: Pitch::LEVEL,
-    };
-    tracking_postback(&mut link, 0, false, at(0));
-    link.aim(vehicle_10, at(0)).unwrap();
+    postback(&mut link, 0, false, at(0));
+    link.aim(level(vehicle(10.0)), at(0)).unwrap();
     assert_eq!(poll_headings(&mut link, 0), [100]);
     let track = TrackingBox::new(ImagePoint::new(4096, 4096).unwrap(), 256.0, 256.0).unwrap();
     link.send(GimbalCommand::StartTracking(track)).unwrap();
     poll_headings(&mut link, 0);
     // The first postback after the start may not say it tracks yet: still the tracker's.
-    tracking_postback(&mut link, 0, false, at(10));
+    postback(&mut link, 0, false, at(10));
     assert_eq!(poll_headings(&mut link, 50), []);
     assert!(link.aim_state().unwrap().yielded_to_tracker);
     // It tracks for a while, the gimbal far off the aim: nothing is sent, nothing judged
     // (no attempt counted, nothing "not reached").
     for look in 2..10u32 {
-        tracking_postback(&mut link, 0, true, at(look * 50 - 40));
+        postback(&mut link, 0, true, at(look * 50 - 40));
         assert_eq!(poll_headings(&mut link, look * 50), [], "look {look}");
     }
     let state = link.aim_state().unwrap();
@@ -964,7 +914,7 @@ fn a_tracker_started_through_the_link_owns_the_gimbal_until_its_postbacks_let_go
     assert_eq!(link.stats().aim_not_reached, 0);
     assert_eq!(link.stats().aim_recommands, 0);
     // It lets go (target lost): the aim is sent again at the next look.
-    tracking_postback(&mut link, 0, false, at(510));
+    postback(&mut link, 0, false, at(510));
     assert_eq!(poll_headings(&mut link, 550), [100]);
     assert!(!link.aim_state().unwrap().yielded_to_tracker);
     assert_eq!(link.stats().aim_recommands, 1);
@@ -983,17 +933,10 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
     heading(&mut link, 0.0, 0);
     poll_headings(&mut link, 0);
     assert!(link.north_referenced(at(0)));
-    link.aim(
-        Aim {
-            yaw: vehicle(10.0),
-            pitch: Pitch::LEVEL,
-        },
-        at(0),
-    )
-    .unwrap();
+    link.aim(level(vehicle(10.0)), at(0)).unwrap();
     assert_eq!(poll_headings(&mut link, 0), [100]);
     // The gimbal is there (motor 10°): on target.
-    tracking_postback(&mut link, 1000, false, at(10));
+    postback(&mut link, 1000, false, at(10));
     poll_headings(&mut link, 50);
     assert!(link.aim_state().unwrap().on_target);
     let mut sent = Vec::new();
@@ -1023,16 +966,9 @@ fn an_aim_waiting_for_room_is_not_judged_before_it_is_sent() {
         link.send(GimbalCommand::Zoom(idu_gimbal::wire::control::Zoom::Stop))
             .unwrap();
     }
-    link.aim(
-        Aim {
-            yaw: vehicle(10.0),
-            pitch: Pitch::LEVEL,
-        },
-        at(0),
-    )
-    .unwrap();
+    link.aim(level(vehicle(10.0)), at(0)).unwrap();
     for look in 1..10u32 {
-        tracking_postback(&mut link, 0, false, at(look * 50 - 40));
+        postback(&mut link, 0, false, at(look * 50 - 40));
         link.poll(at(look * 50));
     }
     let state = link.aim_state().unwrap();
@@ -1049,4 +985,12 @@ fn an_aim_waiting_for_room_is_not_judged_before_it_is_sent() {
     assert_eq!(headings, []);
     assert_eq!(poll_headings(&mut link, 500), [100]);
     assert_eq!(link.stats().aim_recommands, 0);
+}
+
+/// An aim at `yaw`, level.
+fn level(yaw: Yaw) -> Aim {
+    Aim {
+        yaw,
+        pitch: Pitch::LEVEL,
+    }
 }
