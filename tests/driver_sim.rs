@@ -1,5 +1,8 @@
 //! The driver against the simulated gimbal over the in-memory bus.
+
 #![cfg(feature = "mock")]
+
+mod common;
 
 use embedded_can::{nb::Can, Frame as _};
 use idu_gimbal::link::Config;
@@ -65,14 +68,12 @@ impl<'a> Bench<'a> {
     fn tick(&mut self) {
         let now = self.instant();
         let _ = self.gimbal.poll(now);
-        while let Some(e) = self.gimbal.next_event() {
-            if e == Event::Postback {
-                if let Some((p, 0)) = self.gimbal.latest_postback(now) {
-                    self.delivered.push(p);
-                }
-            }
-            self.events.push((self.now, e));
-        }
+        common::take_events(
+            &mut self.gimbal,
+            self.now,
+            &mut self.delivered,
+            &mut self.events,
+        );
         loop {
             match Can::receive(&mut self.sim_can) {
                 Ok(f) => {

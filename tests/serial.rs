@@ -1,6 +1,9 @@
 //! The serial driver against the simulated gimbal over the in-memory serial pipe, through
 //! both adapters (`embedded-io` 0.7 and `embedded-hal-nb`), with every fault the pipe has.
+
 #![cfg(feature = "mock")]
+
+mod common;
 
 use idu_gimbal::driver::{Io, Nb, SerialPort};
 use idu_gimbal::geo::Position;
@@ -70,14 +73,12 @@ impl<'p, P: SerialPort> Bench<'p, P> {
     fn tick(&mut self) {
         let now = self.instant();
         let _ = self.gimbal.poll(now);
-        while let Some(e) = self.gimbal.next_event() {
-            if e == Event::Postback {
-                if let Some((p, 0)) = self.gimbal.latest_postback(now) {
-                    self.delivered.push(p);
-                }
-            }
-            self.events.push((self.now, e));
-        }
+        common::take_events(
+            &mut self.gimbal,
+            self.now,
+            &mut self.delivered,
+            &mut self.events,
+        );
         // The gimbal's side, by hand so that the sniffer sees what arrives.
         let mut buf = [0u8; 64];
         loop {
