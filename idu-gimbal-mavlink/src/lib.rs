@@ -97,6 +97,8 @@ mod setpoint;
 pub mod signing;
 pub mod status;
 
-pub use bridge::{Bridge, BridgeConfig, BridgeStats, ANSWER_ROOM, AUTOPILOT_SILENCE_MS};
+pub use bridge::{
+    Bridge, BridgeConfig, BridgeStats, SerialInput, ANSWER_ROOM, AUTOPILOT_SILENCE_MS,
+};
 pub use gimbal::GimbalControl;
 pub use mavio;

@@ -10,7 +10,7 @@ use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::{Bridge, ANSWER_ROOM};
+use idu_gimbal_mavlink::{Bridge, SerialInput, ANSWER_ROOM};
 use mavio::dialects::common::enums::{MavCmd, MavResult};
 use mavio::dialects::common::messages::CommandAck;
 use proptest::prelude::*;
@@ -125,6 +125,40 @@ fn sent_len_of_one_answer() -> usize {
     let mut b = bridge();
     b.receive_all(&request(0, 0, 0), t(10));
     b.transmit_bytes().len()
+}
+
+#[test]
+fn a_burst_read_from_a_serial_line_through_serial_input_is_answered_in_full() {
+    // 40 requests from three clients, read 37 bytes at a time into a 64-byte input; what
+    // the bridge holds is sent between reads, as a firmware's loop does.
+    let mut b = bridge();
+    let (frames, asked) = burst_of(&(0..40).map(|i| (i % 3, i % 5)).collect::<Vec<_>>());
+    let line: Vec<u8> = frames.concat();
+    let mut input: SerialInput<64> = SerialInput::new();
+    let mut at = 0;
+    let mut a = Answers::default();
+    for call in 0.. {
+        assert!(call < 1000, "the burst is not taken");
+        let read = |buf: &mut [u8]| {
+            let n = buf.len().min(37).min(line.len() - at);
+            buf[..n].copy_from_slice(&line[at..at + n]);
+            at += n;
+            Ok::<usize, ()>(n)
+        };
+        input.receive(&mut b, t(10), read).unwrap();
+        a.take(&mut b);
+        if at == line.len() && input.held() == 0 && !b.reader().is_waiting() {
+            break;
+        }
+        b.poll(t(11));
+        a.take(&mut b);
+    }
+    assert_all_answered(&a, &asked, &b);
+    // A read error ends the call, and is the caller's; nothing held is lost.
+    assert_eq!(
+        input.receive(&mut b, t(12), |_| Err("overrun")),
+        Err("overrun")
+    );
 }
 
 #[test]

@@ -24,9 +24,11 @@ use crate::status::Pose;
 mod autopilot;
 mod device;
 mod dispatch;
+mod serial_input;
 
 use autopilot::{StreamState, Vehicle};
 pub use device::yaw_limit_deg;
+pub use serial_input::SerialInput;
 
 /// The autopilot's component id (`MAV_COMP_ID_AUTOPILOT1`).
 pub const AUTOPILOT_COMPONENT: u8 = 1;

@@ -18,7 +18,7 @@ fn main() -> ! {
     use idu_gimbal::{Config, Gimbal, Instant};
     use idu_gimbal_mavlink::camera::fov::FieldOfView;
     use idu_gimbal_mavlink::camera::CameraConfig;
-    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+    use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
 
     // Either family, chosen at run time, so that everything the camera can be is linked:
     // both definition files, the thermal settings.
@@ -51,20 +51,14 @@ fn main() -> ! {
     };
     footprint::use_mem_builtins();
     let mut port = RegPort;
-    let mut buf = [0u8; 64];
-    // What of `buf` the bridge has not taken (a frame waits for room in its outbox).
-    let mut held = 0..0;
+    // What the bridge has not taken of the line's bytes (a frame waits for room in its outbox).
+    let mut from_line: SerialInput<64> = SerialInput::new();
     loop {
         // The same as `footprint_driver`: the port used directly, the driver driven.
         footprint::port_skeleton();
         footprint::drive(bridge.gimbal_mut());
         let now = Instant::from_millis(input(4));
-        if held.is_empty() {
-            if let Ok(n) = port.read(&mut buf) {
-                held = 0..n.min(64);
-            }
-        }
-        held.start += bridge.receive(buf.get(held.clone()).unwrap_or(&[]), now);
+        let _ = from_line.receive(bridge, now, |buf| port.read(buf));
         bridge.poll(now);
         let bytes = bridge.transmit_bytes();
         if let Ok(n) = port.write(bytes) {

@@ -30,7 +30,7 @@ mod fw {
     use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::{Config, Gimbal, GimbalControl};
     use idu_gimbal_mavlink::camera::CameraConfig;
-    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+    use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
 
     /// The autopilot link's rate.
     const MAVLINK_BAUD: u32 = 921_600;
@@ -69,33 +69,21 @@ mod fw {
                 ..BridgeConfig::default()
             },
         );
-        let mut buf = [0u8; 64];
-        // What of `buf` the bridge has not taken: the bytes after a frame that waits for
-        // room in its outbox, offered again once what it holds is sent.
-        let mut held = 0..0;
+        // What the bridge has not taken of the UART's bytes is held there, offered again
+        // once what the bridge holds is sent.
+        let mut input: SerialInput<64> = SerialInput::new();
         let mut was_up = false;
         loop {
             let now = now();
             if let Err(e) = bridge.gimbal_mut().poll(now) {
                 defmt::warn!("{}", e);
             }
-            loop {
-                if held.is_empty() {
-                    match autopilot.read(&mut buf) {
-                        Ok(0) => break,
-                        Ok(n) => held = 0..n,
-                        // Counted where it shows: the frame it broke fails its CRC.
-                        Err(_) => {
-                            defmt::warn!("autopilot UART: line error or overrun");
-                            continue;
-                        }
-                    }
-                }
-                held.start += bridge.receive(&buf[held.clone()], now);
-                if !held.is_empty() {
-                    // A frame waits for room: send first; the ring keeps what comes.
-                    break;
-                }
+            // A line error is counted where it shows: the frame it broke fails its CRC.
+            if input
+                .receive(&mut bridge, now, |buf| autopilot.read(buf))
+                .is_err()
+            {
+                defmt::warn!("autopilot UART: line error or overrun");
             }
             bridge.poll(now);
             loop {

@@ -39,7 +39,7 @@ mod fw {
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::framing::{Check, FrameReader, MAX_FRAME_LEN};
-    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+    use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
     use mavio::dialects::common::enums::{
         CameraTrackingStatusFlags, EstimatorStatusFlags, GimbalDeviceFlags, MavAutopilot, MavCmd,
         MavLandedState, MavModeFlag, MavParamExtType, MavResult, MavState, MavType, ParamAck,
@@ -231,10 +231,8 @@ mod fw {
         bridge_line: Line<'a>,
         sim: Simulator,
         sim_can: Endpoint<'a, 2, 32>,
-        /// Bytes read from the autopilot's line; `held` is what the bridge has not taken
-        /// (the bytes after a frame that waits for room in its outbox).
-        buf: [u8; 256],
-        held: core::ops::Range<usize>,
+        /// Bytes read from the autopilot's line that the bridge has not taken yet.
+        input: SerialInput<256>,
         ms: u32,
         failures: u32,
     }
@@ -244,20 +242,11 @@ mod fw {
         fn tick(&mut self) {
             let now = Instant::from_millis(self.ms);
             self.ap.periodic(self.ms);
-            loop {
-                if self.held.is_empty() {
-                    match self.bridge_line.0.read(&mut self.buf) {
-                        Ok(n) if n > 0 => self.held = 0..n,
-                        _ => break,
-                    }
-                }
-                let bytes = self.buf.get(self.held.clone()).unwrap_or(&[]);
-                self.held.start += self.bridge.receive(bytes, now);
-                if !self.held.is_empty() {
-                    // A frame waits for room in the outbox: send first.
-                    break;
-                }
-            }
+            let line = &mut self.bridge_line.0;
+            // The in-memory line has no errors to report.
+            let _ = self
+                .input
+                .receive(&mut self.bridge, now, |buf| line.read(buf));
             let _ = self.bridge.gimbal_mut().poll(now);
             self.bridge.poll(now);
             loop {
@@ -343,8 +332,7 @@ mod fw {
             bridge_line,
             sim: Simulator::new(sim_config, Instant::from_millis(0)),
             sim_can,
-            buf: [0; 256],
-            held: 0..0,
+            input: SerialInput::new(),
             ms: 0,
             failures: 0,
         };
