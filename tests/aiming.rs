@@ -994,3 +994,29 @@ fn level(yaw: Yaw) -> Aim {
         pitch: Pitch::LEVEL,
     }
 }
+
+#[test]
+fn a_point_at_re_aims_only_past_the_dead_band() {
+    // 200 m south of the target, 100 m above it: moving 0.45 m east turns the bearing by
+    // 0.13° (within the 0.2° dead-band: nothing re-sent), 1.5 m by 0.43° (re-aimed).
+    let target = Position::new(47.0018, 8.0, 400.0).unwrap();
+    let metre_east = 1.0 / (111_320.0 * 47.0f64.to_radians().cos());
+    let at = |east_m: f64| {
+        (
+            Gps::new(47.0, 8.0 + east_m * metre_east).unwrap(),
+            Altitude::new(500.0).unwrap(),
+        )
+    };
+    let mut rig = Rig::new(Wire::Can, LockHolds::North);
+    rig.position = Some(at(0.0));
+    rig.run(100);
+    rig.can.point_at(target);
+    rig.run(3000);
+    let sent = rig.headings.len();
+    rig.position = Some(at(0.45));
+    rig.run(2000);
+    assert_eq!(rig.headings.len(), sent, "0.13°: within the dead-band");
+    rig.position = Some(at(1.5));
+    rig.run(2000);
+    assert_eq!(rig.headings.len(), sent + 1, "0.43°: past it");
+}
