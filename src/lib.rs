@@ -19,8 +19,8 @@
 //!   `embedded_can::blocking::Can` drivers); [`SerialGimbal`] moves bytes between a UART
 //!   ([`driver::Io`] for `embedded-io` 0.7, [`driver::Nb`] for `embedded-hal-nb`) and the
 //!   serial link, which carries control commands and postbacks only.
-//! - Beside them: `sim` (a simulated gimbal, on CAN or serial), `mock` (feature `mock`: an
-//!   in-memory CAN bus and serial pipe with fault injection), [`geo`] (WGS84 look-at and
+//! - Beside them, the test doubles (feature `mock`): `sim` (a simulated gimbal, on CAN or
+//!   serial) and `mock` (an in-memory CAN bus and serial pipe with fault injection); [`geo`] (WGS84 look-at and
 //!   where a line of sight meets the ground), [`math`] (`f32` sine and cosine),
 //!   [`video`] (RTSP addresses) and [`interface`] (network, UART and CAN defaults, filter
 //!   helpers).
@@ -86,6 +86,7 @@ pub mod link;
 pub mod math;
 #[cfg(feature = "mock")]
 pub mod mock;
+#[cfg(feature = "mock")]
 pub mod sim;
 pub mod time;
 pub mod video;

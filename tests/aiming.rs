@@ -6,6 +6,8 @@
 //! The expectations are the aim itself: an earth yaw is checked as the vehicle's heading
 //! (the test's own) + the simulator's motor angle, a vehicle yaw as the motor angle alone.
 
+#![cfg(feature = "mock")]
+
 use idu_gimbal::geo::{look_at, Position};
 use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{aim, Aim, AimError, Config, Link, LinkStats, Yaw};

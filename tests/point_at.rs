@@ -2,6 +2,7 @@
 //! keeps the simulated gimbal on it, whether the gimbal holds its north heading in lock or
 //! its motor angle. The simulator's reported heading and pitch must stay within 1° of the
 //! true bearing and elevation (exact WGS84) once settled.
+
 #![cfg(feature = "mock")]
 
 use embedded_can::{nb::Can, Frame as _};

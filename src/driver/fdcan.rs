@@ -432,6 +432,7 @@ impl<I: fdcan::Instance> embedded_can::nb::Can for FdCan<I> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(feature = "mock")]
     use crate::sim::{SimConfig, Simulator};
     use crate::wire::control::{GimbalCommand, Pitch};
     use crate::wire::ids;
@@ -747,6 +748,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "mock")]
     fn the_gimbal_driver_runs_over_the_adapter() {
         let (can, chip) = adapter();
         let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
