@@ -96,6 +96,7 @@ mod setpoint;
 #[cfg(feature = "signing")]
 pub mod signing;
 pub mod status;
+mod tx;
 
 pub use bridge::{
     Bridge, BridgeConfig, BridgeStats, SerialInput, ANSWER_ROOM, AUTOPILOT_SILENCE_MS,

@@ -29,9 +29,10 @@ use mavio::dialects::common::enums::GimbalDeviceFlags;
 use mavio::dialects::common::messages::GimbalDeviceSetAttitude;
 
 use crate::attitude::{is_nan_quaternion, YawPitch};
-use crate::bridge::{bump, State};
+use crate::bridge::State;
 use crate::gimbal::GimbalControl;
 use crate::status::Pose;
+use crate::tx::bump;
 
 /// Whether `flags` put a setpoint's yaw in the earth frame.
 fn earth_yaw(flags: GimbalDeviceFlags) -> bool {

@@ -10,9 +10,10 @@ use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt,
 };
 
-use super::{bump, push_counted, State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
+use super::{State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
 use crate::attitude;
 use crate::gimbal::GimbalControl;
+use crate::tx::{bump, push_counted};
 
 /// How often to ask the autopilot again for a stream that does not come.
 const STREAM_RETRY_MS: u32 = 5_000;

@@ -13,10 +13,11 @@ use mavio::dialects::common::messages::{
 
 use idu_gimbal::wire::control::Pitch;
 
-use super::{name, State};
+use super::State;
 use crate::codec;
 use crate::gimbal::GimbalControl;
 use crate::status;
+use crate::tx::name;
 
 /// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
 /// ±325.00° on the 3.5× models (the document's Motor_psi scope,

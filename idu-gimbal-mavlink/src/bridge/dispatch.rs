@@ -16,7 +16,7 @@ use mavio::dialects::common::messages::{
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use super::{bump, id_of, State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
+use super::{State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
 use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
@@ -24,6 +24,7 @@ use crate::framing::{Check, ReceivedFrame};
 use crate::gimbal::GimbalControl;
 #[cfg(feature = "roi")]
 use crate::status::Pose;
+use crate::tx::{bump, id_of};
 
 /// Decodes `frame` as `M` when its CRC holds with `M`'s `CRC_EXTRA`.
 fn decode<M>(frame: &ReceivedFrame<'_>) -> Option<M>

@@ -42,9 +42,9 @@ use idu_gimbal::Instant;
 use mavio::dialects::common::enums::MavResult;
 use mavio::dialects::common::messages::CameraFovStatus;
 
-use crate::bridge::Tx;
 use crate::capture::Vantage;
 use crate::command::Interval;
+use crate::tx::Tx;
 
 use super::periodic::Periodic;
 use super::CameraConfig;

@@ -57,12 +57,12 @@ use mavio::dialects::common::messages::{
     ParamExtSet, StorageInformation, VideoStreamInformation, VideoStreamStatus,
 };
 
-use crate::bridge::{id_of, name, Tx};
 use crate::capture::{Capture, Image, Request, Vantage};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
 use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
 use crate::gimbal::GimbalControl;
+use crate::tx::{id_of, name, Tx};
 use fov::FieldOfView;
 use periodic::Periodic;
 use settings::Settings;

@@ -33,10 +33,10 @@ use idu_gimbal::wire::control::{
 use mavio::dialects::common::enums::{MavParamExtType, MavResult, ParamAck};
 use mavio::dialects::common::messages::{ParamExtAck, ParamExtValue};
 
-use crate::bridge::{name, Tx};
 use crate::codec::param_ext::{self, ParamSet};
 use crate::framing::MAX_FRAME_LEN;
 use crate::gimbal::GimbalControl;
+use crate::tx::{name, Tx};
 
 /// A parameter of the definition.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

@@ -21,8 +21,8 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::{VideoStreamInformation, VideoStreamStatus};
 
-use crate::bridge::{name, Tx};
 use crate::framing::MAX_FRAME_LEN;
+use crate::tx::{name, Tx};
 
 use super::{CameraConfig, URI_CAPACITY};
 

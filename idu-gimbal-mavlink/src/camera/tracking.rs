@@ -48,9 +48,9 @@ use mavio::dialects::common::enums::{
 };
 use mavio::dialects::common::messages::CameraTrackingImageStatus;
 
-use crate::bridge::Tx;
 use crate::command::Interval;
 use crate::gimbal::GimbalControl;
+use crate::tx::Tx;
 
 /// The status's period while tracking when no interval was set, ms: QGroundControl's own
 /// ask (500,000 µs).
