@@ -16,10 +16,11 @@ mod decode;
 mod error;
 mod json;
 mod mavlink;
-mod net;
 mod plot;
 mod rtsp;
+mod send_monitor;
 mod sim;
+mod tcp;
 mod transport;
 
 use command::Spec;
@@ -202,7 +203,7 @@ fn hex(bytes: &[u8]) -> String {
 fn encode(spec: &Spec, tcp: bool) -> Result<(), Failure> {
     let mut text = String::new();
     if tcp {
-        for cmd in net::control_commands(spec)? {
+        for cmd in send_monitor::control_commands(spec)? {
             text.push_str(&hex(&serial::control_frame(&cmd.encode())));
             text.push('\n');
         }
@@ -232,7 +233,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             repeat_ms,
             for_ms,
             command,
-        } => net::send(
+        } => send_monitor::send(
             &Target::from_args(&gimbal)?,
             &command,
             repeat_ms.zip(for_ms),
@@ -241,7 +242,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             gimbal,
             json,
             count,
-        } => net::monitor(&Target::from_args(&gimbal)?, json, count),
+        } => send_monitor::monitor(&Target::from_args(&gimbal)?, json, count),
         Top::Control { gimbal, speed } => {
             let target = Target::from_args(&gimbal)?;
             control::run(&target, speed)

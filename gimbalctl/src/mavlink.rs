@@ -298,12 +298,12 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
         Autopilot::Udp { listen, to: tos } => {
             let mut to = Vec::new();
             for t in tos {
-                let addrs = crate::net::resolve(t).map_err(|_| {
+                let addrs = crate::tcp::resolve(t).map_err(|_| {
                     Failure::Usage(format!("--to: {t:?} is not a HOST:PORT address"))
                 })?;
                 to.extend(addrs.into_iter().take(1));
             }
-            let addrs = crate::net::resolve(listen).map_err(|_| {
+            let addrs = crate::tcp::resolve(listen).map_err(|_| {
                 Failure::Usage(format!("--listen: {listen:?} is not a HOST:PORT address"))
             })?;
             Some((listen, addrs, to))

@@ -48,7 +48,7 @@ struct Client {
 
 /// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
 pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Result<(), Failure> {
-    let addrs = crate::net::resolve(listen)?;
+    let addrs = crate::tcp::resolve(listen)?;
     let listener = TcpListener::bind(&addrs[..])
         .map_err(|e| Failure::Runtime(format!("cannot listen on {listen}: {e}")))?;
     listener

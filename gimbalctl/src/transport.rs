@@ -115,7 +115,7 @@ impl Target {
     pub fn from_args(args: &GimbalArgs) -> Result<Target, Failure> {
         match (&args.tcp, &args.can, &args.serial) {
             (Some(tcp), None, None) => {
-                crate::net::resolve(tcp)?;
+                crate::tcp::resolve(tcp)?;
                 Ok(Target::Tcp(tcp.clone()))
             }
             (None, Some(iface), None) => {

@@ -38,7 +38,7 @@ pub struct Ended(pub String);
 impl StreamPort {
     /// Connects to the serial server (3 s timeout) and makes the socket non-blocking.
     pub fn tcp(target: &str) -> Result<StreamPort, Failure> {
-        let stream = crate::net::connect(target)?;
+        let stream = crate::tcp::connect(target)?;
         stream
             .set_nonblocking(true)
             .map_err(|e| Failure::io(target, e))?;
@@ -131,12 +131,12 @@ impl StreamPort {
     }
 
     /// Closes the port without losing what was written: TCP sends FIN and waits briefly
-    /// for the server (see [`crate::net::close_gently`]); a tty drains its output.
+    /// for the server (see [`crate::tcp::close_gently`]); a tty drains its output.
     pub fn close(self) {
         match self.io {
             Io::Tcp(s) => {
                 let _ = s.set_nonblocking(false);
-                crate::net::close_gently(s);
+                crate::tcp::close_gently(s);
             }
             Io::Tty(mut p) => {
                 let _ = p.flush();
