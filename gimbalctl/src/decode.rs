@@ -35,9 +35,9 @@ use idu_gimbal::wire::serial::{StreamItem, StreamParser};
 use idu_gimbal::wire::vehicle::VehicleFrame;
 use idu_gimbal::Instant;
 
-use crate::command;
 use crate::error::Failure;
 use crate::json::Obj;
+use crate::spec;
 
 /// The longest line kept; longer lines are malformed (no candump line comes close).
 pub const MAX_LINE: usize = 4096;
@@ -482,7 +482,7 @@ pub fn write_postback(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, pb: 
 /// Writes a command object.
 pub fn write_command(out: &mut Vec<u8>, t: Option<&[u8]>, id: Option<u32>, cmd: &Command) {
     let mut o = Obj::start(out, "command", t, id);
-    command::write_command_fields(&mut o, cmd);
+    spec::write_command_fields(&mut o, cmd);
     o.end();
 }
 

@@ -10,21 +10,21 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use idu_gimbal::wire::serial;
 
-mod command;
-mod control;
 mod decode;
 mod error;
 mod json;
 mod mavlink;
+mod panel;
 mod plot;
 mod rtsp;
 mod send_monitor;
 mod sim;
+mod spec;
 mod tcp;
 mod transport;
 
-use command::Spec;
 use error::Failure;
+use spec::Spec;
 use transport::{GimbalArgs, SerialSpec, Target, AUTOPILOT_BAUD};
 
 /// Host tool for IDU camera gimbals: encode and decode CAN frames, send commands and monitor
@@ -245,7 +245,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         } => send_monitor::monitor(&Target::from_args(&gimbal)?, json, count),
         Top::Control { gimbal, speed } => {
             let target = Target::from_args(&gimbal)?;
-            control::run(&target, speed)
+            panel::run(&target, speed)
         }
         Top::Sim {
             listen,

@@ -10,10 +10,10 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::VehicleFrame;
 
-use crate::command::{self, Message, Spec};
 use crate::decode;
 use crate::error::Failure;
 use crate::json::Obj;
+use crate::spec::{self, Message, Spec};
 use crate::transport::{clock, Job, Mode, Seen, Session, Target};
 
 /// `monitor` warns after this long without a postback (three missed 500 ms periods).
@@ -353,12 +353,7 @@ pub fn describe_frame(
             Ok(cmd) => match json {
                 Some(t) => decode::write_command(out, Some(t), Some(id), &cmd),
                 None => out.extend_from_slice(
-                    format!(
-                        "control  {}  {}\n",
-                        f.id_text(),
-                        command::command_line(&cmd)
-                    )
-                    .as_bytes(),
+                    format!("control  {}  {}\n", f.id_text(), spec::command_line(&cmd)).as_bytes(),
                 ),
             },
             Err(e) => malformed(out, "control", &e.to_string()),

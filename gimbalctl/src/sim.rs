@@ -27,8 +27,8 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::serial::{StreamItem, StreamParser};
 use idu_gimbal::Instant;
 
-use crate::command;
 use crate::error::Failure;
+use crate::spec;
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(5);
@@ -137,7 +137,7 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
                                 Ok(()) => {
                                     c.last_logged = Some(data);
                                     if let Ok(cmd) = Command::decode(&data) {
-                                        let line = command::command_line(&cmd);
+                                        let line = spec::command_line(&cmd);
                                         eprintln!("gimbalctl sim: {}: {line}", c.peer);
                                     }
                                 }
@@ -218,7 +218,7 @@ pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
                     // Each command once, not every repeat of a rate hold.
                     Some(cmd) if last_logged != Some(cmd) => {
                         last_logged = Some(cmd);
-                        eprintln!("gimbalctl sim: {path}: {}", command::command_line(&cmd));
+                        eprintln!("gimbalctl sim: {path}: {}", spec::command_line(&cmd));
                     }
                     _ => {}
                 }

@@ -32,8 +32,8 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Paragraph};
 use ratatui::Terminal;
 
-use crate::command;
 use crate::error::Failure;
+use crate::spec;
 use crate::transport::{clock, Job, Mode, Session, Target};
 
 /// How long the loop waits for a key before looking at the socket and the link again.
@@ -302,7 +302,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                             Ok(()) => {
                                 if panel.held != Some(r) {
                                     panel.last_sent =
-                                        command::command_line(&GimbalCommand::Rate(r).into());
+                                        spec::command_line(&GimbalCommand::Rate(r).into());
                                 }
                                 panel.held = Some(r);
                             }
@@ -320,7 +320,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                                 if cmd.is_pointing() {
                                     panel.held = None;
                                 }
-                                panel.last_sent = command::command_line(&cmd);
+                                panel.last_sent = spec::command_line(&cmd);
                             }
                             Err(_) => panel.last_event = "queue full: command not sent".into(),
                         }
