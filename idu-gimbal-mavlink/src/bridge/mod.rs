@@ -13,7 +13,7 @@ use mavio::dialects::common::enums::MavResult;
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::Message;
 
-use crate::camera::{Camera, CameraConfig};
+use crate::camera::{CameraComponent, CameraConfig};
 use crate::capture::Vantage;
 use crate::framing::{self, Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::gimbal::GimbalControl;
@@ -182,7 +182,7 @@ pub(crate) struct State {
     pub(crate) last_flags: u16,
     /// The pose last commanded, for the status flags.
     pub(crate) pose: Pose,
-    camera: Option<Camera>,
+    camera: Option<CameraComponent>,
     pub(crate) stats: BridgeStats,
 }
 
@@ -192,7 +192,7 @@ impl<G: GimbalControl> Bridge<G> {
         let camera = config
             .camera
             .as_ref()
-            .map(|c| Camera::new(c, config.gimbal_component));
+            .map(|c| CameraComponent::new(c, config.gimbal_component));
         let system_id = config.system_id.unwrap_or(1);
         let status_ms = config.attitude_status_ms;
         #[allow(unused_mut)]
@@ -428,7 +428,7 @@ impl State {
         &mut self,
         gimbal: &mut G,
         now: Instant,
-        f: impl FnOnce(&mut Camera, &CameraConfig, &mut G, &mut Tx<'_>) -> R,
+        f: impl FnOnce(&mut CameraComponent, &CameraConfig, &mut G, &mut Tx<'_>) -> R,
     ) -> Option<R> {
         let vantage = self.vantage(gimbal, now);
         let State {

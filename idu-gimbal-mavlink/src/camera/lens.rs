@@ -34,7 +34,7 @@ use mavio::dialects::common::enums::{CameraZoomType, MavResult, SetFocusType};
 
 use crate::gimbal::GimbalControl;
 
-use super::{Camera, CameraConfig};
+use super::{CameraComponent, CameraConfig};
 
 /// `kind` is the enum value `e` (a command's float param).
 fn is(kind: f32, e: u8) -> bool {
@@ -79,7 +79,7 @@ pub(crate) fn focus<G: GimbalControl>(gimbal: &mut G, params: [f32; 4]) -> MavRe
 /// The most zoom steps sent to the gimbal for one `ZOOM_TYPE_STEP`.
 const MAX_STEPS: usize = 5;
 
-impl Camera {
+impl CameraComponent {
     pub(crate) fn zoom<G: GimbalControl>(
         &mut self,
         gimbal: &mut G,

@@ -253,9 +253,9 @@ pub(crate) enum Message {
     ParamSet(crate::codec::param_ext::ParamSet),
 }
 
-/// The camera's state.
+/// The MAVLink camera component's state (the RTSP address builder is `video::Camera`).
 #[derive(Clone, Debug)]
-pub(crate) struct Camera {
+pub(crate) struct CameraComponent {
     /// The gimbal device's component id, for `CAMERA_INFORMATION.gimbal_device_id`.
     gimbal_device_id: u8,
     /// The zoom ratio last set; NaN when unknown (after a continuous zoom).
@@ -357,9 +357,9 @@ fn whole_i32(v: f32) -> Option<i32> {
     (v.is_finite() && v == libm::truncf(v) && libm::fabsf(v) < 2_147_483_648.0).then_some(v as i32)
 }
 
-impl Camera {
+impl CameraComponent {
     pub(crate) fn new(config: &CameraConfig, gimbal_device_id: u8) -> Self {
-        Camera {
+        CameraComponent {
             gimbal_device_id,
             zoom: 1.0,
             mode: CameraMode::Image,
@@ -671,7 +671,7 @@ impl Camera {
         }
     }
 
-    /// Whether [`Camera::poll`] has anything to do at `now`: images due or asked for again,
+    /// Whether [`CameraComponent::poll`] has anything to do at `now`: images due or asked for again,
     /// streams or parameters still to describe, a burst read, the tracking status.
     pub(crate) fn has_work(&self, now: Instant) -> bool {
         self.resend.is_some()
