@@ -50,12 +50,13 @@ use idu_gimbal::link::{Config, Link};
 use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::wire::postback::GimbalType;
+use idu_gimbal::GimbalControl;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::FrameReader;
 use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
-use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
+use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::error::Failure;
 use crate::transport::{clock, Job, Mode, SerialSpec, Session, StreamPort, Target};

@@ -5,9 +5,12 @@
 //!
 //! `no_std`, allocation-free, `forbid(unsafe_code)`, and sans-IO like the core: MAVLink 2
 //! bytes in ([`Bridge::receive`]), MAVLink 2 bytes out ([`Bridge::transmit_bytes`]), time
-//! passed in ([`Bridge::poll`]); it drives the gimbal through [`GimbalControl`], implemented
-//! for the core's links and drivers on either transport (CAN or UART), and never reads a
-//! clock.
+//! passed in ([`Bridge::poll`]); it drives the gimbal through the core's
+//! [`GimbalControl`](idu_gimbal::GimbalControl), implemented for its links and drivers on
+//! either transport (CAN or UART), and never reads a clock. Where the transport carries no
+//! vehicle frames (the UART), the vehicle's data is kept for point-at and headings stay
+//! nose-referenced, which the status and the setpoint conversion read from
+//! [`GimbalControl::north_referenced`](idu_gimbal::GimbalControl::north_referenced).
 //!
 //! # What it does
 //!
@@ -91,7 +94,6 @@ pub mod codec;
 pub mod command;
 pub mod framing;
 pub mod ftp;
-pub mod gimbal;
 mod setpoint;
 #[cfg(feature = "signing")]
 pub mod signing;
@@ -101,5 +103,4 @@ mod tx;
 pub use bridge::{
     Bridge, BridgeConfig, BridgeStats, SerialInput, ANSWER_ROOM, AUTOPILOT_SILENCE_MS,
 };
-pub use gimbal::GimbalControl;
 pub use mavio;

@@ -30,9 +30,9 @@ use mavio::dialects::common::messages::GimbalDeviceSetAttitude;
 
 use crate::attitude::{is_nan_quaternion, YawPitch};
 use crate::bridge::State;
-use crate::gimbal::GimbalControl;
 use crate::status::Pose;
 use crate::tx::bump;
+use idu_gimbal::GimbalControl;
 
 /// Whether `flags` put a setpoint's yaw in the earth frame.
 fn earth_yaw(flags: GimbalDeviceFlags) -> bool {

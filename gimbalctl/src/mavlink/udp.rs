@@ -6,9 +6,10 @@ use std::io::ErrorKind;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::Instant as StdInstant;
 
+use idu_gimbal::GimbalControl;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
-use idu_gimbal_mavlink::{Bridge, GimbalControl};
+use idu_gimbal_mavlink::Bridge;
 
 use super::peer_log::{PeerEvent, PeerLog};
 use super::peers::{Change, Peers, PEER_TIMEOUT};

@@ -12,8 +12,8 @@ use mavio::dialects::common::messages::{
 
 use super::{State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
 use crate::attitude;
-use crate::gimbal::GimbalControl;
 use crate::tx::{bump, push_counted};
+use idu_gimbal::GimbalControl;
 
 /// How often to ask the autopilot again for a stream that does not come.
 const STREAM_RETRY_MS: u32 = 5_000;

@@ -15,9 +15,9 @@ use idu_gimbal::wire::control::Pitch;
 
 use super::State;
 use crate::codec;
-use crate::gimbal::GimbalControl;
 use crate::status;
 use crate::tx::name;
+use idu_gimbal::GimbalControl;
 
 /// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
 /// ±325.00° on the 3.5× models (the document's Motor_psi scope,

@@ -21,10 +21,10 @@ use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
 use crate::framing::{Check, ReceivedFrame};
-use crate::gimbal::GimbalControl;
 #[cfg(feature = "roi")]
 use crate::status::Pose;
 use crate::tx::{bump, id_of};
+use idu_gimbal::GimbalControl;
 
 /// Decodes `frame` as `M` when its CRC holds with `M`'s `CRC_EXTRA`.
 fn decode<M>(frame: &ReceivedFrame<'_>) -> Option<M>

@@ -16,9 +16,9 @@ use mavio::Message;
 use crate::camera::{CameraComponent, CameraConfig};
 use crate::capture::Vantage;
 use crate::framing::{self, Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
-use crate::gimbal::GimbalControl;
 use crate::status::Pose;
 use crate::tx::{bump, push_ack, push_counted, push_encoded, Tx};
+use idu_gimbal::GimbalControl;
 
 mod autopilot;
 mod device;

@@ -5,7 +5,7 @@ use core::ops::Range;
 use idu_gimbal::Instant;
 
 use super::Bridge;
-use crate::gimbal::GimbalControl;
+use idu_gimbal::GimbalControl;
 
 /// What a firmware read from the autopilot's serial line (a UART) for the bridge: the bytes
 /// the bridge has not yet taken are held here and offered again, first, at the next

@@ -32,7 +32,7 @@ use idu_gimbal::wire::control::{Command as GimbalCmd, Focus, GimbalCommand, Zoom
 use idu_gimbal::wire::postback::GimbalType;
 use mavio::dialects::common::enums::{CameraZoomType, MavResult, SetFocusType};
 
-use crate::gimbal::GimbalControl;
+use idu_gimbal::GimbalControl;
 
 use super::{CameraComponent, CameraConfig};
 

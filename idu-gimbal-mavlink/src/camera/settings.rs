@@ -35,8 +35,8 @@ use mavio::dialects::common::messages::{ParamExtAck, ParamExtValue};
 
 use crate::codec::param_ext::{self, ParamSet};
 use crate::framing::MAX_FRAME_LEN;
-use crate::gimbal::GimbalControl;
 use crate::tx::{name, Tx};
+use idu_gimbal::GimbalControl;
 
 /// A parameter of the definition.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

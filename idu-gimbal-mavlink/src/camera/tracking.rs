@@ -49,8 +49,8 @@ use mavio::dialects::common::enums::{
 use mavio::dialects::common::messages::CameraTrackingImageStatus;
 
 use crate::command::Interval;
-use crate::gimbal::GimbalControl;
 use crate::tx::Tx;
+use idu_gimbal::GimbalControl;
 
 /// The status's period while tracking when no interval was set, ms: QGroundControl's own
 /// ask (500,000 µs).

@@ -5,11 +5,12 @@
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand};
 use idu_gimbal::wire::ids;
+use idu_gimbal::GimbalControl;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
-use idu_gimbal_mavlink::{Bridge, BridgeConfig, GimbalControl};
+use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt, Heartbeat,
