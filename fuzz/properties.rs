@@ -207,7 +207,7 @@ pub fn link(data: &[u8]) {
     take_events(&mut link, &mut told_up);
     assert_eq!(
         told_up,
-        link.is_up(),
+        link.is_link_up(),
         "the last transition told is not the link's state"
     );
     assert_eq!(

@@ -182,7 +182,7 @@ impl<const Q: usize, const T: usize> GimbalControl for Link<Q, T> {
     }
     #[inline]
     fn is_link_up(&self) -> bool {
-        self.is_up()
+        Link::is_link_up(self)
     }
     #[inline]
     fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)> {

@@ -887,6 +887,6 @@ fn an_image_taken_while_the_gimbal_link_is_down_has_no_attitude() {
     // the last postback's angles are stale, the attitude unknown.
     b.receive_all(&frame(AP, 1, &autopilot_state(0.0)), t(1_600));
     b.gimbal_mut().poll(t(1_600));
-    assert!(!b.gimbal().is_up());
+    assert!(!b.gimbal().is_link_up());
     assert!(image_q(&mut b, 1_610).iter().all(|v| v.is_nan()));
 }

@@ -172,10 +172,10 @@ fn postback_window_expiry_and_link_health() {
     link.poll(at(t0 + 301));
     assert_eq!(link.next_deadline(at(t0 + 301)), at(t0 + 1701));
     link.poll(at(t0 + 1700));
-    assert!(link.is_up());
+    assert!(link.is_link_up());
     assert_eq!(link.next_deadline(at(t0 + 1700)), at(t0 + 1701));
     link.poll(at(t0 + 1701));
-    assert!(!link.is_up());
+    assert!(!link.is_link_up());
 }
 
 #[test]
@@ -414,7 +414,7 @@ impl<const Q: usize, const T: usize> Pair<Q, T> {
             "stats at {}",
             now.as_millis()
         );
-        prop_assert_eq!(self.reference.is_up(), self.lazy.is_up());
+        prop_assert_eq!(self.reference.is_link_up(), self.lazy.is_link_up());
         prop_assert_eq!(
             self.reference.is_rate_holding(),
             self.lazy.is_rate_holding()

@@ -105,7 +105,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     /// Whether a valid postback arrived within the link timeout (as of the last poll).
-    pub fn is_up(&self) -> bool {
+    pub fn is_link_up(&self) -> bool {
         self.status.is_up()
     }
 

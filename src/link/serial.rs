@@ -365,7 +365,7 @@ mod tests {
         assert_eq!(l.link().latest_postback(T0), None);
         assert_eq!(l.stats().link.crc_errors, 1);
         assert_eq!(l.stats().link.postbacks, 0);
-        assert!(!l.link().is_up());
+        assert!(!l.link().is_link_up());
     }
 
     #[test]

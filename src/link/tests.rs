@@ -321,7 +321,7 @@ fn a_waiting_zero_rate_frame_gives_way_to_a_newer_pointing_instruction() {
 #[test]
 fn link_up_down_and_latest_postback() {
     let mut link: Link = Link::new(Config::default());
-    assert!(!link.is_up());
+    assert!(!link.is_link_up());
     postback_frames(&mut link, 1000, -100);
     assert_eq!(link.next_event(), Some(Event::LinkUp));
     assert_eq!(link.next_event(), Some(Event::Postback));
@@ -338,9 +338,9 @@ fn link_up_down_and_latest_postback() {
         Some((-100, 300))
     );
     link.poll(Instant::from_millis(2500));
-    assert!(link.is_up(), "exactly 1.5 s is still up");
+    assert!(link.is_link_up(), "exactly 1.5 s is still up");
     link.poll(Instant::from_millis(2501));
-    assert!(!link.is_up());
+    assert!(!link.is_link_up());
     assert_eq!(link.next_event(), Some(Event::LinkDown));
     postback_frames(&mut link, 3000, -200);
     assert_eq!(link.next_event(), Some(Event::LinkUp));
@@ -370,7 +370,7 @@ fn events_wait_as_a_set_and_none_is_lost() {
     );
     // Down and up again between two reads: both, in order, ending in the current state.
     link.poll(Instant::from_millis(2591));
-    assert!(!link.is_up());
+    assert!(!link.is_link_up());
     postback_frames(&mut link, 3000, 0);
     assert_eq!(link.next_event(), Some(Event::LinkDown));
     assert_eq!(link.next_event(), Some(Event::LinkUp));
@@ -774,7 +774,7 @@ mod fast_path {
                 if t.wrapping_sub(start).is_multiple_of(drain_every) {
                     prop_assert_eq!(drain(&mut fast), drain(&mut full), "at {}", t);
                     prop_assert_eq!(fast.stats(), full.stats(), "at {}", t);
-                    prop_assert_eq!(fast.is_up(), full.is_up(), "at {}", t);
+                    prop_assert_eq!(fast.is_link_up(), full.is_link_up(), "at {}", t);
                 }
                 t = t.wrapping_add(1);
             }

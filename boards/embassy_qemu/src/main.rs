@@ -169,7 +169,7 @@ async fn link_task() {
         while let Some(event) = link.next_event() {
             let r = match event {
                 Event::Postback => match link.latest_postback(now) {
-                    Some((p, _age)) => Report::Postback(p, link.is_up()),
+                    Some((p, _age)) => Report::Postback(p, link.is_link_up()),
                     None => continue,
                 },
                 other => Report::Event(other),
