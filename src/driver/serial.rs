@@ -56,8 +56,9 @@ use core::fmt;
 
 use crate::control::Transport;
 use crate::link::serial::{SerialLink, SerialStats};
-use crate::link::Config;
+use crate::link::{Config, LinkStats};
 use crate::time::Instant;
+use crate::wire::serial::StreamStats;
 
 /// A byte stream that never blocks: the contract [`SerialGimbal`] needs of a UART.
 pub trait SerialPort {
@@ -235,13 +236,20 @@ pub struct PortErrors {
     pub write: u32,
 }
 
-/// Everything [`SerialGimbal`] counts: its serial link's counters and the port's errors
-/// (the shape of every driver's `stats()`: `link`, then its own errors).
+/// Everything [`SerialGimbal`] counts: the link's counters, then the serial port's (the
+/// shape of every driver's `stats()`: `link`, then what its transport adds).
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SerialGimbalStats {
-    /// The serial link's counters: the link's, the stream parser's, bytes each way.
-    pub link: SerialStats,
+    /// The link's counters (as [`SerialStats::link`]: postbacks and CRC errors come from the
+    /// stream parser).
+    pub link: LinkStats,
+    /// The stream parser's counters: frames, CRC errors, invalid frames, skipped bytes.
+    pub stream: StreamStats,
+    /// Bytes received.
+    pub bytes_received: u32,
+    /// Bytes written.
+    pub bytes_sent: u32,
     /// Port errors by direction.
     pub port_errors: PortErrors,
 }
@@ -411,8 +419,17 @@ impl<P: SerialPort, const Q: usize> SerialGimbal<P, Q> {
 
     /// All counters.
     pub fn stats(&self) -> SerialGimbalStats {
+        let SerialStats {
+            link,
+            stream,
+            bytes_received,
+            bytes_sent,
+        } = self.link.stats();
         SerialGimbalStats {
-            link: self.link.stats(),
+            link,
+            stream,
+            bytes_received,
+            bytes_sent,
             port_errors: self.errors,
         }
     }

@@ -160,7 +160,7 @@ impl<'a> Rig for SerialRig<'a> {
         let _ = self.sim.serve(&mut self.sim_port, now);
     }
     fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.link.postbacks
+        self.gimbal.stats().link.postbacks
     }
     fn send_text(&mut self, _text: &[u8]) -> Option<bool> {
         None
@@ -172,7 +172,7 @@ impl<'a> Rig for SerialRig<'a> {
         self.sim.sim().stats()
     }
     fn summary(&self, out: &mut dyn Write) {
-        let s = self.gimbal.stats().link;
+        let s = self.gimbal.stats();
         let _ = writeln!(
             out,
             "bytes sent {} received {}; frames sent {}; postbacks {}; bytes skipped {}, CRC errors {}",

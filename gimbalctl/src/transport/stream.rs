@@ -303,7 +303,7 @@ impl Session for StreamSession {
     }
 
     fn poll_once(&mut self, now: Instant) -> Result<(), Failure> {
-        self.before = self.gimbal.stats().link.bytes_received;
+        self.before = self.gimbal.stats().bytes_received;
         match self.gimbal.poll(now) {
             Ok(()) => Ok(()),
             Err(PortError::Read(Ended(why)) | PortError::Write(Ended(why))) => {
@@ -313,20 +313,15 @@ impl Session for StreamSession {
     }
 
     fn drained(&self) -> bool {
-        self.gimbal
-            .stats()
-            .link
-            .bytes_received
-            .wrapping_sub(self.before)
-            < self.per_poll
+        self.gimbal.stats().bytes_received.wrapping_sub(self.before) < self.per_poll
     }
 
     fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.link.postbacks
+        self.gimbal.stats().link.postbacks
     }
 
     fn sent(&self) -> u64 {
-        u64::from(self.gimbal.stats().link.bytes_sent) / 24
+        u64::from(self.gimbal.stats().bytes_sent) / 24
     }
 
     fn has_transmit(&self) -> bool {
@@ -338,7 +333,7 @@ impl Session for StreamSession {
     }
 
     fn counters(&self) -> [String; 3] {
-        let s = self.gimbal.stats().link;
+        let s = self.gimbal.stats();
         let garbage = Self::garbage(&s.stream);
         [
             format!(
@@ -370,7 +365,7 @@ impl Session for StreamSession {
     }
 
     fn take_notes(&mut self) -> Vec<String> {
-        let s = self.gimbal.stats().link.stream;
+        let s = self.gimbal.stats().stream;
         let new = Self::garbage(&s).saturating_sub(Self::garbage(&self.noted));
         if new == 0 {
             return Vec::new();

@@ -27,6 +27,6 @@ fn main() -> ! {
         footprint::command_surface(gimbal, now, |_| false);
         output(u32::from(gimbal.poll(now).is_ok()));
         footprint::events(gimbal, now);
-        output(gimbal.stats().link.link.postbacks);
+        output(gimbal.stats().link.postbacks);
     }
 }

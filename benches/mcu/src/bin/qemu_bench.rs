@@ -651,7 +651,7 @@ mod fw {
             );
             qemu::exit(false);
         }
-        let stats = gimbal.stats().link;
+        let stats = gimbal.stats();
         if stats.link.postbacks != 3 * N + 3 * N
             || stats.stream.crc_errors != 0
             || stats.stream.skipped_bytes != 0
