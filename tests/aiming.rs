@@ -621,7 +621,7 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
 
 #[test]
 fn an_earth_yaw_without_a_fresh_vehicle_heading_is_refused() {
-    let mut link: Link = Link::new(Config::default());
+    let mut link = alone();
     let now = Instant::from_millis(5000);
     assert_eq!(
         link.aim(level(earth(10.0)), now),
@@ -769,8 +769,7 @@ fn a_point_at_moving_with_the_vehicle_leaves_the_gimbal_to_a_tracker_started_thr
 #[test]
 fn an_earth_yaw_waits_for_the_vehicle_heading_while_it_is_stale() {
     // The link alone: the aim's state as the attitude goes stale and comes back.
-    let mut link: Link = Link::new(Config::default());
-    let at = |ms| Instant::from_millis(ms);
+    let mut link = alone();
     link.set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), at(0));
     link.aim(level(earth(100.0)), at(0)).unwrap();
     // Nose-referenced (no attitude has reached the gimbal yet when the aim went): 100 - 30.
@@ -809,8 +808,7 @@ fn getting_closer_means_by_more_than_the_tolerance() {
     // against the one before: an error that shrank by more than the tolerance is getting
     // closer; one that shrank by the tolerance or less is an attempt (a re-command).
     for (second_motor, recommands) in [(51, 0), (50, 1)] {
-        let mut link: Link = Link::new(Config::default());
-        let at = Instant::from_millis;
+        let mut link = alone();
         postback(&mut link, 0, false, at(0));
         link.aim(level(vehicle(10.0)), at(0)).unwrap();
         assert_eq!(poll_headings(&mut link, 0), [100]);
@@ -833,7 +831,7 @@ fn an_aim_within_the_dead_band_of_the_one_held_changes_nothing() {
     // The link alone; the default dead-band is 0.2° (`aim_deadband_mdeg` 200): an aim that
     // far from the one held on each axis is the same aim (a setpoint stream re-sending
     // it), a tenth of a degree more is a new one, commanded at once.
-    let mut link: Link = Link::new(Config::default());
+    let mut link = alone();
     let aim = |yaw: f32, pitch: f32| Aim {
         yaw: vehicle(yaw),
         pitch: Pitch::new(pitch).unwrap(),
@@ -893,8 +891,7 @@ fn postback(link: &mut Link, motor_cdeg: i16, tracking: bool, now: Instant) {
 fn a_tracker_started_through_the_link_owns_the_gimbal_until_its_postbacks_let_go() {
     // The link alone, the postbacks made here (the gimbal's motor stays at 0, 10° off the
     // aim, all along: the tracker holds it elsewhere).
-    let mut link: Link = Link::new(Config::default());
-    let at = Instant::from_millis;
+    let mut link = alone();
     postback(&mut link, 0, false, at(0));
     link.aim(level(vehicle(10.0)), at(0)).unwrap();
     assert_eq!(poll_headings(&mut link, 0), [100]);
@@ -927,8 +924,7 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
     // The link alone, north-referenced (the attitude pushed): a vehicle yaw's command is
     // the yaw plus the vehicle's heading, so a turn must re-send it; a turn within the
     // dead-band (0.2°) need not.
-    let mut link: Link = Link::new(Config::default());
-    let at = Instant::from_millis;
+    let mut link = alone();
     let heading = |link: &mut Link, deg: f32, ms: u32| {
         link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
     };
@@ -962,8 +958,7 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
 fn an_aim_waiting_for_room_is_not_judged_before_it_is_sent() {
     // The link alone, its command queue (8) left with one slot: the aim's two commands wait
     // while postbacks (the gimbal far off the aim) come in at every look.
-    let mut link: Link = Link::new(Config::default());
-    let at = Instant::from_millis;
+    let mut link = alone();
     for _ in 0..7 {
         link.send(GimbalCommand::Zoom(idu_gimbal::wire::control::Zoom::Stop))
             .unwrap();
@@ -1021,4 +1016,14 @@ fn a_point_at_re_aims_only_past_the_dead_band() {
     rig.position = Some(at(1.5));
     rig.run(2000);
     assert_eq!(rig.headings.len(), sent + 1, "0.43°: past it");
+}
+
+/// The link alone (no gimbal: the tests give its postbacks by hand), default configuration.
+fn alone() -> Link {
+    Link::new(Config::default())
+}
+
+/// The instant `ms` milliseconds from the start.
+fn at(ms: u32) -> Instant {
+    Instant::from_millis(ms)
 }
