@@ -65,7 +65,22 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     /// Queues a text message, all of it or nothing.
+    ///
+    /// A link without text slots (`T` = 0, as the serial link's, whose transport carries no
+    /// text) has nothing to queue it in: calling this on one does not build.
+    ///
+    /// ```compile_fail
+    /// use idu_gimbal::link::{Config, Link};
+    /// let mut no_text: Link<8, 0> = Link::new(Config::default());
+    /// let _ = no_text.send_text(b"hello");
+    /// ```
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
+        const {
+            assert!(
+                T > 0,
+                "this link has no text slots (T = 0): its transport carries no text"
+            )
+        };
         let frames = wire_text::chunks(text).map_err(TextQueueError::Invalid)?;
         let free = self.tx.text_free();
         let slots = frames.map(|f| queue::TextSlot {

@@ -22,8 +22,8 @@
 //! 0), and the gimbal, never receiving the vehicle attitude, references headings to the
 //! **nose**. Vehicle data given to the link (see [`Link::set_attitude`]) is kept for
 //! [`Link::point_at`] only, which then aims relative to the nose from the vehicle heading.
-//! The link has no text slots, so [`Link::send_text`] through its
-//! [`Transport::link_mut`](crate::Transport::link_mut) is refused with [`TextQueueError::NoRoom`](crate::link::TextQueueError::NoRoom).
+//! The link has no text slots (a `Link<Q, 0>`), so [`Link::send_text`] on it does not
+//! build.
 //!
 //! ```
 //! use idu_gimbal::link::serial::SerialLink;
@@ -258,7 +258,7 @@ impl<const Q: usize> crate::control::Transport for SerialLink<Q> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::{Event, TextQueueError};
+    use crate::link::Event;
     use crate::wire::control::{Command, GimbalCommand, Photo, Pitch};
     use crate::wire::postback::Postback;
     use crate::wire::vehicle::{Altitude, Attitude, Gps};
@@ -386,15 +386,5 @@ mod tests {
         );
         // The gimbal gets no attitude, so it references headings to the nose.
         assert!(!l.link().north_referenced(T0));
-    }
-
-    #[test]
-    fn text_has_no_slots_on_the_serial_link() {
-        let mut l: SerialLink = SerialLink::new(Config::default());
-        assert_eq!(
-            l.link_mut().send_text(b"hello"),
-            Err(TextQueueError::NoRoom { needed: 1, free: 0 })
-        );
-        assert!(!l.has_transmit());
     }
 }
