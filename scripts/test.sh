@@ -91,7 +91,10 @@ stage_fast() {
     # contents are fixed by each crate's `include`. cargo unpacks the packaged crates into
     # its registry cache under a name keyed by the target directory's path and the version,
     # and reuses what it finds there: a copy from an earlier run of an older tree would be
-    # built instead of this one. Those copies of these two crates go first.
+    # built instead of this one. Those copies of these two crates go first, and so do their
+    # builds in target/ (where the verification builds): a registry crate is never rebuilt
+    # for a change of its content, so the bridge would link an older core's build.
+    cargo clean --quiet -p idu-gimbal -p idu-gimbal-mavlink
     cargo_home=${CARGO_HOME:-$HOME/.cargo}
     rm -rf "$cargo_home"/registry/src/-*/idu-gimbal-[0-9]* \
         "$cargo_home"/registry/src/-*/idu-gimbal-mavlink-[0-9]* \
