@@ -938,13 +938,16 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
     poll_headings(&mut link, 50);
     assert!(link.aim_state().unwrap().on_target);
     let mut sent = Vec::new();
-    for ms in (60..=600).step_by(10) {
-        heading(&mut link, 0.1, ms);
-        sent.extend(poll_headings(&mut link, ms));
+    // 0.1°, then exactly the dead-band: nothing.
+    for (deg, from) in [(0.1, 60), (0.2, 610)] {
+        for ms in (from..from + 550).step_by(10) {
+            heading(&mut link, deg, ms);
+            sent.extend(poll_headings(&mut link, ms));
+        }
+        assert_eq!(sent, [], "{deg}° of turn");
     }
-    assert_eq!(sent, [], "0.1° of turn");
     assert!(link.aim_state().unwrap().on_target);
-    for ms in (610..=1000).step_by(10) {
+    for ms in (1160..=1600).step_by(10) {
         heading(&mut link, 0.3, ms);
         sent.extend(poll_headings(&mut link, ms));
     }

@@ -7,7 +7,7 @@
 
 use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _};
 use idu_gimbal::driver::{DriverError, PortError};
-use idu_gimbal::link::{Config, Link, QueueFull, TextQueueError};
+use idu_gimbal::link::{AimError, Config, Link, QueueFull, TextQueueError};
 use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::ids;
@@ -48,6 +48,11 @@ mod errors {
         assert_eq!(
             e.to_string(),
             format!("CAN driver error: {}", ErrorKind::Overrun)
+        );
+        assert_eq!(
+            AimError::NoVehicleHeading.to_string(),
+            "an earth-frame yaw needs the vehicle's heading, and none is fresh \
+             (set the vehicle attitude first)"
         );
         let read: PortError<&str, u8> = PortError::Read("overrun");
         assert_eq!(read.to_string(), "serial read error: \"overrun\"");
