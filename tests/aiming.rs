@@ -1030,3 +1030,31 @@ fn alone() -> Link {
 fn at(ms: u32) -> Instant {
     Instant::from_millis(ms)
 }
+
+#[test]
+fn a_turn_and_an_off_postback_at_the_same_look_re_send_the_aim_at_that_look() {
+    // The link alone, north-referenced, polled every 10 ms; the attitude is pushed every
+    // 100 ms and the loop looks every 50. Two reasons to re-send at the 150 ms look: the
+    // attitude frame taken at 100 ms carries a 0.3° turn, and the postback of 110 ms is off
+    // the aim and no closer than the one before. One command goes, at that look.
+    let mut link = alone();
+    let heading = |link: &mut Link, deg: f32, ms: u32| {
+        link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
+    };
+    heading(&mut link, 0.0, 0);
+    poll_headings(&mut link, 0);
+    link.aim(level(vehicle(10.0)), at(0)).unwrap();
+    assert_eq!(poll_headings(&mut link, 0), [100]);
+    let mut sent = Vec::new();
+    for ms in (10..=300).step_by(10) {
+        heading(&mut link, if ms < 95 { 0.0 } else { 0.3 }, ms);
+        match ms {
+            // On target, then 1° off.
+            10 => postback(&mut link, 1000, false, at(ms)),
+            110 => postback(&mut link, 900, false, at(ms)),
+            _ => {}
+        }
+        sent.extend(poll_headings(&mut link, ms).into_iter().map(|h| (ms, h)));
+    }
+    assert_eq!(sent, [(150, 103)]);
+}
