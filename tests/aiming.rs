@@ -1058,3 +1058,35 @@ fn a_turn_and_an_off_postback_at_the_same_look_re_send_the_aim_at_that_look() {
     }
     assert_eq!(sent, [(150, 103)]);
 }
+
+#[test]
+fn a_point_at_waits_for_both_the_position_and_the_altitude() {
+    // The link alone: with only one of the two fresh, no aim is computed (it would take the
+    // other from nothing); with both, the aim goes.
+    let target = Position::new(47.0018, 8.0, 400.0).unwrap();
+    let gps = Gps::new(47.0, 8.0).unwrap();
+    let altitude = Altitude::new(500.0).unwrap();
+    for gps_first in [true, false] {
+        let mut link = alone();
+        link.point_at(target);
+        let mut sent = Vec::new();
+        for ms in (0..=1000).step_by(10) {
+            link.set_attitude(Attitude::new(0.0, 0.0, 0.0).unwrap(), at(ms));
+            if gps_first {
+                link.set_gps(gps, at(ms));
+            } else {
+                link.set_altitude(altitude, at(ms));
+            }
+            sent.extend(poll_headings(&mut link, ms));
+        }
+        assert_eq!(sent, [], "gps first: {gps_first}");
+        assert_eq!(link.aim_state(), None);
+        link.set_gps(gps, at(1010));
+        link.set_altitude(altitude, at(1010));
+        for ms in (1010..=1200).step_by(10) {
+            sent.extend(poll_headings(&mut link, ms));
+        }
+        // Due north of the vehicle, its heading 0: a heading command of 0.
+        assert_eq!(sent, [0], "gps first: {gps_first}");
+    }
+}
