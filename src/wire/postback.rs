@@ -613,6 +613,12 @@ pub(crate) mod tests {
             (0x0C, [0x21, 0xFE], 0x0F)
         );
         assert!(view.reserved_is_zero());
+        // The view's fields, and a postback read from it, are the sample's.
+        assert_eq!(
+            (view.data_id(), view.gimbal_type(), view.tracking_flag()),
+            (DataId::Attitude, GimbalType::X30T, 1)
+        );
+        assert_eq!(Postback::from_packet(&view), p);
     }
 
     #[test]
