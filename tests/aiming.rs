@@ -1069,6 +1069,8 @@ fn a_point_at_waits_for_both_the_position_and_the_altitude() {
     for gps_first in [true, false] {
         let mut link = alone();
         link.point_at(target);
+        // A ground target is fixed in the earth frame, aim or not yet.
+        assert!(link.holds_earth_yaw());
         let mut sent = Vec::new();
         for ms in (0..=1000).step_by(10) {
             link.set_attitude(Attitude::new(0.0, 0.0, 0.0).unwrap(), at(ms));
