@@ -897,6 +897,12 @@ fn a_tracker_started_through_the_link_owns_the_gimbal_until_its_postbacks_let_go
     assert_eq!(poll_headings(&mut link, 0), [100]);
     let track = TrackingBox::new(ImagePoint::new(4096, 4096).unwrap(), 256.0, 256.0).unwrap();
     link.send(GimbalCommand::StartTracking(track)).unwrap();
+    // Yielded, and nothing else about the aim changed.
+    let state = link.aim_state().unwrap();
+    assert!(
+        state.yielded_to_tracker && !state.waiting_for_heading,
+        "{state:?}"
+    );
     poll_headings(&mut link, 0);
     // The first postback after the start may not say it tracks yet: still the tracker's.
     postback(&mut link, 0, false, at(10));
