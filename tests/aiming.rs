@@ -237,6 +237,18 @@ impl Rig {
     fn motor(&self) -> f32 {
         self.state().motor_yaw_deg
     }
+
+    /// The simulated gimbal tracks, the aim has yielded to its tracker, and no heading
+    /// command went since `sent` of them had.
+    fn assert_tracker_owns(&self, sent: usize, what: &str) {
+        assert!(self.state().tracking, "{what}");
+        assert!(self.aim_state().unwrap().yielded_to_tracker, "{what}");
+        assert_eq!(
+            self.headings.len(),
+            sent,
+            "{what}: nothing sent while tracking"
+        );
+    }
 }
 
 /// The vehicle's data into either link.
@@ -578,13 +590,7 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
             rig.aim(vehicle(0.0), 0.0).unwrap();
             rig.turn(20.0, 30.0, |_| {});
             rig.run(3000);
-            assert!(rig.state().tracking, "{what}");
-            assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
-            assert_eq!(
-                rig.headings.len(),
-                sent,
-                "{what}: nothing sent while tracking"
-            );
+            rig.assert_tracker_owns(sent, &what);
             // The target, 15° right of the nose when tracking began, is 5° left of it once
             // the vehicle has turned 20° right: the tracker turned the gimbal there, on CAN,
             // where the simulated gimbal sees the vehicle turn (on the UART it cannot).
@@ -745,13 +751,7 @@ fn a_point_at_moving_with_the_vehicle_leaves_the_gimbal_to_a_tracker_started_thr
             rig.position = Some((Gps::new(47.0, lon).unwrap(), Altitude::new(500.0).unwrap()));
             rig.tick();
         }
-        assert!(rig.state().tracking, "{what}");
-        assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
-        assert_eq!(
-            rig.headings.len(),
-            sent,
-            "{what}: nothing sent while tracking"
-        );
+        rig.assert_tracker_owns(sent, &what);
         // The tracker stopped: the aim at the target from where the vehicle is now.
         rig.send(GimbalCommand::StopTracking);
         rig.run(3000);
@@ -930,15 +930,7 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
     // The link alone, north-referenced (the attitude pushed): a vehicle yaw's command is
     // the yaw plus the vehicle's heading, so a turn must re-send it; a turn within the
     // dead-band (0.2°) need not.
-    let mut link = alone();
-    let heading = |link: &mut Link, deg: f32, ms: u32| {
-        link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
-    };
-    heading(&mut link, 0.0, 0);
-    poll_headings(&mut link, 0);
-    assert!(link.north_referenced(at(0)));
-    link.aim(level(vehicle(10.0)), at(0)).unwrap();
-    assert_eq!(poll_headings(&mut link, 0), [100]);
+    let mut link = aiming_north_referenced();
     // The gimbal is there (motor 10°): on target.
     postback(&mut link, 1000, false, at(10));
     poll_headings(&mut link, 50);
@@ -947,14 +939,14 @@ fn a_turn_within_the_dead_band_re_sends_nothing_and_one_past_it_re_sends_the_aim
     // 0.1°, then exactly the dead-band: nothing.
     for (deg, from) in [(0.1, 60), (0.2, 610)] {
         for ms in (from..from + 550).step_by(10) {
-            heading(&mut link, deg, ms);
+            set_heading(&mut link, deg, ms);
             sent.extend(poll_headings(&mut link, ms));
         }
         assert_eq!(sent, [], "{deg}° of turn");
     }
     assert!(link.aim_state().unwrap().on_target);
     for ms in (1160..=1600).step_by(10) {
-        heading(&mut link, 0.3, ms);
+        set_heading(&mut link, 0.3, ms);
         sent.extend(poll_headings(&mut link, ms));
     }
     assert_eq!(sent, [103], "0.3° of turn");
@@ -1043,17 +1035,10 @@ fn a_turn_and_an_off_postback_at_the_same_look_re_send_the_aim_at_that_look() {
     // 100 ms and the loop looks every 50. Two reasons to re-send at the 150 ms look: the
     // attitude frame taken at 100 ms carries a 0.3° turn, and the postback of 110 ms is off
     // the aim and no closer than the one before. One command goes, at that look.
-    let mut link = alone();
-    let heading = |link: &mut Link, deg: f32, ms: u32| {
-        link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
-    };
-    heading(&mut link, 0.0, 0);
-    poll_headings(&mut link, 0);
-    link.aim(level(vehicle(10.0)), at(0)).unwrap();
-    assert_eq!(poll_headings(&mut link, 0), [100]);
+    let mut link = aiming_north_referenced();
     let mut sent = Vec::new();
     for ms in (10..=300).step_by(10) {
-        heading(&mut link, if ms < 95 { 0.0 } else { 0.3 }, ms);
+        set_heading(&mut link, if ms < 95 { 0.0 } else { 0.3 }, ms);
         match ms {
             // On target, then 1° off.
             10 => postback(&mut link, 1000, false, at(ms)),
@@ -1097,4 +1082,21 @@ fn a_point_at_waits_for_both_the_position_and_the_altitude() {
         // Due north of the vehicle, its heading 0: a heading command of 0.
         assert_eq!(sent, [0], "gps first: {gps_first}");
     }
+}
+
+/// The vehicle's heading `deg` from north, measured at `ms`, level.
+fn set_heading(link: &mut Link, deg: f32, ms: u32) {
+    link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));
+}
+
+/// The link alone, north-referenced (an attitude of heading 0 pushed at 0 ms), holding a
+/// vehicle yaw of 10°: its command, 10° from north, sent at 0 ms.
+fn aiming_north_referenced() -> Link {
+    let mut link = alone();
+    set_heading(&mut link, 0.0, 0);
+    poll_headings(&mut link, 0);
+    assert!(link.north_referenced(at(0)));
+    link.aim(level(vehicle(10.0)), at(0)).unwrap();
+    assert_eq!(poll_headings(&mut link, 0), [100]);
+    link
 }
