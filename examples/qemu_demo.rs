@@ -1,16 +1,16 @@
 //! The firmware on an emulated STM32F405 (QEMU `netduinoplus2`) driving a simulated gimbal.
 //!
-//! The board has no CAN peripheral in QEMU, so the driver (`Gimbal`) and the simulated
+//! The board has no CAN peripheral in QEMU, so the link's port (`CanPort`) and the simulated
 //! gimbal (`sim::Simulator`) exchange frames over the crate's in-memory CAN bus
 //! (`mock::Bus`) inside the firmware. It plays the scripted session of
 //! `idu_firmware_support::session` (shared with `host_sim`): re-center, pitch -45°, heading
 //! 90°, a rate hold released to test the dead-man, zoom 10x, photo, recording on and off, a
 //! text message, with vehicle data pushed throughout. Then it plays the same session over the
-//! serial path: `SerialGimbal` and `sim::serial::SerialSimulator` on the in-memory serial
+//! serial path: `SerialPort` and `sim::serial::SerialSimulator` on the in-memory serial
 //! line (`mock::serial::Pipe`), where headings are nose-referenced and there is no text.
 //! Telemetry goes to the host's stdout through semihosting.
 //!
-//! **Clock.** Time is simulated: each loop iteration advances the driver's and the
+//! **Clock.** Time is simulated: each loop iteration advances the link's and the
 //! simulator's millisecond tick by exactly 1. Without `-icount`, QEMU's virtual clock (and so
 //! SysTick) follows the host's wall clock, which stalls and jumps with host load: a session
 //! timed by it would be neither reproducible nor faithful to a real board's 1 kHz tick. The
@@ -50,7 +50,7 @@ mod fw {
 
     // The scripted session; semihosting output and exit (its panic and HardFault handlers
     // exit with status 1).
-    use idu_firmware_support::session::{CanRig, DemoBus, DemoPipe, SerialRig, Session};
+    use idu_firmware_support::session::{CanRig, DemoBus, DemoPipe, Script, SerialRig};
     use idu_firmware_support::{println, qemu};
     use idu_gimbal::Instant;
 
@@ -83,7 +83,7 @@ mod fw {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        println!("qemu_demo: STM32F405 (QEMU netduinoplus2), driver and simulated gimbal on an in-memory CAN bus");
+        println!("qemu_demo: STM32F405 (QEMU netduinoplus2), link, port and simulated gimbal on an in-memory CAN bus");
         let out = || Semihosting {
             line: heapless::String::new(),
         };
@@ -92,14 +92,14 @@ mod fw {
             println!("qemu_demo: could not set up the bus");
             qemu::exit(false)
         };
-        let can_failures = Session::new(can, out(), 0).play();
+        let can_failures = Script::new(can, out(), 0).play();
         println!("");
         let pipe = DemoPipe::new(42);
         let Some(serial) = SerialRig::new(&pipe, Instant::from_millis(0)) else {
             println!("qemu_demo: could not set up the serial line");
             qemu::exit(false)
         };
-        let serial_failures = Session::new(serial, out(), 0).play();
+        let serial_failures = Script::new(serial, out(), 0).play();
         let failures = can_failures + serial_failures;
         if failures != 0 {
             println!(

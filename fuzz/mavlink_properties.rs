@@ -9,8 +9,14 @@ use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader, Outbox};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
+/// The bridge and the link it drives, with a small queue.
+struct Firmware {
+    bridge: Bridge,
+    link: Link<3, 4>,
+}
+
 /// Everything the bridge has to send, read by `out`, an independent frame reader.
-fn drain(bridge: &mut Bridge<Link<3, 4>>, out: &mut FrameReader) {
+fn drain(bridge: &mut Bridge, out: &mut FrameReader) {
     loop {
         let bytes = bridge.transmit_bytes();
         if bytes.is_empty() {
@@ -25,21 +31,22 @@ fn drain(bridge: &mut Bridge<Link<3, 4>>, out: &mut FrameReader) {
 /// `bytes` into the bridge at `now`, its answers drained into `out` whenever a frame waits
 /// for room: every byte is taken, and a drained outbox always takes the frame that waited
 /// (no frame waits for ever).
-fn receive_all(bridge: &mut Bridge<Link<3, 4>>, bytes: &[u8], now: Instant, out: &mut FrameReader) {
+fn receive_all(fw: &mut Firmware, bytes: &[u8], now: Instant, out: &mut FrameReader) {
+    let Firmware { bridge, link } = fw;
     let mut rest = bytes;
     loop {
-        let taken = bridge.receive(rest, now);
+        let taken = bridge.receive(link, rest, now);
         assert!(taken <= rest.len(), "took more than it was given");
         rest = rest.get(taken..).unwrap_or(&[]);
-        bridge.gimbal_mut().poll(now);
-        bridge.poll(now);
+        link.poll(now);
+        bridge.poll(link, now);
         let waiting = bridge.reader().is_waiting();
         drain(bridge, out);
         if rest.is_empty() && !waiting {
             return;
         }
         // The outbox is empty now: the frame that waited goes at once.
-        let taken = bridge.receive(&[], now);
+        let taken = bridge.receive(link, &[], now);
         assert_eq!(taken, 0);
         assert!(
             !bridge.reader().is_waiting(),
@@ -61,15 +68,15 @@ fn assert_whole_frames(out: &FrameReader) {
 
 /// A bridge with the dual light's camera: every camera message has something to act on
 /// (three streams, the thermal settings, the infrared tracking source).
-fn dual_light_bridge() -> Bridge<Link<3, 4>> {
+fn dual_light_bridge() -> Firmware {
     let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
-    Bridge::new(
-        Link::<3, 4>::new(Config::default()),
-        BridgeConfig {
+    Firmware {
+        bridge: Bridge::new(BridgeConfig {
             camera,
             ..BridgeConfig::default()
-        },
-    )
+        }),
+        link: Link::new(Config::default()),
+    }
 }
 
 /// Any bytes from the autopilot, split where the first byte says, with time passing: the
@@ -85,9 +92,9 @@ pub fn mavlink_bridge(data: &[u8]) {
     for (i, part) in [a, b].into_iter().enumerate() {
         let now = Instant::from_millis(1_000 * i as u32);
         receive_all(&mut bridge, part, now, &mut out);
-        bridge.gimbal_mut().poll(now);
-        bridge.poll(now);
-        drain(&mut bridge, &mut out);
+        bridge.link.poll(now);
+        bridge.bridge.poll(&mut bridge.link, now);
+        drain(&mut bridge.bridge, &mut out);
     }
     assert_whole_frames(&out);
 }
@@ -146,9 +153,9 @@ pub fn mavlink_messages(data: &[u8]) {
         ms = ms.wrapping_add(u32::from(payload.first().copied().unwrap_or(0)) * 16);
         let now = Instant::from_millis(ms.wrapping_sub(1_000));
         receive_all(&mut bridge, &frame, now, &mut out);
-        bridge.gimbal_mut().poll(now);
-        bridge.poll(now);
-        drain(&mut bridge, &mut out);
+        bridge.link.poll(now);
+        bridge.bridge.poll(&mut bridge.link, now);
+        drain(&mut bridge.bridge, &mut out);
     }
     assert_whole_frames(&out);
 }

@@ -4,13 +4,14 @@
 
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::postback::PostbackAssembler;
-use idu_gimbal::link::serial::SerialLink;
+use idu_gimbal::link::SerialLink;
 use idu_gimbal::link::{Config, Event, Link, RxId};
+use idu_gimbal::port::SerialStream;
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, MAX_FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::{ids, postback::Postback, Frame};
-use idu_gimbal::{Instant, Transport};
+use idu_gimbal::Instant;
 
 /// Any bytes: decoding never panics, and whatever decodes re-encodes to the same bytes.
 pub fn command_decode(data: &[u8]) {
@@ -225,6 +226,7 @@ pub fn link(data: &[u8]) {
 /// never interleaved, one per frame the link counts as sent.
 pub fn serial_link(data: &[u8]) {
     let mut link: SerialLink<3> = SerialLink::new(Config::default());
+    let mut stream = SerialStream::new();
     let mut wire = StreamParser::new();
     let mut t = 0u32;
     // The rest of a postback whose first part was received.
@@ -238,7 +240,7 @@ pub fn serial_link(data: &[u8]) {
         t = t.wrapping_add(u32::from(dt) * 4);
         let now = Instant::from_millis(t);
         match op % 8 {
-            0 => link.receive(rec, now),
+            0 => stream.receive(&mut link, rec, now),
             1 => {
                 let p = Postback {
                     pitch: i16::from(a as i8) * 10,
@@ -247,18 +249,18 @@ pub fn serial_link(data: &[u8]) {
                 }
                 .to_stream_bytes();
                 let cut = usize::from(b) % 28;
-                link.receive(&p[..cut], now);
+                stream.receive(&mut link, &p[..cut], now);
                 tail = Some((p, cut));
             }
             2 => {
                 if let Some((p, cut)) = tail.take() {
-                    link.receive(&p[cut..], now);
+                    stream.receive(&mut link, &p[cut..], now);
                 }
             }
             3 => {
                 if let Ok(p) = Pitch::from_deci(i16::from_le_bytes([a, b]) % 600) {
                     let c = GimbalCommand::Pitch(p);
-                    if link.link_mut().send(c).is_ok() {
+                    if link.send(c).is_ok() {
                         pitches.push(Command::from(c).encode());
                     }
                 }
@@ -266,27 +268,27 @@ pub fn serial_link(data: &[u8]) {
             4 => {
                 if let Ok(r) = Rate::from_centi(i16::from(a as i8) * 100, i16::from(b as i8) * 100)
                 {
-                    let _ = link.link_mut().set_rate(r, now);
+                    let _ = link.set_rate(r, now);
                 }
             }
             5 | 6 => {
-                let bytes = link.transmit_bytes();
+                let bytes = stream.transmit_bytes(&mut link);
                 let n = usize::from(a) % (bytes.len() + 2);
                 on_wire.extend(wire.feed(&bytes[..n.min(bytes.len())]));
-                link.transmit_written(n);
+                stream.transmit_written(&mut link, n);
             }
             _ => link.poll(now),
         }
     }
     // Drain what waits: a started frame is finished.
     loop {
-        let bytes = link.transmit_bytes();
+        let bytes = stream.transmit_bytes(&mut link);
         if bytes.is_empty() {
             break;
         }
         let n = bytes.len();
         on_wire.extend(wire.feed(bytes));
-        link.transmit_written(n);
+        stream.transmit_written(&mut link, n);
     }
     // Every pitch command accepted went out, once, in order (nothing else sends pitch).
     let pitch_frames: Vec<[u8; 8]> = on_wire
@@ -311,17 +313,20 @@ pub fn serial_link(data: &[u8]) {
         (0, 0, 0, 0),
         "the bytes written are not whole frames"
     );
-    let s = link.stats();
+    let (l, s) = (link.stats(), stream.stats());
     assert_eq!(
-        w.control_frames, s.link.frames_sent,
+        w.control_frames, l.frames_sent,
         "a frame sent is not on the wire once"
     );
     assert_eq!(s.bytes_sent, 24 * w.control_frames);
     let r = s.stream;
     assert_eq!(
         s.bytes_received,
-        24 * r.control_frames + 27 * r.postbacks + r.skipped_bytes + link.parser().pending() as u32,
+        24 * r.control_frames
+            + 27 * r.postbacks
+            + r.skipped_bytes
+            + stream.parser().pending() as u32,
         "a received byte is not accounted for"
     );
-    assert_eq!(s.link.postbacks, r.postbacks);
+    assert_eq!(l.postbacks, r.postbacks);
 }

@@ -97,4 +97,8 @@ echo "  (bench_crc_crate_table256 is a call into idu_gimbal::wire::crc::update, 
 
 echo
 scripts/size-report.sh || status=$?
+
+echo
+echo "A poll generic over its port against the poll written for the port (footprint_generic):"
+scripts/port-generic.sh || status=$?
 exit "$status"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Mutation testing: runs cargo-mutants over the protocol code of `idu-gimbal`
-# (src/wire, src/link, src/driver), or with `bridge` first over the whole of
+# (src/wire, src/link, src/port), or with `bridge` first over the whole of
 # `idu-gimbal-mavlink`'s library, and fails when fewer than 95% of the viable mutants are
 # caught. Not part of CI: too slow. Results and the survivor triage are in TESTING.md,
 # "Mutation testing".
@@ -20,18 +20,18 @@
 #
 # Choices:
 # - Tests run: the library's unit tests, tests/driver_sim.rs and tests/point_at.rs (the
-#   integration tests that drive the driver over the mock bus), tests/driver_errors.rs
+#   integration tests that drive a link and its CAN port over the mock bus), tests/driver_errors.rs
 #   and tests/defmt_format.rs (the driver errors' counters and defmt encoding),
-#   tests/serial.rs (the serial driver and link over the mock pipe) and tests/bounds.rs
+#   tests/serial.rs (the serial link and port over the mock pipe) and tests/bounds.rs
 #   (the parsers and the link under floods), tests/blocking_adapter.rs (the Blocking
-#   adapter's classifier), tests/next_deadline.rs (the drivers' next_deadline) and
+#   adapter's classifier), tests/next_deadline.rs (the ports' next_deadline) and
 #   tests/aiming.rs (the closed-loop aim against the simulator). Left out: tests/no_panic.rs
 #   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
 #   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
 #   scope) and doctests (examples, not checks).
 # - PROPTEST_CASES=32 instead of 256: the proptests dominate the test time; 32 cases still
 #   cover each property, and the hand-written vectors do the exact checking.
-# - --all-features: the driver tests need the `mock` bus.
+# - --all-features: the port tests need the `mock` bus.
 # - Score = caught / (caught + missed); unviable mutants (do not build) are left out.
 #   Timeouts count as caught: the timeout (30 s) is over four times the unmutated test
 #   time (about 6 s for the core's tests, less for the bridge's), so a mutant that hits it
@@ -76,10 +76,10 @@ cargo mutants \
     --all-features \
     --file 'src/wire/**' \
     --file 'src/link/**' \
-    --file 'src/driver/**' \
+    --file 'src/port/**' \
     --exclude src/link/tests.rs \
     --exclude src/link/deadline_tests.rs \
-    --exclude src/driver/idle_tests.rs \
+    --exclude src/port/idle_tests.rs \
     --timeout "$timeout" \
     --build-timeout 600 \
     --jobs "$jobs" \

@@ -2,11 +2,11 @@
 # Flash and static RAM of the driver on thumbv7em-none-eabihf (release: opt-level "s", LTO),
 # and of the firmware programs (boards/stm32f405, the root crate's qemu_demo, benches/mcu).
 #
-# A driver's share is the difference between two builds that differ only by that driver
-# (benches/mcu/src/bin/): footprint_driver (a static Gimbal with the default queues, driven
-# with every kind of call) or footprint_serial (the same for SerialGimbal) minus
-# footprint_base (the same skeleton: vector table, panic handler, a CAN driver and a serial
-# port over volatile registers, memcpy/memmove). Flash counts .vector_table + .text +
+# A transport's share is the difference between two builds that differ only by it
+# (benches/mcu/src/bin/): footprint_driver (a static Link with the default queues and its
+# CanPort, driven with every kind of call) or footprint_serial (the same for a SerialLink
+# and its SerialPort) minus footprint_base (the same skeleton: vector table, panic handler,
+# a CAN driver and a UART over volatile registers, memcpy/memmove). Flash counts .vector_table + .text +
 # .rodata + .data (initial values live in flash); static RAM counts .data + .bss + .uninit.
 #
 # Budgets: the goals where tighter than the floors: driver flash <= 6 KiB (the floor: 8 KiB);
@@ -15,7 +15,7 @@
 # is held to the same RAM budget, and to 6.25 KiB of flash: the link it shares carries the
 # closed loop's hooks (the tracker's hand-over, the attitude's accounting), about 350 B,
 # beside its stream parser. The MAVLink bridge
-# (footprint_bridge: a Bridge with a camera over footprint_driver's driver) is measured
+# (footprint_bridge: a Bridge with a camera over footprint_driver's link and port) is measured
 # against footprint_driver: flash <= 42 KiB (the camera definition files included, and the
 # core's closed-loop aiming, which the bridge links and footprint_driver does not: 40 KiB
 # before it) and static RAM <= 4 KiB. Exit status 1 when one is exceeded.

@@ -69,11 +69,11 @@ stage_fast() {
     # Its QEMU and meter parts build for bare-metal ARM only, so the host clippy above skips them.
     cargo clippy -p idu-firmware-support --target thumbv7em-none-eabihf --all-features -- -D warnings
 
-    step "library builds for thumbv7em-none-eabihf: no features, defmt, mock, fdcan"
+    step "library builds for thumbv7em-none-eabihf: no features, defmt, mock; the FDCAN adapter"
     cargo build --target thumbv7em-none-eabihf --lib
     cargo build --target thumbv7em-none-eabihf --lib --features defmt
     cargo build --target thumbv7em-none-eabihf --lib --features mock
-    cargo build --target thumbv7em-none-eabihf --lib --features fdcan
+    cargo clippy -p idu-gimbal-fdcan --target thumbv7em-none-eabihf --lib --features defmt -- -D warnings
 
     step "MAVLink bridge (idu-gimbal-mavlink): clippy and build for thumbv7em-none-eabihf"
     cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --examples -- -D warnings
@@ -85,7 +85,7 @@ stage_fast() {
     step "docs, warnings denied"
     RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
 
-    step "packages: cargo publish --dry-run of the library crates (idu-gimbal, idu-gimbal-mavlink)"
+    step "packages: cargo publish --dry-run of the library crates (idu-gimbal, idu-gimbal-mavlink, idu-gimbal-fdcan)"
     # The bridge depends on the unpublished core: cargo packages the workspace's crates
     # together. --allow-dirty: tests may append to proptest-regressions files; the package's
     # contents are fixed by each crate's `include`. cargo unpacks the packaged crates into
@@ -94,17 +94,19 @@ stage_fast() {
     # built instead of this one. Those copies of these two crates go first, and so do their
     # builds in target/ (where the verification builds): a registry crate is never rebuilt
     # for a change of its content, so the bridge would link an older core's build.
-    cargo clean --quiet -p idu-gimbal -p idu-gimbal-mavlink
+    cargo clean --quiet -p idu-gimbal -p idu-gimbal-mavlink -p idu-gimbal-fdcan
     cargo_home=${CARGO_HOME:-$HOME/.cargo}
     rm -rf "$cargo_home"/registry/src/-*/idu-gimbal-[0-9]* \
         "$cargo_home"/registry/src/-*/idu-gimbal-mavlink-[0-9]* \
+        "$cargo_home"/registry/src/-*/idu-gimbal-fdcan-[0-9]* \
         "$cargo_home"/registry/cache/-*/idu-gimbal-[0-9]*.crate \
-        "$cargo_home"/registry/cache/-*/idu-gimbal-mavlink-[0-9]*.crate
+        "$cargo_home"/registry/cache/-*/idu-gimbal-mavlink-[0-9]*.crate \
+        "$cargo_home"/registry/cache/-*/idu-gimbal-fdcan-[0-9]*.crate
     cargo publish --dry-run --workspace --exclude gimbalctl --allow-dirty 2>&1 |
         grep -v '^warning: ignoring \(test\|example\)'
 
     step "MSRV: the declared rust-version builds each library crate"
-    # Read from the manifests (idu-gimbal 1.87; idu-gimbal-mavlink 1.88, as mavio's code
+    # Read from the manifests (idu-gimbal and idu-gimbal-fdcan 1.87; idu-gimbal-mavlink 1.88, as mavio's code
     # generator pulls icu 2.4), installed with the minimal profile.
     msrv() { sed -n 's/^rust-version = "\(.*\)"$/\1/p' "$1"; }
     core_msrv=$(msrv Cargo.toml)
@@ -115,7 +117,8 @@ stage_fast() {
             rustup toolchain install "$v" --profile minimal >/dev/null 2>&1
         fi
     done
-    CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock,fdcan
+    CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal --features std,defmt,mock
+    CARGO_TARGET_DIR=target/msrv cargo "+$core_msrv" check -p idu-gimbal-fdcan --features std,defmt
     CARGO_TARGET_DIR=target/msrv cargo "+$bridge_msrv" check -p idu-gimbal-mavlink --features roi,signing
     # Nothing else reads these checks (half a gigabyte).
     rm -rf target/msrv

@@ -9,8 +9,9 @@
 #![cfg(feature = "mock")]
 
 use idu_gimbal::geo::{look_at, Position};
-use idu_gimbal::link::serial::SerialLink;
 use idu_gimbal::link::{aim, Aim, AimError, Config, Link, LinkStats, Yaw};
+use idu_gimbal::link::{Medium, SerialLink};
+use idu_gimbal::port::SerialStream;
 use idu_gimbal::sim::serial::SerialSimulator;
 use idu_gimbal::sim::{LockHolds, SimConfig, SimState, Simulator};
 use idu_gimbal::wire::control::{
@@ -19,7 +20,7 @@ use idu_gimbal::wire::control::{
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{ControlMode, GimbalType, Postback};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Event, GimbalControl, Instant};
+use idu_gimbal::{Event, Instant};
 
 const BOTH: [LockHolds; 2] = [LockHolds::North, LockHolds::Motor];
 const WIRES: [Wire; 2] = [Wire::Can, Wire::Uart];
@@ -37,6 +38,7 @@ struct Rig {
     can: Link,
     can_sim: Simulator,
     uart: SerialLink,
+    uart_stream: SerialStream,
     uart_sim: SerialSimulator<512>,
     now: u32,
     vehicle_deg: f32,
@@ -67,6 +69,7 @@ impl Rig {
             can: Link::new(Config::default()),
             can_sim: Simulator::new(sim, t0),
             uart: SerialLink::new(Config::default()),
+            uart_stream: SerialStream::new(),
             uart_sim: SerialSimulator::new(sim, t0),
             now: 0,
             vehicle_deg: 0.0,
@@ -91,7 +94,7 @@ impl Rig {
     fn stats(&self) -> LinkStats {
         match self.wire {
             Wire::Can => self.can.stats(),
-            Wire::Uart => self.uart.stats().link,
+            Wire::Uart => self.uart.stats(),
         }
     }
 
@@ -180,11 +183,12 @@ impl Rig {
             Wire::Uart => {
                 self.uart.poll(now);
                 loop {
-                    let bytes = self.uart.transmit_bytes().to_vec();
+                    let bytes = self.uart_stream.transmit_bytes(&mut self.uart).to_vec();
                     if bytes.is_empty() {
                         break;
                     }
-                    self.uart.transmit_written(bytes.len());
+                    self.uart_stream
+                        .transmit_written(&mut self.uart, bytes.len());
                     // One whole 24-byte frame at a time: its 8 data bytes at 14..22.
                     let data: [u8; 8] = bytes[14..22].try_into().unwrap();
                     if self.passes(data) {
@@ -198,7 +202,7 @@ impl Rig {
                         break;
                     }
                     self.uart_sim.transmit_written(bytes.len());
-                    self.uart.receive(&bytes, now);
+                    self.uart_stream.receive(&mut self.uart, &bytes, now);
                 }
                 while let Some(e) = self.uart.next_event() {
                     self.events.push(e);
@@ -257,7 +261,7 @@ trait Vehicle {
     fn position(&mut self, g: Gps, a: Altitude, now: Instant);
 }
 
-impl<G: GimbalControl> Vehicle for G {
+impl<const Q: usize, const T: usize, M: Medium> Vehicle for Link<Q, T, M> {
     fn attitude(&mut self, a: Attitude, now: Instant) {
         self.set_attitude(a, now);
     }

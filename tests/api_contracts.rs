@@ -6,16 +6,16 @@
 #![cfg(feature = "mock")]
 
 use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _};
-use idu_gimbal::driver::{DriverError, PortError};
 use idu_gimbal::link::{AimError, Config, Link, QueueFull, TextQueueError};
 use idu_gimbal::mock::{Bus, MockFrame};
+use idu_gimbal::port::{DriverError, PortError};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Pitch, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal::wire::text::TextError;
 use idu_gimbal::wire::vehicle::{Attitude, VehicleError};
-use idu_gimbal::GimbalControl;
-use idu_gimbal::{Gimbal, Instant};
+use idu_gimbal::Instant;
+use idu_gimbal::{CanPort, Port};
 
 fn t(ms: u32) -> Instant {
     Instant::from_millis(ms)
@@ -140,7 +140,8 @@ mod state {
     #[test]
     fn the_command_surface_reaches_the_drivers_link() {
         let bus: Bus<2, 64> = Bus::new(4);
-        let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+        let mut gimbal: Link = Link::new(Config::default());
+        let mut port = CanPort::new(bus.endpoint(0).unwrap());
         let mut other = bus.endpoint(1).unwrap();
         assert!(!gimbal.is_link_up());
         assert_eq!(gimbal.gimbal_type(), None);
@@ -148,7 +149,7 @@ mod state {
             let f = MockFrame::extended(ids::POSTBACK, &d).unwrap();
             Can::transmit(&mut other, &f).unwrap();
         }
-        gimbal.poll(t(0)).unwrap();
+        port.poll(&mut gimbal, t(0)).unwrap();
         assert!(gimbal.is_link_up());
         assert_eq!(gimbal.gimbal_type(), Some(GimbalType::A2000));
 
@@ -163,10 +164,10 @@ mod state {
         gimbal
             .set_rate(Rate::new(10.0, 0.0).unwrap(), t(10))
             .unwrap();
-        gimbal.poll(t(10)).unwrap();
+        port.poll(&mut gimbal, t(10)).unwrap();
         let _ = drain(&mut other);
         gimbal.stop_rate();
-        gimbal.poll(t(11)).unwrap();
+        port.poll(&mut gimbal, t(11)).unwrap();
         let zero = Command::from(GimbalCommand::Rate(Rate::new(0.0, 0.0).unwrap())).encode();
         let sent = drain(&mut other);
         assert_eq!(
@@ -175,7 +176,7 @@ mod state {
             "{sent:?}"
         );
         // No more repeats of the hold afterwards.
-        gimbal.poll(t(200)).unwrap();
+        port.poll(&mut gimbal, t(200)).unwrap();
         assert!(drain(&mut other).iter().all(|d| d[..]
             != Command::from(GimbalCommand::Rate(Rate::new(10.0, 0.0).unwrap())).encode()[..]));
     }
@@ -190,13 +191,14 @@ mod reception {
     #[test]
     fn a_remote_frame_on_the_postback_id_is_ignored() {
         let bus: Bus<2, 16> = Bus::new(3);
-        let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+        let mut gimbal: Link = Link::new(Config::default());
+        let mut port = CanPort::new(bus.endpoint(0).unwrap());
         let mut other = bus.endpoint(1).unwrap();
         let id = ExtendedId::new(ids::POSTBACK).unwrap();
         let remote = MockFrame::new_remote(id, 8).unwrap();
         Can::transmit(&mut other, &remote).unwrap();
-        gimbal.poll(t(0)).unwrap();
-        let s = gimbal.stats().link;
+        port.poll(&mut gimbal, t(0)).unwrap();
+        let s = gimbal.stats();
         assert_eq!(s.ignored_frames, 1);
         assert_eq!(s.frames_received, 1);
         assert!(!gimbal.is_link_up(), "no postback, no link");
@@ -209,7 +211,8 @@ mod reception {
     #[test]
     fn a_short_frame_on_the_postback_id_breaks_the_message_and_is_counted() {
         let bus: Bus<2, 16> = Bus::new(5);
-        let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+        let mut gimbal: Link = Link::new(Config::default());
+        let mut port = CanPort::new(bus.endpoint(0).unwrap());
         let mut other = bus.endpoint(1).unwrap();
         let frames = a2000().to_can_frames();
         for (i, d) in frames.iter().enumerate() {
@@ -219,8 +222,8 @@ mod reception {
             }
             Can::transmit(&mut other, &MockFrame::extended(ids::POSTBACK, d).unwrap()).unwrap();
         }
-        gimbal.poll(t(0)).unwrap();
-        let s = gimbal.stats().link;
+        port.poll(&mut gimbal, t(0)).unwrap();
+        let s = gimbal.stats();
         assert_eq!(s.frames_received, 5);
         assert_eq!((s.malformed, s.dropped_partials, s.postbacks), (1, 1, 0));
         assert!(!gimbal.is_link_up(), "no whole postback, no link");
@@ -228,8 +231,8 @@ mod reception {
         for d in frames {
             Can::transmit(&mut other, &MockFrame::extended(ids::POSTBACK, &d).unwrap()).unwrap();
         }
-        gimbal.poll(t(100)).unwrap();
-        assert_eq!(gimbal.stats().link.postbacks, 1);
+        port.poll(&mut gimbal, t(100)).unwrap();
+        assert_eq!(gimbal.stats().postbacks, 1);
         assert!(gimbal.is_link_up());
     }
 
@@ -328,11 +331,13 @@ mod pointing {
         use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
         for stop in [false, true] {
             let bus: Bus<2, 256> = Bus::new(5);
-            let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+            let mut gimbal: Link = Link::new(Config::default());
+            let mut port = CanPort::new(bus.endpoint(0).unwrap());
             let mut other = bus.endpoint(1).unwrap();
             let mut aims = Vec::new();
             type Ep<'a> = idu_gimbal::mock::Endpoint<'a, 2, 256>;
-            let fly = |gimbal: &mut Gimbal<Ep<'_>>,
+            let fly = |gimbal: &mut Link,
+                       port: &mut CanPort<Ep<'_>>,
                        other: &mut Ep<'_>,
                        aims: &mut Vec<u32>,
                        from: u32,
@@ -344,7 +349,7 @@ mod pointing {
                     gimbal.set_gps(Gps::new(lat, 8.0).unwrap(), now);
                     gimbal.set_altitude(Altitude::new(600.0).unwrap(), now);
                     gimbal.set_attitude(Attitude::new(0.0, 0.0, 0.0).unwrap(), now);
-                    gimbal.poll(now).unwrap();
+                    port.poll(gimbal, now).unwrap();
                     while let Ok(f) = Can::receive(other) {
                         if is_aim(f.data()) {
                             aims.push(ms);
@@ -353,12 +358,12 @@ mod pointing {
                 }
             };
             gimbal.point_at(Position::new(47.0, 8.001, 400.0).unwrap());
-            fly(&mut gimbal, &mut other, &mut aims, 0, 1000);
+            fly(&mut gimbal, &mut port, &mut other, &mut aims, 0, 1000);
             assert!(aims.iter().any(|&ms| ms < 1000), "point-at aims at first");
             if stop {
                 gimbal.stop_pointing();
             }
-            fly(&mut gimbal, &mut other, &mut aims, 1000, 5000);
+            fly(&mut gimbal, &mut port, &mut other, &mut aims, 1000, 5000);
             let later = aims.iter().filter(|&&ms| ms >= 1100).count();
             if stop {
                 assert_eq!(later, 0, "no aim after stop_pointing: {aims:?}");

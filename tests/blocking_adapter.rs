@@ -4,17 +4,17 @@
 //! `Other`. With a classifier these are "would block", not faults: nothing is counted, every
 //! frame goes out, in order. Real faults are still counted.
 
-use idu_gimbal::{GimbalControl, Transport};
+use idu_gimbal::{CanPort, Link, Port};
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::rc::Rc;
 
 use embedded_can::{ErrorKind, ExtendedId, Frame as _, Id};
-use idu_gimbal::driver::{Blocking, Classify, DriverErrors};
+use idu_gimbal::port::{Blocking, Classify, DriverErrors};
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::control::{Command, Focus, GimbalCommand, Heading, Pitch, Zoom};
 use idu_gimbal::wire::{ids, Frame};
-use idu_gimbal::{Config, Gimbal, Instant};
+use idu_gimbal::{Config, Instant};
 
 /// The errors of the `mcp2515` crate that matter here.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -173,19 +173,20 @@ fn commands() -> Vec<Command> {
 const TEXT: &[u8] = b"IDU over MCP2515: 40 bytes of text here.";
 
 type Driver<W = fn(&McpError) -> bool> =
-    Gimbal<Blocking<Mcp2515Like, fn(&mut Mcp2515Like) -> bool, W>>;
+    CanPort<Blocking<Mcp2515Like, fn(&mut Mcp2515Like) -> bool, W>>;
 
-/// A gimbal over the stub with the classifier, the commands and the text queued.
-fn setup<W: Classify<McpError>>(classifier: W) -> (Driver<W>, Rc<RefCell<Chip>>) {
+/// A link with the commands and the text queued, and a port over the stub with the
+/// classifier.
+fn setup<W: Classify<McpError>>(classifier: W) -> (Link, Driver<W>, Rc<RefCell<Chip>>) {
     let chip = Mcp2515Like::default();
     let handle = chip.0.clone();
     let can = Blocking::with_classifier(chip, always as fn(&mut Mcp2515Like) -> bool, classifier);
-    let mut gimbal: Driver<W> = Gimbal::new(can, Config::default());
+    let mut link: Link = Link::new(Config::default());
     for c in commands() {
-        gimbal.send(c).unwrap();
+        link.send(c).unwrap();
     }
-    gimbal.send_text(TEXT).unwrap();
-    (gimbal, handle)
+    link.send_text(TEXT).unwrap();
+    (link, CanPort::new(can), handle)
 }
 
 /// Runs the gimbal over `[from, to)` ms against a simulated gimbal: each millisecond the bus
@@ -193,7 +194,8 @@ fn setup<W: Classify<McpError>>(classifier: W) -> (Driver<W>, Rc<RefCell<Chip>>)
 /// postbacks arrive in the receive buffer, then the driver polls. Returns the polls that
 /// returned an error.
 fn run<W: Classify<McpError>>(
-    gimbal: &mut Driver<W>,
+    gimbal: &mut Link,
+    port: &mut Driver<W>,
     chip: &Rc<RefCell<Chip>>,
     sim: &mut Simulator,
     from: u32,
@@ -218,7 +220,7 @@ fn run<W: Classify<McpError>>(
                 .rx
                 .push_back(StubFrame::new(id, &f.data).unwrap());
         }
-        if gimbal.poll(now).is_err() {
+        if port.poll(gimbal, now).is_err() {
             failed += 1;
         }
     }
@@ -244,11 +246,11 @@ fn expected_frames() -> Vec<Frame> {
 
 #[test]
 fn would_block_errors_are_not_faults_and_every_frame_goes_out_in_order() {
-    let (mut gimbal, chip) = setup(would_block);
+    let (mut gimbal, mut port, chip) = setup(would_block);
     let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
     // 1.6 s: the 13 frames go out in the first 13 ms; the simulator's postbacks (every
     // 500 ms) come in.
-    let failed = run(&mut gimbal, &chip, &mut sim, 0, 1600);
+    let failed = run(&mut gimbal, &mut port, &chip, &mut sim, 0, 1600);
 
     let c = chip.borrow();
     // The stub did refuse: the transmit buffers were full and the receive buffer empty.
@@ -257,11 +259,11 @@ fn would_block_errors_are_not_faults_and_every_frame_goes_out_in_order() {
     assert_eq!(c.spi_errors, 0);
     // None of it was a fault.
     assert_eq!(failed, 0);
-    assert_eq!(gimbal.stats().driver_errors, DriverErrors::default());
+    assert_eq!(port.stats().driver_errors, DriverErrors::default());
     // Every frame, once each, in order.
     assert_eq!(c.on_bus, expected_frames());
     assert!(c.tx_buffers.is_empty());
-    let link = gimbal.stats().link;
+    let link = gimbal.stats();
     assert_eq!(link.frames_sent, 13);
     assert_eq!(link.queue_full, 0);
     assert_eq!(link.requeued, 0);
@@ -281,40 +283,40 @@ fn would_block_errors_are_not_faults_and_every_frame_goes_out_in_order() {
 
 #[test]
 fn a_frame_refused_as_busy_is_requeued_not_dropped() {
-    let (mut gimbal, chip) = setup(would_block);
+    let (mut gimbal, mut port, chip) = setup(would_block);
     // The bus is stopped: three frames fit, the fourth is refused.
-    gimbal.poll(Instant::from_millis(0)).unwrap();
+    port.poll(&mut gimbal, Instant::from_millis(0)).unwrap();
     assert_eq!(chip.borrow().tx_busy, 1);
-    assert_eq!(gimbal.stats().link.frames_sent, 3);
-    assert!(gimbal.link().has_transmit());
+    assert_eq!(gimbal.stats().frames_sent, 3);
+    assert!(gimbal.has_transmit());
     // Refused again on every poll while the bus is stopped, never counted, never lost.
     for t in 1..10 {
-        gimbal.poll(Instant::from_millis(t)).unwrap();
+        port.poll(&mut gimbal, Instant::from_millis(t)).unwrap();
     }
     assert_eq!(chip.borrow().tx_busy, 10);
-    assert_eq!(gimbal.stats().link.frames_sent, 3);
-    assert_eq!(gimbal.stats().driver_errors.total(), 0);
+    assert_eq!(gimbal.stats().frames_sent, 3);
+    assert_eq!(port.stats().driver_errors.total(), 0);
     // The bus runs: the rest follows, in order.
     for t in 10..30 {
         chip.borrow_mut().bus(3);
-        gimbal.poll(Instant::from_millis(t)).unwrap();
+        port.poll(&mut gimbal, Instant::from_millis(t)).unwrap();
     }
     chip.borrow_mut().bus(3);
     assert_eq!(chip.borrow().on_bus, expected_frames());
-    assert_eq!(gimbal.stats().link.frames_sent, 13);
+    assert_eq!(gimbal.stats().frames_sent, 13);
 }
 
 #[test]
 fn real_faults_are_still_counted() {
-    let (mut gimbal, chip) = setup(would_block);
+    let (mut gimbal, mut port, chip) = setup(would_block);
     let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
     // An SPI failure on the first transmit and on the first receive.
     chip.borrow_mut().fail_tx = true;
     chip.borrow_mut().fail_rx = true;
-    let e = gimbal.poll(Instant::from_millis(0)).unwrap_err();
+    let e = port.poll(&mut gimbal, Instant::from_millis(0)).unwrap_err();
     assert_eq!(e.0, ErrorKind::Other);
     assert_eq!(
-        gimbal.stats().driver_errors,
+        port.stats().driver_errors,
         DriverErrors {
             other: 2,
             ..DriverErrors::default()
@@ -322,14 +324,14 @@ fn real_faults_are_still_counted() {
     );
     // The frame the failed transmit refused is kept: every frame still goes out, in order,
     // and no further error is counted.
-    let failed = run(&mut gimbal, &chip, &mut sim, 1, 1600);
+    let failed = run(&mut gimbal, &mut port, &chip, &mut sim, 1, 1600);
     assert_eq!(failed, 0);
-    assert_eq!(gimbal.stats().driver_errors.other, 2);
-    assert_eq!(gimbal.stats().driver_errors.total(), 2);
+    assert_eq!(port.stats().driver_errors.other, 2);
+    assert_eq!(port.stats().driver_errors.total(), 2);
     assert_eq!(chip.borrow().spi_errors, 2);
     assert_eq!(chip.borrow().on_bus, expected_frames());
-    assert_eq!(gimbal.stats().link.frames_sent, 13);
-    assert_eq!(gimbal.stats().link.postbacks, 3);
+    assert_eq!(gimbal.stats().frames_sent, 13);
+    assert_eq!(gimbal.stats().postbacks, 3);
 }
 
 #[test]
@@ -338,11 +340,12 @@ fn without_the_classifier_every_error_is_a_fault() {
     // (right for drivers that really block): NoMessage and TxBusy count as faults.
     let chip = Mcp2515Like::default();
     let handle = chip.0.clone();
-    let mut gimbal: Gimbal<_> = Gimbal::new(Blocking::new(chip, always), Config::default());
+    let mut gimbal: Link = Link::new(Config::default());
+    let mut port = CanPort::new(Blocking::new(chip, always));
     for c in commands() {
         gimbal.send(c).unwrap();
     }
-    let e = gimbal.poll(Instant::from_millis(0)).unwrap_err();
+    let e = port.poll(&mut gimbal, Instant::from_millis(0)).unwrap_err();
     assert_eq!(e.0, ErrorKind::Other);
     let no_message = handle.borrow().no_message;
     let tx_busy = handle.borrow().tx_busy;
@@ -350,11 +353,11 @@ fn without_the_classifier_every_error_is_a_fault() {
         (no_message, tx_busy),
         (u32::from(Config::default().max_rx_per_poll.get()), 1)
     );
-    assert_eq!(gimbal.stats().driver_errors.other, no_message + tx_busy);
+    assert_eq!(port.stats().driver_errors.other, no_message + tx_busy);
     // A classifier that calls nothing "would block" is the same.
-    let (mut gimbal, _chip) = setup(|_: &McpError| false);
-    assert!(gimbal.poll(Instant::from_millis(0)).is_err());
-    assert!(gimbal.stats().driver_errors.other > 0);
+    let (mut gimbal, mut port, _chip) = setup(|_: &McpError| false);
+    assert!(port.poll(&mut gimbal, Instant::from_millis(0)).is_err());
+    assert!(port.stats().driver_errors.other > 0);
 }
 
 /// A classifier of a type of its own, as a firmware keeping state in it would write: it
@@ -376,12 +379,12 @@ impl Classify<McpError> for CountingClassifier {
 fn a_classifier_of_a_type_of_its_own_is_taken() {
     let classifier = CountingClassifier::default();
     let seen = classifier.0.clone();
-    let (mut gimbal, chip) = setup(classifier);
+    let (mut gimbal, mut port, chip) = setup(classifier);
     let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
-    assert_eq!(run(&mut gimbal, &chip, &mut sim, 0, 1600), 0);
+    assert_eq!(run(&mut gimbal, &mut port, &chip, &mut sim, 0, 1600), 0);
     let c = chip.borrow();
     assert_eq!(c.on_bus, expected_frames());
-    assert_eq!(gimbal.stats().driver_errors, DriverErrors::default());
+    assert_eq!(port.stats().driver_errors, DriverErrors::default());
     // It was asked about every error the stub returned, and took them all as would-block.
     assert_eq!(*seen.borrow(), c.tx_busy + c.no_message);
 }

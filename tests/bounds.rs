@@ -11,7 +11,8 @@ use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::serial::{StreamParser, MAX_FRAME_LEN};
-use idu_gimbal::{Gimbal, Instant};
+use idu_gimbal::Instant;
+use idu_gimbal::{CanPort, Link, Port};
 
 /// 10^6 garbage bytes, heavy in the stream's own vocabulary (`EB 90 0A/0C`): the parser
 /// holds less than one frame at all times, yields nothing, and every byte is skipped or
@@ -59,24 +60,25 @@ fn one_poll_takes_at_most_max_rx_per_poll_frames() {
         max_rx_per_poll: core::num::NonZeroU16::new(8).unwrap(),
         ..Config::default()
     };
-    let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), config);
+    let mut gimbal: Link = Link::new(config);
+    let mut port = CanPort::new(bus.endpoint(0).unwrap());
     let mut babbler = bus.endpoint(1).unwrap();
     let id = ExtendedId::new(0x1234).unwrap();
     for i in 0..300u32 {
         let _ = babbler.transmit(&MockFrame::new(id, &i.to_le_bytes()).unwrap());
     }
-    let _ = gimbal.poll(Instant::from_millis(0));
+    let _ = port.poll(&mut gimbal, Instant::from_millis(0));
     // Eight receive calls: the FIFO's overrun (reported once, by the first) and 7 frames.
-    let s = gimbal.stats();
-    assert_eq!(s.link.frames_received + s.driver_errors.total(), 8);
-    assert_eq!(s.driver_errors.overrun, 1);
+    let errors = port.stats().driver_errors;
+    assert_eq!(gimbal.stats().frames_received + errors.total(), 8);
+    assert_eq!(errors.overrun, 1);
     for ms in 1..40 {
-        let _ = gimbal.poll(Instant::from_millis(ms));
+        let _ = port.poll(&mut gimbal, Instant::from_millis(ms));
     }
     // 256 fit the receive FIFO; the other 44 overran it, counted once as an overrun error.
-    assert_eq!(gimbal.stats().link.frames_received, 256);
-    assert_eq!(gimbal.stats().link.ignored_frames, 256);
-    assert_eq!(gimbal.stats().driver_errors.overrun, 1);
+    assert_eq!(gimbal.stats().frames_received, 256);
+    assert_eq!(gimbal.stats().ignored_frames, 256);
+    assert_eq!(port.stats().driver_errors.overrun, 1);
 }
 
 /// xorshift64*: a fixed, reproducible byte source.

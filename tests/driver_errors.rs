@@ -2,10 +2,11 @@
 #![cfg(feature = "mock")]
 
 use embedded_can::ErrorKind;
-use idu_gimbal::driver::DriverErrors;
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::Bus;
-use idu_gimbal::{Gimbal, Instant};
+use idu_gimbal::port::DriverErrors;
+use idu_gimbal::Instant;
+use idu_gimbal::{CanPort, Link, Port};
 
 #[test]
 fn every_error_kind_is_counted_in_its_own_field() {
@@ -32,11 +33,17 @@ fn every_error_kind_is_counted_in_its_own_field() {
         ErrorKind::Other,
     ] {
         let bus: Bus<2, 16> = Bus::new(1);
-        let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
+        let mut gimbal: Link = Link::new(Config::default());
+        let mut port = CanPort::new(bus.endpoint(0).unwrap());
         // The next receive of the driver's endpoint fails with exactly this kind.
         assert!(bus.inject_error(0, kind));
-        assert_eq!(gimbal.poll(Instant::from_millis(0)).unwrap_err().0, kind);
-        let errors = gimbal.stats().driver_errors;
+        assert_eq!(
+            port.poll(&mut gimbal, Instant::from_millis(0))
+                .unwrap_err()
+                .0,
+            kind
+        );
+        let errors = port.stats().driver_errors;
         assert_eq!(errors, one(kind), "{kind:?}");
         assert_eq!(errors.total(), 1);
     }

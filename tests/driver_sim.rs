@@ -12,8 +12,8 @@ use idu_gimbal::wire::control::{GimbalCommand, Heading, Pitch, Rate, ZoomRatio};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::{ids, Frame};
-use idu_gimbal::{Event, Gimbal, Instant};
-use idu_gimbal::{GimbalControl, Transport};
+use idu_gimbal::{CanPort, Link, Port};
+use idu_gimbal::{Event, Instant};
 
 const E: usize = 3;
 const RXQ: usize = 256;
@@ -22,7 +22,8 @@ type TestBus = Bus<E, RXQ>;
 /// Driver on endpoint 0, simulator on endpoint 1, a sniffer on endpoint 2 that sees every
 /// frame either side sends.
 struct Bench<'a> {
-    gimbal: Gimbal<Endpoint<'a, E, RXQ>>,
+    link: Link,
+    port: CanPort<Endpoint<'a, E, RXQ>>,
     sim: Simulator,
     sim_can: Endpoint<'a, E, RXQ>,
     sniffer: Endpoint<'a, E, RXQ>,
@@ -44,7 +45,8 @@ impl<'a> Bench<'a> {
     fn new(bus: &'a TestBus, config: Config, sim_config: SimConfig, start: u32) -> Self {
         let now = Instant::from_millis(start);
         Bench {
-            gimbal: Gimbal::new(bus.endpoint(0).unwrap(), config),
+            link: Link::new(config),
+            port: CanPort::new(bus.endpoint(0).unwrap()),
             sim: Simulator::new(sim_config, now),
             sim_can: bus.endpoint(1).unwrap(),
             sniffer: bus.endpoint(2).unwrap(),
@@ -67,9 +69,9 @@ impl<'a> Bench<'a> {
     /// One millisecond of both sides.
     fn tick(&mut self) {
         let now = self.instant();
-        let _ = self.gimbal.poll(now);
+        let _ = self.port.poll(&mut self.link, now);
         common::take_events(
-            &mut self.gimbal,
+            &mut self.link,
             self.now,
             &mut self.delivered,
             &mut self.events,
@@ -122,7 +124,7 @@ impl<'a> Bench<'a> {
     /// polls once more, then the simulator and the sniffer take what reached them.
     fn settle(&mut self) {
         let now = self.instant();
-        let _ = self.gimbal.poll(now);
+        let _ = self.port.poll(&mut self.link, now);
         while let Ok(f) = Can::receive(&mut self.sim_can) {
             self.sim_received += 1;
             let _ = self.sim.receive(f.raw_id(), f.data(), now);
@@ -139,7 +141,7 @@ impl<'a> Bench<'a> {
     }
 
     fn latest(&self) -> Postback {
-        self.gimbal
+        self.link
             .latest_postback(self.instant())
             .expect("a postback")
             .0
@@ -155,10 +157,10 @@ impl<'a> Bench<'a> {
 
 fn push_vehicle(b: &mut Bench) {
     let now = b.instant();
-    b.gimbal
+    b.link
         .set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
-    b.gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), now);
-    b.gimbal.set_altitude(Altitude::new(450.0).unwrap(), now);
+    b.link.set_gps(Gps::new(47.0, 8.0).unwrap(), now);
+    b.link.set_altitude(Altitude::new(450.0).unwrap(), now);
 }
 
 #[test]
@@ -166,14 +168,14 @@ fn angle_commands_reach_the_gimbal_and_postbacks_report_them() {
     let bus = TestBus::new(1);
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 10_000);
     b.run(600);
-    assert!(b.gimbal.is_link_up());
-    b.gimbal
+    assert!(b.link.is_link_up());
+    b.link
         .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()))
         .unwrap();
-    b.gimbal
+    b.link
         .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()))
         .unwrap();
-    b.gimbal
+    b.link
         .send(GimbalCommand::ZoomRatio(ZoomRatio::new(10.0).unwrap()))
         .unwrap();
     // 90° at 60°/s takes 1.5 s; the next postback after that reports it.
@@ -193,7 +195,7 @@ fn rate_hold_turns_the_gimbal_and_the_dead_man_stops_it() {
     // The application refreshes the hold every 30 ms for one second, then stops.
     for _ in 0..34 {
         let now = b.instant();
-        b.gimbal.set_rate(rate, now).unwrap();
+        b.link.set_rate(rate, now).unwrap();
         b.run(30);
     }
     let last_refresh = b.now - 30;
@@ -252,7 +254,7 @@ fn link_lost_and_restored() {
     let bus = TestBus::new(4);
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 0);
     b.run(1000);
-    assert!(b.gimbal.is_link_up());
+    assert!(b.link.is_link_up());
     b.sim.set_silent(true);
     let silent_from = b.now;
     b.run(2100);
@@ -269,7 +271,7 @@ fn link_lost_and_restored() {
     );
     b.sim.set_silent(false);
     b.run(600);
-    assert!(b.gimbal.is_link_up());
+    assert!(b.link.is_link_up());
     let ups: Vec<_> = b
         .events
         .iter()
@@ -284,23 +286,21 @@ fn full_mailboxes_lose_no_command_and_keep_priority() {
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 0);
     bus.set_auto_deliver(false);
     push_vehicle(&mut b);
-    b.gimbal.send_text(b"MAILBOX PRESSURE TEST").unwrap(); // 3 frames
-                                                           // Text and vehicle frames fill the three mailboxes first.
-    b.gimbal.poll(b.instant()).unwrap();
+    b.link.send_text(b"MAILBOX PRESSURE TEST").unwrap(); // 3 frames
+                                                         // Text and vehicle frames fill the three mailboxes first.
+    let now = b.instant();
+    b.port.poll(&mut b.link, now).unwrap();
     assert_eq!(bus.pending(), 3);
     // Control commands now displace the lower-priority frames from the mailboxes.
     let pitches = [-10.0, -20.0, -30.0, -40.0, -50.0];
     for p in pitches {
-        b.gimbal
+        b.link
             .send(GimbalCommand::Pitch(Pitch::new(p).unwrap()))
             .unwrap();
     }
-    b.gimbal.poll(b.instant()).unwrap();
-    assert!(
-        b.gimbal.stats().link.requeued >= 3,
-        "{:?}",
-        b.gimbal.stats().link
-    );
+    let now = b.instant();
+    b.port.poll(&mut b.link, now).unwrap();
+    assert!(b.link.stats().requeued >= 3, "{:?}", b.link.stats());
     // Drain one frame per millisecond, as a busy bus would.
     for _ in 0..40 {
         bus.deliver_one();
@@ -368,9 +368,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
                 -30.0
             };
             let now = b.instant();
-            b.gimbal
-                .set_rate(Rate::new(yaw, 0.0).unwrap(), now)
-                .unwrap();
+            b.link.set_rate(Rate::new(yaw, 0.0).unwrap(), now).unwrap();
         }
         b.tick();
         b.events.clear();
@@ -387,8 +385,8 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
             "delivered a postback the simulator never sent: {p:?}"
         );
     }
-    let s = b.gimbal.stats().link;
-    let a = b.gimbal.link().assembler().stats();
+    let s = b.link.stats();
+    let a = b.link.assembler().stats();
     let bs = bus.stats();
     assert!(
         delivered.len() as f64 > 0.7 * b.sent_postbacks.len() as f64,
@@ -400,7 +398,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
     // Every postback frame the driver received ended in a message, was discarded, or waits.
     assert_eq!(
         a.frames,
-        4 * a.messages + a.discarded_frames + b.gimbal.link().assembler().pending() as u32
+        4 * a.messages + a.discarded_frames + b.link.assembler().pending() as u32
     );
     // Every frame the bus delivered reached the driver, the simulator or the sniffer.
     assert_eq!(bs.delivered, s.frames_received + b.sim_received + b.sniffed);
@@ -413,7 +411,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
         (bs.sent - bs.lost + bs.duplicated) * (E as u32 - 1)
     );
     assert_eq!(bs.overruns, 0);
-    assert_eq!(b.gimbal.stats().driver_errors.total(), 0);
+    assert_eq!(b.port.stats().driver_errors.total(), 0);
     println!(
         "bus {bs:?}\nlink {s:?}\ndelivered {} of {} postbacks",
         delivered.len(),
@@ -429,7 +427,7 @@ fn the_tick_wraps_mid_run_without_a_hiccup() {
     for _ in 0..250 {
         push_vehicle(&mut b);
         if b.now == start.wrapping_add(1000) {
-            b.gimbal
+            b.link
                 .send(GimbalCommand::Pitch(Pitch::new(-60.0).unwrap()))
                 .unwrap();
         }
@@ -440,17 +438,18 @@ fn the_tick_wraps_mid_run_without_a_hiccup() {
     assert_eq!(b.count(ids::GPS, start, start.wrapping_add(5000)), 25);
     assert_eq!(b.latest().pitch, -6000);
     assert!(!b.events.iter().any(|(_, e)| *e == Event::LinkDown));
-    assert_eq!(b.gimbal.stats().link.dropped_partials, 0);
+    assert_eq!(b.link.stats().dropped_partials, 0);
 }
 
 #[test]
 fn blocking_drivers_work_through_the_adapter() {
-    use idu_gimbal::Blocking;
+    use idu_gimbal::port::Blocking;
     let bus = TestBus::new(7);
     let can = Blocking::new(bus.endpoint(0).unwrap(), |ep: &mut Endpoint<'_, E, RXQ>| {
         ep.rx_pending() > 0
     });
-    let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+    let mut gimbal: Link = Link::new(Config::default());
+    let mut port = CanPort::new(can);
     let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
     let mut sim_can = bus.endpoint(1).unwrap();
     gimbal
@@ -458,7 +457,7 @@ fn blocking_drivers_work_through_the_adapter() {
         .unwrap();
     for t in 0..1600u32 {
         let now = Instant::from_millis(t);
-        gimbal.poll(now).unwrap(); // never blocks: rx_ready says whether a frame waits
+        port.poll(&mut gimbal, now).unwrap(); // never blocks: rx_ready says whether a frame waits
         while let Ok(f) = Can::receive(&mut sim_can) {
             sim.receive(f.raw_id(), f.data(), now).unwrap();
         }
@@ -478,14 +477,16 @@ fn blocking_drivers_work_through_the_adapter() {
     // Errors from a blocking driver reach the caller with their kind and are counted.
     bus.inject_error(0, embedded_can::ErrorKind::Bit);
     gimbal.send(GimbalCommand::Recenter).unwrap();
-    let e = gimbal.poll(Instant::from_millis(1600)).unwrap_err();
+    let e = port
+        .poll(&mut gimbal, Instant::from_millis(1600))
+        .unwrap_err();
     assert_eq!(e.0, embedded_can::ErrorKind::Bit);
-    assert_eq!(gimbal.stats().driver_errors.bit, 1);
+    assert_eq!(port.stats().driver_errors.bit, 1);
     // The command was not lost: the next poll sends it.
-    gimbal.poll(Instant::from_millis(1601)).unwrap();
+    port.poll(&mut gimbal, Instant::from_millis(1601)).unwrap();
     assert!(Can::receive(&mut sim_can).is_ok_and(|f| f.data()[1] == 0x03));
     // release() hands back the adapter, and the adapter the driver it wraps.
-    assert_eq!(gimbal.release().release().index(), 0);
+    assert_eq!(port.release().release().index(), 0);
 }
 
 #[test]
@@ -497,14 +498,14 @@ fn driver_errors_are_counted_and_never_stop_the_driver() {
         tx_error: 0.2,
         ..Faults::default()
     });
-    b.gimbal
+    b.link
         .send(GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()))
         .unwrap();
     for _ in 0..100 {
         push_vehicle(&mut b);
         b.run(20);
     }
-    let errors = b.gimbal.stats().driver_errors;
+    let errors = b.port.stats().driver_errors;
     assert!(errors.total() > 100, "{errors:?}");
     assert_eq!(
         errors.total(),
@@ -512,7 +513,7 @@ fn driver_errors_are_counted_and_never_stop_the_driver() {
     );
     // Despite a fifth of all calls failing, the command got through and postbacks flow.
     assert_eq!(b.latest().pitch, -3000);
-    assert!(b.gimbal.is_link_up());
+    assert!(b.link.is_link_up());
 }
 
 /// Errors the simulator side's endpoint saw (the bench ignores them).

@@ -11,8 +11,8 @@ use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, MockFrame};
 use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::GimbalControl;
-use idu_gimbal::{Gimbal, Instant};
+use idu_gimbal::Instant;
+use idu_gimbal::{CanPort, Link, Port};
 
 const TARGET: (f64, f64, f64) = (47.397_742, 8.545_594, 410.0);
 const RADIUS_M: f64 = 200.0;
@@ -39,7 +39,8 @@ fn angle_diff(a: f64, b: f64) -> f64 {
 
 fn fly(config: Config, push_attitude_to_gimbal: bool, holds: LockHolds) -> (usize, f64, f64) {
     let bus: Bus<2, 64> = Bus::new(11);
-    let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), config);
+    let mut gimbal: Link = Link::new(config);
+    let mut port = CanPort::new(bus.endpoint(0).unwrap());
     let sim_config = SimConfig {
         lock_holds: holds,
         ..SimConfig::default()
@@ -58,7 +59,7 @@ fn fly(config: Config, push_attitude_to_gimbal: bool, holds: LockHolds) -> (usiz
             gimbal.set_altitude(Altitude::new(ALT_M).unwrap(), now);
             gimbal.set_attitude(Attitude::new(0.0, 0.0, heading).unwrap(), now);
         }
-        gimbal.poll(now).unwrap();
+        port.poll(&mut gimbal, now).unwrap();
         while gimbal.next_event().is_some() {}
         while let Ok(f) = Can::receive(&mut sim_can) {
             sim.receive(f.raw_id(), f.data(), now).unwrap();

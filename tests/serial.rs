@@ -5,26 +5,27 @@
 
 mod common;
 
-use idu_gimbal::driver::{Io, Nb, SerialPort};
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::serial::{Pipe, PipeStats, Rx, SerialFaults, Tx};
+use idu_gimbal::port::{Io, Nb, SerialPort, Uart};
 use idu_gimbal::sim::serial::SerialSimulator;
 use idu_gimbal::sim::SimConfig;
 use idu_gimbal::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
 use idu_gimbal::wire::postback::{Postback, MESSAGE_LEN};
 use idu_gimbal::wire::serial::{StreamItem, StreamParser, FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Event, Instant, SerialGimbal};
-use idu_gimbal::{GimbalControl, Transport};
+use idu_gimbal::{Event, Instant};
+use idu_gimbal::{Port, SerialLink};
 
 const N: usize = 256;
 
 /// The driver on port 0, the simulated gimbal on port 1. Everything the gimbal receives
 /// also goes through a parser of the test's own, so the test sees each command that
 /// arrived.
-struct Bench<'p, P: SerialPort> {
-    gimbal: SerialGimbal<P>,
+struct Bench<'p, P: Uart> {
+    link: SerialLink,
+    port: SerialPort<P>,
     sim: SerialSimulator<512>,
     sim_port: Io<Rx<'p, N>, Tx<'p, N>>,
     sniffer: StreamParser,
@@ -49,10 +50,11 @@ fn nb_port(pipe: &Pipe<N>, index: usize) -> Nb<Rx<'_, N>, Tx<'_, N>> {
     Nb::new(rx, tx)
 }
 
-impl<'p, P: SerialPort> Bench<'p, P> {
+impl<'p, P: Uart> Bench<'p, P> {
     fn new(pipe: &'p Pipe<N>, port: P, sim_config: SimConfig, start: u32) -> Self {
         Bench {
-            gimbal: SerialGimbal::new(port, Config::default()),
+            link: SerialLink::new(Config::default()),
+            port: SerialPort::new(port),
             sim: SerialSimulator::new(sim_config, Instant::from_millis(start)),
             sim_port: io_port(pipe, 1),
             sniffer: StreamParser::new(),
@@ -72,9 +74,9 @@ impl<'p, P: SerialPort> Bench<'p, P> {
     /// One millisecond of both sides.
     fn tick(&mut self) {
         let now = self.instant();
-        let _ = self.gimbal.poll(now);
+        let _ = self.port.poll(&mut self.link, now);
         common::take_events(
-            &mut self.gimbal,
+            &mut self.link,
             self.now,
             &mut self.delivered,
             &mut self.events,
@@ -123,7 +125,7 @@ impl<'p, P: SerialPort> Bench<'p, P> {
     }
 
     fn latest(&self) -> Postback {
-        self.gimbal.latest_postback(self.instant()).unwrap().0
+        self.link.latest_postback(self.instant()).unwrap().0
     }
 }
 
@@ -137,12 +139,12 @@ fn is_subsequence<T: PartialEq>(got: &[T], sent: &[T]) -> bool {
     got.iter().all(|g| it.any(|s| s == g))
 }
 
-fn round_trip<P: SerialPort>(pipe: &Pipe<N>, port: P) {
+fn round_trip<P: Uart>(pipe: &Pipe<N>, port: P) {
     let mut b = Bench::new(pipe, port, SimConfig::default(), 0);
-    b.gimbal
+    b.link
         .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()))
         .unwrap();
-    b.gimbal
+    b.link
         .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()))
         .unwrap();
     b.run(2_000);
@@ -158,14 +160,14 @@ fn round_trip<P: SerialPort>(pipe: &Pipe<N>, port: P) {
     assert_eq!((p.pitch, p.motor_heading), (-4500, 9000));
     // Nose-referenced: no vehicle attitude on the serial link, so heading = motor.
     assert_eq!(p.heading, 9000);
-    assert!(b.gimbal.is_link_up());
+    assert!(b.link.is_link_up());
     assert_eq!(b.delivered, b.sent_postbacks);
     // Due at 500, 1000 and 1500 ms within the 2 s run (0 to 1999 ms).
     assert_eq!(b.sent_postbacks.len(), 3);
     assert_eq!(b.events.first().map(|e| e.1), Some(Event::LinkUp));
-    let s = b.gimbal.stats();
-    assert_eq!((s.link.frames_sent, s.bytes_sent), (2, 48));
-    assert_eq!(s.link.postbacks, 3);
+    let (l, s) = (b.link.stats(), b.port.stats());
+    assert_eq!((l.frames_sent, s.bytes_sent), (2, 48));
+    assert_eq!(l.postbacks, 3);
     assert_eq!(s.bytes_received, 3 * MESSAGE_LEN as u32);
     assert_eq!(s.stream.skipped_bytes, 0);
 }
@@ -222,11 +224,11 @@ fn slow_writers_never_interleave_or_lose_a_frame() {
         let arrived = if nb {
             let mut b = Bench::new(&pipe, nb_port(&pipe, 0), SimConfig::default(), 0);
             send_all(&mut b, &commands);
-            (b.arrived, b.sniffer.stats(), b.gimbal.stats())
+            (b.arrived, b.sniffer.stats(), b.port.stats())
         } else {
             let mut b = Bench::new(&pipe, io_port(&pipe, 0), SimConfig::default(), 0);
             send_all(&mut b, &commands);
-            (b.arrived, b.sniffer.stats(), b.gimbal.stats())
+            (b.arrived, b.sniffer.stats(), b.port.stats())
         };
         let expected: Vec<[u8; 8]> = commands.iter().map(|&c| encode(c)).collect();
         assert_eq!(arrived.0, expected, "{faults:?}");
@@ -244,9 +246,9 @@ fn slow_writers_never_interleave_or_lose_a_frame() {
 }
 
 /// Sends every command, waiting for room in the queue, then runs until all went out.
-fn send_all<P: SerialPort>(b: &mut Bench<P>, commands: &[GimbalCommand]) {
+fn send_all<P: Uart>(b: &mut Bench<P>, commands: &[GimbalCommand]) {
     for &c in commands {
-        while b.gimbal.send(c).is_err() {
+        while b.link.send(c).is_err() {
             b.tick();
         }
         b.tick();
@@ -261,7 +263,7 @@ fn the_dead_man_stops_the_gimbal_over_serial() {
     let rate = Rate::new(20.0, 0.0).unwrap();
     // Refreshed every 20 ms from 0 to 980 ms, then released.
     for _ in 0..50 {
-        b.gimbal.set_rate(rate, b.instant()).unwrap();
+        b.link.set_rate(rate, b.instant()).unwrap();
         b.run(20);
     }
     let last_refresh = 980;
@@ -323,13 +325,13 @@ fn headings_are_nose_referenced_and_point_at_aims_from_the_vehicle_heading() {
     .unwrap();
     let observe = |b: &mut Bench<_>| {
         let now = b.instant();
-        b.gimbal
+        b.link
             .set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
-        b.gimbal.set_gps(Gps::new(here.0, here.1).unwrap(), now);
-        b.gimbal.set_altitude(Altitude::new(here.2).unwrap(), now);
+        b.link.set_gps(Gps::new(here.0, here.1).unwrap(), now);
+        b.link.set_altitude(Altitude::new(here.2).unwrap(), now);
     };
     observe(&mut b);
-    b.gimbal.point_at(east);
+    b.link.point_at(east);
     for _ in 0..10 {
         observe(&mut b);
         b.run(100);
@@ -372,7 +374,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     let mut i = 0u32;
     while pipe.stats(0).written + pipe.stats(1).written < 1_000_000 {
         let c = GimbalCommand::Pitch(Pitch::new(-((i % 10_000) as f32) / 100.0).unwrap());
-        if b.gimbal.send(c).is_ok() {
+        if b.link.send(c).is_ok() {
             sent.push(encode(c));
             i += 1;
         }
@@ -397,7 +399,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         b.arrived.len(),
         sent.len()
     );
-    let received = b.gimbal.stats().link.postbacks as usize;
+    let received = b.link.stats().postbacks as usize;
     assert!(
         received * 10 > b.sent_postbacks.len() * 8,
         "{received} of {}",
@@ -415,7 +417,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     };
     accounted(to_gimbal, pipe.pending(1));
     accounted(to_fc, pipe.pending(0));
-    let g = b.gimbal.stats();
+    let g = b.port.stats();
     assert_eq!(g.bytes_sent, to_gimbal.written);
     assert_eq!(g.bytes_received, to_fc.delivered);
     assert_eq!(
@@ -423,7 +425,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         g.stream.postbacks * MESSAGE_LEN as u32
             + g.stream.control_frames * FRAME_LEN as u32
             + g.stream.skipped_bytes
-            + b.gimbal.link().parser().pending() as u32
+            + b.port.stream().parser().pending() as u32
     );
     let p = b.sim.parser().stats();
     assert_eq!(
@@ -435,7 +437,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     );
     assert_eq!(p.control_frames as usize, b.arrived.len());
     // Each read or write error the pipe injected was counted by the driver.
-    let e = b.gimbal.stats().port_errors;
+    let e = b.port.stats().port_errors;
     assert!(e.read > 0 && e.write > 0);
     assert_eq!(
         e.read + e.write + b.sim_errors,
@@ -599,16 +601,15 @@ fn the_io_adapter_never_calls_what_would_block() {
     assert_eq!((rx.calls, tx.calls), (1, 1));
 
     // Through the driver: a port that is never ready leaves the command queued.
-    let mut gimbal: SerialGimbal<_> =
-        SerialGimbal::new(Io::new(gate(false), gate(false)), Config::default());
-    gimbal
-        .send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut port = SerialPort::new(Io::new(gate(false), gate(false)));
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
         .unwrap();
     for ms in 0..100 {
-        gimbal.poll(Instant::from_millis(ms)).unwrap();
+        port.poll(&mut link, Instant::from_millis(ms)).unwrap();
     }
-    assert_eq!(gimbal.stats().link.frames_sent, 0);
-    assert!(gimbal.link().has_transmit());
+    assert_eq!(link.stats().frames_sent, 0);
+    assert!(link.has_transmit());
 }
 
 /// A backlog larger than one poll reads (`max_rx_per_poll` reads of up to 32 bytes) is
@@ -624,7 +625,8 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
         max_rx_per_poll: core::num::NonZeroU16::new(2).unwrap(),
         ..Config::default()
     };
-    let mut gimbal: SerialGimbal<_> = SerialGimbal::new(io_port(&pipe, 0), config);
+    let mut gimbal: SerialLink = SerialLink::new(config);
+    let mut port = SerialPort::new(io_port(&pipe, 0));
     let mut sim_port = io_port(&pipe, 1);
     // Nine postbacks (243 bytes) waiting at once.
     let sent: Vec<Postback> = (0..9)
@@ -639,10 +641,10 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
     let mut got = Vec::new();
     let mut polls = 0;
     while pipe.pending(0) > 0 {
-        gimbal.poll(Instant::from_millis(polls)).unwrap();
+        port.poll(&mut gimbal, Instant::from_millis(polls)).unwrap();
         polls += 1;
         // At most 2 reads of at most 3 bytes a poll.
-        assert!(gimbal.stats().bytes_received <= 6 * polls);
+        assert!(port.stats().bytes_received <= 6 * polls);
         if gimbal.next_event().is_some() {
             got.push(
                 gimbal
@@ -653,7 +655,7 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
         }
         while gimbal.next_event().is_some() {}
     }
-    assert_eq!(gimbal.stats().bytes_received, 9 * MESSAGE_LEN as u32);
-    assert_eq!(gimbal.stats().link.postbacks, 9);
+    assert_eq!(port.stats().bytes_received, 9 * MESSAGE_LEN as u32);
+    assert_eq!(gimbal.stats().postbacks, 9);
     assert_eq!(got, sent);
 }

@@ -42,15 +42,13 @@
 //! carries no vehicle frames).
 
 use std::io::Write;
-use std::marker::PhantomData;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant as StdInstant};
 
-use idu_gimbal::link::{Config, Link};
+use idu_gimbal::link::{Can, Config, Link, Medium};
 use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::wire::postback::GimbalType;
-use idu_gimbal::GimbalControl;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
@@ -59,7 +57,9 @@ use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::error::Failure;
-use crate::transport::{clock, Job, Mode, SerialSpec, Session, StreamPort, Target};
+use crate::transport::{
+    self, clock, Job, Mode, SerialSpec, Session, StreamPort, Target, Transport,
+};
 
 mod peer_log;
 mod peers;
@@ -190,11 +190,12 @@ pub struct Options<'a> {
 
 /// The gimbal side, moved each tick.
 trait Pump {
-    type G: GimbalControl;
+    /// What the link to the gimbal carries.
+    type Medium: Medium;
     /// Moves frames or bytes between the gimbal and the link; `Err` ends the run.
-    fn pump(bridge: &mut Bridge<Self::G>, side: &mut Self, now: Instant) -> Result<(), Failure>;
+    fn pump(&mut self, link: &mut Link<8, 8, Self::Medium>, now: Instant) -> Result<(), Failure>;
     /// Faults new since the last call, for stderr.
-    fn notes(_bridge: &mut Bridge<Self::G>) -> Vec<String> {
+    fn notes(&mut self) -> Vec<String> {
         Vec::new()
     }
 }
@@ -223,9 +224,9 @@ fn stdin_lines() -> std::sync::mpsc::Receiver<String> {
 }
 
 impl Pump for SimSide {
-    type G = Link;
-    fn pump(bridge: &mut Bridge<Link>, side: &mut Self, now: Instant) -> Result<(), Failure> {
-        let link = bridge.gimbal_mut();
+    type Medium = Can;
+    fn pump(&mut self, link: &mut Link, now: Instant) -> Result<(), Failure> {
+        let side = self;
         link.poll(now);
         while let Some(f) = link.next_transmit() {
             link.transmit_done(None);
@@ -257,16 +258,16 @@ impl Pump for SimSide {
     }
 }
 
-/// A real gimbal: the bridge drives the transport's session, which the bridge owns.
-struct SessionSide<S>(PhantomData<S>);
+/// A real gimbal: the transport moves the link's frames.
+struct TransportSide<T>(T);
 
-impl<S: Session> Pump for SessionSide<S> {
-    type G = S;
-    fn pump(bridge: &mut Bridge<S>, _side: &mut Self, now: Instant) -> Result<(), Failure> {
-        bridge.gimbal_mut().pump(now)
+impl<T: Transport> Pump for TransportSide<T> {
+    type Medium = T::Medium;
+    fn pump(&mut self, link: &mut Link<8, 8, T::Medium>, now: Instant) -> Result<(), Failure> {
+        transport::pump(&mut self.0, link, now)
     }
-    fn notes(bridge: &mut Bridge<S>) -> Vec<String> {
-        bridge.gimbal_mut().take_notes()
+    fn notes(&mut self) -> Vec<String> {
+        self.0.take_notes()
     }
 }
 
@@ -332,7 +333,7 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let now = clock(StdInstant::now());
     match opts.gimbal {
         Gimbal::Sim => {
-            let bridge = Bridge::new(Link::new(Config::default()), config);
+            let bridge = Bridge::new(config);
             // The simulated gimbal is of the family's type: the dual light's postback says
             // so, and the camera's model and zoom range follow it.
             let sim_config = SimConfig {
@@ -353,7 +354,8 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
                 stdin: stdin_lines(),
             };
             announce(&where_, "the simulated gimbal (in-process, CAN)")?;
-            serve(bridge, side, port, now, opts.exit_after_ms)
+            let link = Link::new(Config::default());
+            serve(bridge, link, side, port, now, opts.exit_after_ms)
         }
         Gimbal::Target(target) => {
             let mut what = target.describe();
@@ -413,13 +415,14 @@ struct Bridged {
 impl Job for Bridged {
     type Out = ();
 
-    fn run<S: Session>(self, session: S) -> Result<(), Failure> {
+    fn run<T: Transport>(self, session: Session<T>) -> Result<(), Failure> {
         announce(&self.announce.0, &self.announce.1)?;
-        let bridge = Bridge::new(session, self.config);
+        let bridge = Bridge::new(self.config);
         let now = clock(StdInstant::now());
         serve(
             bridge,
-            SessionSide::<S>(PhantomData),
+            session.link,
+            TransportSide(session.transport),
             self.port,
             now,
             self.exit_after_ms,
@@ -437,7 +440,8 @@ fn announce(where_: &str, gimbal: &str) -> Result<(), Failure> {
 }
 
 fn serve<S: Pump>(
-    mut bridge: Bridge<S::G>,
+    mut bridge: Bridge,
+    mut link: Link<8, 8, S::Medium>,
     mut side: S,
     mut port: Port,
     now: impl Fn() -> Instant,
@@ -479,19 +483,22 @@ fn serve<S: Pump>(
         let drained = match &mut port {
             Port::Udp { socket, to } => receive_udp(
                 &mut bridge,
+                &mut link,
                 socket,
                 to,
                 &mut clients,
                 &mut buf,
                 t,
                 clock,
-                |bridge| S::pump(bridge, &mut side, t),
+                |link| side.pump(link, t),
             )?,
-            Port::Serial(serial) => receive_serial(&mut bridge, serial, &mut buf, &mut held, t)?,
+            Port::Serial(serial) => {
+                receive_serial(&mut bridge, &mut link, serial, &mut buf, &mut held, t)?
+            }
         };
-        S::pump(&mut bridge, &mut side, t)?;
-        bridge.poll(t);
-        let up = bridge.gimbal().is_link_up();
+        side.pump(&mut link, t)?;
+        bridge.poll(&mut link, t);
+        let up = link.is_link_up();
         if up != was_up {
             eprintln!(
                 "gimbalctl mavlink: gimbal link {}",
@@ -500,7 +507,7 @@ fn serve<S: Pump>(
             was_up = up;
         }
         if clock >= notes_at {
-            for note in S::notes(&mut bridge) {
+            for note in side.notes() {
                 eprintln!("gimbalctl mavlink: warning: {note}");
             }
             let others = bridge.stats().other_autopilots;
@@ -547,8 +554,9 @@ fn serve<S: Pump>(
 
 /// Reads what the serial port has (bounded) into the bridge as a byte stream; whether the
 /// port was emptied. A port that went away ends the run.
-fn receive_serial<G: GimbalControl>(
-    bridge: &mut Bridge<G>,
+fn receive_serial<M: Medium>(
+    bridge: &mut Bridge,
+    link: &mut Link<8, 8, M>,
     port: &mut StreamPort,
     buf: &mut [u8],
     held: &mut Vec<u8>,
@@ -556,7 +564,7 @@ fn receive_serial<G: GimbalControl>(
 ) -> Result<bool, Failure> {
     // The bytes after a frame that waited for room in the outbox, before anything newer.
     if !held.is_empty() {
-        let taken = bridge.receive(held, t);
+        let taken = bridge.receive(link, held, t);
         held.drain(..taken);
         if !held.is_empty() {
             // Still waiting: the port keeps what came since until the outbox drains.
@@ -568,7 +576,7 @@ fn receive_serial<G: GimbalControl>(
         match port.read_now(&mut buf[..chunk]) {
             Ok(0) => return Ok(true),
             Ok(n) => {
-                let taken = bridge.receive(&buf[..n], t);
+                let taken = bridge.receive(link, &buf[..n], t);
                 if taken < n {
                     held.extend_from_slice(&buf[taken..n]);
                     return Ok(true);
@@ -580,12 +588,12 @@ fn receive_serial<G: GimbalControl>(
     Ok(false)
 }
 
-/// The bridge over the library's `Gimbal<C>` on the core's in-memory CAN bus (the session
+/// The bridge over the library's `CanPort<C>` on the core's in-memory CAN bus (the transport
 /// `--can` runs over SocketCAN), with the library's simulated gimbal at the other end.
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transport::can::CanSession;
+    use crate::transport::can::CanTransport;
     use embedded_can::{nb::Can, Frame as _};
     use idu_gimbal::mock::{Bus, MockFrame};
     use idu_gimbal_mavlink::attitude::YawPitch;
@@ -617,9 +625,13 @@ mod tests {
     fn the_autopilots_attitude_gps_and_altitude_reach_the_can_gimbal() {
         let bus: Bus<2, 64> = Bus::new(5);
         let mut gimbal_end = bus.endpoint(1).unwrap();
-        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
-        let mut bridge = Bridge::new(session, BridgeConfig::default());
-        let mut side = SessionSide::<CanSession<_>>(PhantomData);
+        let mut side = TransportSide(CanTransport::new(
+            bus.endpoint(0).unwrap(),
+            "mock0",
+            Mode::Drive,
+        ));
+        let mut link: Link = Link::new(Config::default());
+        let mut bridge = Bridge::new(BridgeConfig::default());
         let t = Instant::from_millis;
         let mut sim: Simulator = Simulator::new(SimConfig::default(), t(0));
         let heartbeat = Heartbeat {
@@ -669,11 +681,11 @@ mod tests {
                 // A byte stream, as from --autopilot-serial, in two pieces.
                 let (a, b) = bytes.split_at(bytes.len() / 3);
                 // Drained every tick: every byte is taken at once.
-                assert_eq!(bridge.receive(a, now), a.len());
-                assert_eq!(bridge.receive(b, now), b.len());
+                assert_eq!(bridge.receive(&mut link, a, now), a.len());
+                assert_eq!(bridge.receive(&mut link, b, now), b.len());
             }
-            SessionSide::pump(&mut bridge, &mut side, now).unwrap();
-            bridge.poll(now);
+            side.pump(&mut link, now).unwrap();
+            bridge.poll(&mut link, now);
             let n = bridge.transmit_bytes().len();
             bridge.transmit_written(n);
             while let Ok(f) = gimbal_end.receive() {
@@ -693,8 +705,8 @@ mod tests {
         assert_eq!((gps.lat_e7(), gps.lon_e7()), (473_977_420, 85_455_940));
         assert!(state.altitude.is_some());
         assert!(state.north_referenced, "headings north-referenced on CAN");
-        assert!(bridge.gimbal().is_link_up());
-        assert!(bridge.gimbal().north_referenced(t(3_000)));
+        assert!(link.is_link_up());
+        assert!(link.north_referenced(t(3_000)));
         // The setpoint became a pitch command on the bus.
         assert_eq!(state.target_pitch_deg, Some(-45.0));
         assert!(sim.stats().vehicle_frames >= 20, "{:?}", sim.stats());

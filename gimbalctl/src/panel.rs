@@ -1,9 +1,9 @@
 //! `gimbalctl control (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD])`: an
 //! interactive terminal panel.
 //!
-//! Every byte or frame goes through the library's driver for the transport (a
-//! [`Session`]: `SerialGimbal` for the serial server and the UART, `Gimbal<C>` for CAN):
-//! commands are queued on its link, the arrow keys drive its rate hold, and the panel shows
+//! Every byte or frame goes through the library's link and the port for the transport (a
+//! [`Session`]: `SerialPort` for the serial server and the UART, `CanPort<C>` for CAN):
+//! commands are queued on the link, the arrow keys drive its rate hold, and the panel shows
 //! its latest postback, state and counters (bus errors on CAN, bytes that held no frame on
 //! the serial paths).
 //!
@@ -34,7 +34,7 @@ use ratatui::Terminal;
 
 use crate::error::Failure;
 use crate::spec;
-use crate::transport::{clock, Job, Mode, Session, Target};
+use crate::transport::{clock, Job, Mode, Session, Target, Transport};
 
 /// How long the loop waits for a key before looking at the socket and the link again.
 const TICK: Duration = Duration::from_millis(10);
@@ -89,8 +89,14 @@ fn centi(v: i64) -> String {
     format!("{sign}{}.{:02}", a / 100, a % 100)
 }
 
-fn draw<S: Session>(frame: &mut ratatui::Frame<'_>, link: &S, panel: &Panel, now: Instant) {
-    let link_state = match (link.is_link_up(), link.postbacks()) {
+fn draw<T: Transport>(
+    frame: &mut ratatui::Frame<'_>,
+    session: &Session<T>,
+    panel: &Panel,
+    now: Instant,
+) {
+    let link = &session.link;
+    let link_state = match (link.is_link_up(), link.stats().postbacks) {
         (true, _) => "up",
         (false, 0) => "waiting for the first postback",
         (false, _) => "DOWN (no postback for 1.5 s)",
@@ -143,7 +149,7 @@ fn draw<S: Session>(frame: &mut ratatui::Frame<'_>, link: &S, panel: &Panel, now
         Line::raw(format!("last sent  {}", panel.last_sent)),
         Line::raw(format!("last event {}", panel.last_event)),
     ];
-    let counters: Vec<Line> = link.counters().into_iter().map(Line::raw).collect();
+    let counters: Vec<Line> = session.counters().into_iter().map(Line::raw).collect();
     let keys = vec![
         Line::raw("arrows rate hold (stops 250 ms after the last key event)"),
         Line::raw("c centre  d look down  +/- zoom  p photo  r record  f follow  q quit"),
@@ -203,16 +209,16 @@ struct Panelled {
 impl Job for Panelled {
     type Out = ();
 
-    fn run<S: Session>(self, link: S) -> Result<(), Failure> {
-        panel(link, self.speed)
+    fn run<T: Transport>(self, session: Session<T>) -> Result<(), Failure> {
+        panel(session, self.speed)
     }
 }
 
 /// The panel over an open session.
-fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
+fn panel<T: Transport>(mut session: Session<T>, speed: f32) -> Result<(), Failure> {
     let now = clock(StdInstant::now());
     let mut panel = Panel {
-        target: link.name().to_owned(),
+        target: session.transport.name().to_owned(),
         speed,
         held: None,
         recording: false,
@@ -228,9 +234,9 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
     let result = (|| -> Result<(), Failure> {
         loop {
             let t = now();
-            link.pump(t)?;
+            session.pump(t)?;
             let mut changed = false;
-            while let Some(ev) = link.next_event() {
+            while let Some(ev) = session.link.next_event() {
                 match ev {
                     Event::Postback => {}
                     Event::LinkUp => panel.last_event = "link up".into(),
@@ -246,7 +252,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                 changed = true;
             }
             if changed || drawn.elapsed() >= REDRAW {
-                term.draw(|f| draw(f, &link, &panel, now()))
+                term.draw(|f| draw(f, &session, &panel, now()))
                     .map_err(|e| Failure::io("terminal", e))?;
                 drawn = StdInstant::now();
             }
@@ -271,8 +277,8 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                     let mut send: Option<Command> = None;
                     let mut hold: Option<Rate> = None;
                     match key.code {
-                        _ if ctrl_c => return quit(&mut link, now),
-                        KeyCode::Char('q') => return quit(&mut link, now),
+                        _ if ctrl_c => return quit(&mut session, now),
+                        KeyCode::Char('q') => return quit(&mut session, now),
                         KeyCode::Up => hold = rate(0.0, speed),
                         KeyCode::Down => hold = rate(0.0, -speed),
                         KeyCode::Left => hold = rate(-speed, 0.0),
@@ -298,7 +304,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                         _ => {}
                     }
                     if let Some(r) = hold {
-                        match link.set_rate(r, t) {
+                        match session.link.set_rate(r, t) {
                             Ok(()) => {
                                 if panel.held != Some(r) {
                                     panel.last_sent =
@@ -310,7 +316,7 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                         }
                     }
                     if let Some(cmd) = send {
-                        match link.send(cmd) {
+                        match session.link.send(cmd) {
                             Ok(()) => {
                                 if cmd == Command::from(GimbalCommand::Video(Video::Start)) {
                                     panel.recording = true;
@@ -325,13 +331,13 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
                             Err(_) => panel.last_event = "queue full: command not sent".into(),
                         }
                     }
-                    link.pump(t)?;
+                    session.pump(t)?;
                 }
                 if !event::poll(Duration::ZERO).map_err(|e| Failure::io("terminal", e))? {
                     break;
                 }
             }
-            term.draw(|f| draw(f, &link, &panel, now()))
+            term.draw(|f| draw(f, &session, &panel, now()))
                 .map_err(|e| Failure::io("terminal", e))?;
             drawn = StdInstant::now();
         }
@@ -339,14 +345,15 @@ fn panel<S: Session>(mut link: S, speed: f32) -> Result<(), Failure> {
     drop(term);
     drop(guard);
     if result.is_ok() {
-        link.finish();
+        session.finish();
     }
     result
 }
 
 /// `q`: a zero rate (through the link: the end of the hold, or a zero-rate command when
 /// none is held), written before leaving.
-fn quit<S: Session>(link: &mut S, now: impl Fn() -> Instant) -> Result<(), Failure> {
+fn quit<T: Transport>(session: &mut Session<T>, now: impl Fn() -> Instant) -> Result<(), Failure> {
+    let link = &mut session.link;
     if link.is_rate_holding() {
         link.stop_rate();
     } else if link.send(GimbalCommand::Rate(Rate::ZERO)).is_err() {
@@ -355,14 +362,14 @@ fn quit<S: Session>(link: &mut S, now: impl Fn() -> Instant) -> Result<(), Failu
     }
     let deadline = StdInstant::now() + QUIT_FLUSH;
     loop {
-        link.pump(now())?;
-        if !link.has_transmit() {
+        session.pump(now())?;
+        if !session.has_transmit() {
             break;
         }
         if StdInstant::now() >= deadline {
             return Err(Failure::Runtime(format!(
                 "cannot send the zero rate to {} within {} ms",
-                link.name(),
+                session.transport.name(),
                 QUIT_FLUSH.as_millis()
             )));
         }

@@ -14,7 +14,7 @@ use crate::decode;
 use crate::error::Failure;
 use crate::json::Obj;
 use crate::spec::{self, Message, Spec};
-use crate::transport::{clock, Job, Mode, Seen, Session, Target};
+use crate::transport::{clock, Job, Mode, Seen, Session, Target, Transport};
 
 /// `monitor` warns after this long without a postback (three missed 500 ms periods).
 pub const SILENCE_WARNING: Duration = Duration::from_millis(1500);
@@ -77,10 +77,10 @@ struct SendJob {
 impl Job for SendJob {
     type Out = ();
 
-    fn run<S: Session>(self, mut s: S) -> Result<(), Failure> {
+    fn run<T: Transport>(self, mut s: Session<T>) -> Result<(), Failure> {
         let now = clock(Instant::now());
         let frames = self.message.frames().len() as u64;
-        let mut want = s.sent() + frames;
+        let mut want = u64::from(s.link.stats().frames_sent) + frames;
         queue(&mut s, &self.message, self.text.as_deref(), now())?;
         flush(&mut s, want, now)?;
         if let Some((every_ms, for_ms)) = self.repeat {
@@ -115,8 +115,8 @@ impl Job for SendJob {
 
 /// Hands a message to the library: commands to the queue, vehicle values to the push
 /// (CAN), a text to the text queue (CAN).
-fn queue<S: Session>(
-    s: &mut S,
+fn queue<T: Transport>(
+    s: &mut Session<T>,
     message: &Message,
     text: Option<&str>,
     now: idu_gimbal::Instant,
@@ -124,43 +124,49 @@ fn queue<S: Session>(
     match message {
         Message::Control(cmds) => {
             for cmd in cmds {
-                s.send(*cmd).map_err(|_| {
+                s.link.send(*cmd).map_err(|_| {
                     Failure::Runtime(format!(
                         "cannot send to {}: the transmit queue is full",
-                        s.name()
+                        s.transport.name()
                     ))
                 })?;
             }
         }
-        Message::Vehicle(VehicleFrame::Gps(g)) => s.set_gps(*g, now),
-        Message::Vehicle(VehicleFrame::Altitude(a)) => s.set_altitude(*a, now),
-        Message::Vehicle(VehicleFrame::Attitude(a)) => s.set_attitude(*a, now),
+        Message::Vehicle(VehicleFrame::Gps(g)) => s.link.set_gps(*g, now),
+        Message::Vehicle(VehicleFrame::Altitude(a)) => s.link.set_altitude(*a, now),
+        Message::Vehicle(VehicleFrame::Attitude(a)) => s.link.set_attitude(*a, now),
         Message::Text(_) => s
             .send_text(text.unwrap_or_default().as_bytes())
-            .map_err(|e| Failure::Runtime(format!("cannot send the text to {}: {e}", s.name())))?,
+            .map_err(|e| {
+                Failure::Runtime(format!(
+                    "cannot send the text to {}: {e}",
+                    s.transport.name()
+                ))
+            })?,
     }
     Ok(())
 }
 
-/// Polls until `want` frames in all were taken by the port or bus.
-fn flush<S: Session>(
-    s: &mut S,
+/// Polls until `want` frames in all were taken by the port or bus, and nothing of them
+/// waits to be written.
+fn flush<T: Transport>(
+    s: &mut Session<T>,
     want: u64,
     now: impl Fn() -> idu_gimbal::Instant,
 ) -> Result<(), Failure> {
     let deadline = Instant::now() + SEND_TIMEOUT;
     loop {
         s.pump(now())?;
-        if s.sent() >= want {
+        if u64::from(s.link.stats().frames_sent) >= want && !s.has_transmit() {
             return Ok(());
         }
         if Instant::now() >= deadline {
             let mut why = format!(
                 "cannot send to {}: not taken within {} s",
-                s.name(),
+                s.transport.name(),
                 SEND_TIMEOUT.as_secs()
             );
-            for note in s.take_notes() {
+            for note in s.transport.take_notes() {
                 why.push_str("; ");
                 why.push_str(&note);
             }
@@ -225,7 +231,7 @@ struct MonitorJob {
 impl Job for MonitorJob {
     type Out = ();
 
-    fn run<S: Session>(self, s: S) -> Result<(), Failure> {
+    fn run<T: Transport>(self, s: Session<T>) -> Result<(), Failure> {
         let stdout = std::io::stdout();
         let mut out = stdout.lock();
         watch(s, self.json, self.count, &mut out, None)
@@ -235,8 +241,8 @@ impl Job for MonitorJob {
 /// `monitor`'s loop over any session, writing to `out`; `until`, for tests, ends it after
 /// that long (Ok). Each postback is printed once: a monitor session completes at most one
 /// per poll.
-pub fn watch<S: Session>(
-    mut s: S,
+pub fn watch<T: Transport>(
+    mut s: Session<T>,
     json: bool,
     count: Option<u64>,
     out: &mut impl Write,
@@ -245,7 +251,7 @@ pub fn watch<S: Session>(
     let start = Instant::now();
     let now = clock(start);
     let mut seen = 0u64;
-    let mut postbacks = s.postbacks();
+    let mut postbacks = s.link.stats().postbacks;
     // The last postback (or the start), and when to warn about silence next.
     let mut last = Instant::now();
     let mut warn_at = last + SILENCE_WARNING;
@@ -257,7 +263,7 @@ pub fn watch<S: Session>(
             return Ok(());
         }
         let t = now();
-        if let Err(e) = s.poll_once(t) {
+        if let Err(e) = s.poll(t) {
             return Err(match e {
                 Failure::Runtime(why) => {
                     Failure::Runtime(format!("{why} (after {seen} postback(s))"))
@@ -267,19 +273,19 @@ pub fn watch<S: Session>(
         }
         line.clear();
         let ts = now_timestamp();
-        for frame in s.take_frames() {
+        for frame in s.transport.take_frames() {
             if !frame.is(ids::POSTBACK) {
                 describe_frame(&mut line, &frame, &mut texts, json.then_some(ts.as_bytes()));
             }
         }
         let mut done = false;
-        if s.postbacks() != postbacks {
-            postbacks = s.postbacks();
-            if let Some((pb, _age)) = s.latest_postback(t) {
+        if s.link.stats().postbacks != postbacks {
+            postbacks = s.link.stats().postbacks;
+            if let Some((pb, _age)) = s.link.latest_postback(t) {
                 last = Instant::now();
                 warn_at = last + SILENCE_WARNING;
                 if json {
-                    let id = s.is_can().then_some(ids::POSTBACK);
+                    let id = T::IS_CAN.then_some(ids::POSTBACK);
                     decode::write_postback(&mut line, Some(ts.as_bytes()), id, &pb);
                 } else {
                     line.extend_from_slice(readable(&pb).as_bytes());
@@ -300,7 +306,7 @@ pub fn watch<S: Session>(
         }
         let clock_now = Instant::now();
         if clock_now >= notes_at {
-            for note in s.take_notes() {
+            for note in s.transport.take_notes() {
                 eprintln!("gimbalctl: warning: {note}");
             }
             notes_at = clock_now + NOTE_EVERY;
@@ -308,12 +314,12 @@ pub fn watch<S: Session>(
         if clock_now >= warn_at {
             eprintln!(
                 "gimbalctl: warning: no postback from {} for {:.1} s",
-                s.name(),
+                s.transport.name(),
                 (clock_now - last).as_secs_f64()
             );
             warn_at += SILENCE_WARNING;
         }
-        if s.drained() {
+        if s.transport.drained() {
             std::thread::sleep(Duration::from_millis(2));
         }
     }
@@ -432,12 +438,12 @@ fn vehicle_text(v: &VehicleFrame) -> String {
     }
 }
 
-/// `send` and `monitor` over the library's `Gimbal<C>` on the core's in-memory CAN bus: the
+/// `send` and `monitor` over the library's `CanPort<C>` on the core's in-memory CAN bus: the
 /// same session code `--can` runs over a SocketCAN socket.
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transport::can::CanSession;
+    use crate::transport::can::CanTransport;
     use embedded_can::{nb::Can, Frame as _};
     use idu_gimbal::mock::{Bus, MockFrame};
     use idu_gimbal::sim::{SimConfig, Simulator};
@@ -459,7 +465,10 @@ mod tests {
     fn sent_on_can(args: &[&str], repeat: Option<(u64, u64)>) -> Vec<String> {
         let bus: Bus<2, 64> = Bus::new(1);
         let mut gimbal = bus.endpoint(1).unwrap();
-        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
+        let session = Session::new(
+            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive),
+            Mode::Drive,
+        );
         let s = spec(args);
         let job = SendJob {
             message: s.build().unwrap(),
@@ -552,7 +561,10 @@ mod tests {
     #[test]
     fn monitor_on_can_shows_postbacks_and_every_other_frame() {
         let bus: Bus<2, 64> = Bus::new(2);
-        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor);
+        let session = Session::new(
+            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor),
+            Mode::Monitor,
+        );
         let _other = traffic(&bus);
         let mut out = Vec::new();
         watch(
@@ -585,7 +597,10 @@ mod tests {
     #[test]
     fn monitor_on_can_writes_json_as_decode_does() {
         let bus: Bus<2, 64> = Bus::new(3);
-        let session = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor);
+        let session = Session::new(
+            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor),
+            Mode::Monitor,
+        );
         let _other = traffic(&bus);
         let mut out = Vec::new();
         watch(
@@ -621,22 +636,25 @@ mod tests {
     #[test]
     fn bus_errors_are_counted_and_told_once() {
         let bus: Bus<2, 64> = Bus::new(4);
-        let mut s = CanSession::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive);
+        let mut s = Session::new(
+            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive),
+            Mode::Drive,
+        );
         let _other = traffic(&bus);
         bus.inject_error(0, embedded_can::ErrorKind::Acknowledge);
         let t = idu_gimbal::Instant::from_millis(0);
         s.pump(t).unwrap();
-        assert_eq!(s.postbacks(), 2);
+        assert_eq!(s.link.stats().postbacks, 2);
         let counters = s.counters();
         assert!(
             counters[2].starts_with("bus errors 1  last: "),
             "{counters:?}"
         );
-        let notes = s.take_notes();
+        let notes = s.transport.take_notes();
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].starts_with("mock0: ") && notes[0].ends_with("(1 new, 1 in all)"));
-        assert!(s.take_notes().is_empty());
+        assert!(s.transport.take_notes().is_empty());
         // A monitor-less session records no frames.
-        assert!(s.take_frames().is_empty());
+        assert!(s.transport.take_frames().is_empty());
     }
 }

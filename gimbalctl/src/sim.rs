@@ -173,7 +173,7 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
 /// `gimbalctl sim --pty [--exit-after-ms MS]`.
 #[cfg(unix)]
 pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
-    use idu_gimbal::driver::SerialPort;
+    use idu_gimbal::port::Uart;
 
     let (master, path) =
         open_pty().map_err(|e| Failure::Runtime(format!("cannot open a pseudo-terminal: {e}")))?;
@@ -310,7 +310,7 @@ struct PtyMaster {
 }
 
 #[cfg(unix)]
-impl idu_gimbal::driver::SerialPort for PtyMaster {
+impl idu_gimbal::port::Uart for PtyMaster {
     type ReadError = ();
     type WriteError = ();
 

@@ -5,12 +5,13 @@
 //! Every gimbal-facing command (`send`, `monitor`, `control`, `mavlink`) flattens
 //! [`GimbalArgs`] into its arguments, turns it into a [`Target`] (usage errors, exit 2,
 //! before anything is opened) and hands a [`Job`] to [`Target::run`], which opens the
-//! transport and runs the job's one generic body over a [`Session`]:
+//! transport and runs the job's one generic body over a [`Session`]: the library's link,
+//! the one command surface, and the [`Transport`] that moves its frames:
 //!
-//! - `--tcp` and `--serial`: a [`StreamSession`], the library's `SerialGimbal` over a
+//! - `--tcp` and `--serial`: a [`StreamTransport`], the library's `SerialPort` over a
 //!   non-blocking [`StreamPort`] (a `TcpStream`, or a `serialport` tty at BAUD 8N1);
-//! - `--can`: a [`can::CanSession`], the library's `Gimbal<C>` over a [`can::Tap`] around any
-//!   `embedded_can::nb::Can`: the SocketCAN socket in non-blocking mode here, the core's
+//! - `--can`: a [`can::CanTransport`], the library's `CanPort<C>` over a [`can::Tap`] around
+//!   any `embedded_can::nb::Can`: the SocketCAN socket in non-blocking mode here, the core's
 //!   in-memory mock bus in the tests. Only the opening of the socket is SocketCAN's.
 //!
 //! What ends a session (exit 1, see [`Failure`]): a TCP connection the server closes, a
@@ -24,8 +25,8 @@ use std::ops::RangeInclusive;
 use std::time::Instant as StdInstant;
 
 use clap::Args;
-use idu_gimbal::link::Config;
-use idu_gimbal::{GimbalControl, Instant};
+use idu_gimbal::link::{Config, Link, LinkStats, Medium};
+use idu_gimbal::Instant;
 
 use crate::error::Failure;
 
@@ -33,7 +34,7 @@ pub mod can;
 pub mod stream;
 
 pub use can::Seen;
-pub use stream::{StreamPort, StreamSession};
+pub use stream::{StreamPort, StreamTransport};
 
 /// The gimbal's UART: 115200 baud, 8N1 (the protocol document's).
 pub const GIMBAL_BAUD: u32 = idu_gimbal::interface::UART_BAUD;
@@ -152,8 +153,8 @@ impl Target {
     /// Opens the transport and runs `job` over it.
     pub fn run<J: Job>(&self, mode: Mode, job: J) -> Result<J::Out, Failure> {
         match self {
-            Target::Tcp(t) => job.run(StreamSession::tcp(t, mode)?),
-            Target::Serial(s) => job.run(StreamSession::serial(s, mode)?),
+            Target::Tcp(t) => job.run(Session::new(StreamTransport::tcp(t, mode)?, mode)),
+            Target::Serial(s) => job.run(Session::new(StreamTransport::serial(s, mode)?, mode)),
             Target::Can(iface) => can::run_socketcan(iface, mode, job),
         }
     }
@@ -165,12 +166,12 @@ pub enum Mode {
     /// Commands and postbacks (`send`, `control`, `mavlink`).
     Drive,
     /// `monitor`: every received frame recorded, and at most one postback per poll, so
-    /// that each is seen (`poll_once` then [`Session::postbacks`]).
+    /// that each is seen ([`Session::poll`], then the link's postback count).
     Monitor,
 }
 
 impl Mode {
-    /// The link's timing for this mode.
+    /// The link's timing for this mode, the transport's receive bound `per_poll`.
     pub fn config(self, per_poll: u16) -> Config {
         let mut config = Config::default();
         if self == Mode::Monitor {
@@ -185,48 +186,40 @@ impl Mode {
 /// A command body, generic over the transport.
 pub trait Job {
     type Out;
-    fn run<S: Session>(self, session: S) -> Result<Self::Out, Failure>;
+    fn run<T: Transport>(self, session: Session<T>) -> Result<Self::Out, Failure>;
 }
 
-/// A gimbal reached through one transport: the library's command surface
-/// ([`GimbalControl`]) plus what moving bytes or frames needs.
-pub trait Session: GimbalControl {
+/// The gimbal end of one transport: the library's port, and what the host adds to it
+/// (a name, faults in words, the end of the connection).
+pub trait Transport {
+    /// What the transport carries.
+    type Medium: Medium;
+
+    /// Whether this is the CAN bus (postbacks have an ID, other frames are seen).
+    const IS_CAN: bool = false;
+
     /// How messages name the transport: `127.0.0.1:2000`, `/dev/ttyUSB0`, `can0`.
     fn name(&self) -> &str;
 
-    /// One poll of the library's driver: a bounded receive, the link's schedules, what the
-    /// port or bus takes now. `Err`: the connection, port or interface is gone (exit 1).
-    fn poll_once(&mut self, now: Instant) -> Result<(), Failure>;
+    /// The receive bound of one poll in `mode` (the link's `max_rx_per_poll`).
+    fn per_poll(mode: Mode) -> u16;
+
+    /// One poll of the library's port over `link`: a bounded receive, the link's
+    /// schedules, what the port or bus takes now. `Err`: the connection, port or interface
+    /// is gone (exit 1).
+    fn poll(&mut self, link: &mut Link<8, 8, Self::Medium>, now: Instant) -> Result<(), Failure>;
 
     /// Whether the last poll emptied what was waiting (another poll would read nothing).
     fn drained(&self) -> bool;
 
-    /// Polls until nothing more waits (at most 64 polls, so a flood cannot stall the
-    /// caller's loop).
-    fn pump(&mut self, now: Instant) -> Result<(), Failure> {
-        for _ in 0..64 {
-            self.poll_once(now)?;
-            if self.drained() {
-                break;
-            }
-        }
-        Ok(())
-    }
+    /// Whether anything waits to be written: queued on `link`, or part-written here.
+    fn has_transmit(&self, link: &Link<8, 8, Self::Medium>) -> bool;
 
-    /// Valid postbacks received so far.
-    fn postbacks(&self) -> u32;
+    /// Queues a text where the transport carries one (CAN); refused otherwise.
+    fn send_text(link: &mut Link<8, 8, Self::Medium>, text: &[u8]) -> Result<(), String>;
 
-    /// Frames handed to the port or bus so far.
-    fn sent(&self) -> u64;
-
-    /// Whether anything waits to be written.
-    fn has_transmit(&self) -> bool;
-
-    /// Queues a text (CAN only; the serial link refuses it).
-    fn send_text(&mut self, text: &[u8]) -> Result<(), String>;
-
-    /// The counters as lines for `control`'s panel (three).
-    fn counters(&self) -> [String; 3];
+    /// The link's and the transport's counters as lines for `control`'s panel (three).
+    fn counters(&self, link: &LinkStats) -> [String; 3];
 
     /// Faults new since the last call, one line each for stderr: CAN error frames,
     /// bytes that held no frame.
@@ -236,13 +229,71 @@ pub trait Session: GimbalControl {
     /// on CAN; empty otherwise).
     fn take_frames(&mut self) -> Vec<Seen>;
 
-    /// Whether this is the CAN bus (postbacks have an ID, other frames are seen).
-    fn is_can(&self) -> bool {
-        false
+    /// Ends the transport: written data is left to arrive (TCP: a gentle close).
+    fn finish(self);
+}
+
+/// A gimbal reached through one transport: the link (commands, vehicle data, events,
+/// postbacks, its counters) and the transport that moves its frames.
+pub struct Session<T: Transport> {
+    pub link: Link<8, 8, T::Medium>,
+    pub transport: T,
+}
+
+impl<T: Transport> Session<T> {
+    /// A session over `transport` with the link's timing for `mode`.
+    pub fn new(transport: T, mode: Mode) -> Self {
+        Session {
+            link: Link::new(mode.config(T::per_poll(mode))),
+            transport,
+        }
     }
 
-    /// Ends the session: written data is left to arrive (TCP: a gentle close).
-    fn finish(self);
+    /// One poll of the transport over the link.
+    pub fn poll(&mut self, now: Instant) -> Result<(), Failure> {
+        self.transport.poll(&mut self.link, now)
+    }
+
+    /// Polls until nothing more waits (see [`pump`]).
+    pub fn pump(&mut self, now: Instant) -> Result<(), Failure> {
+        pump(&mut self.transport, &mut self.link, now)
+    }
+
+    /// Whether anything waits to be written.
+    pub fn has_transmit(&self) -> bool {
+        self.transport.has_transmit(&self.link)
+    }
+
+    /// Queues a text (CAN only; the serial link carries none).
+    pub fn send_text(&mut self, text: &[u8]) -> Result<(), String> {
+        T::send_text(&mut self.link, text)
+    }
+
+    /// The counters as lines for `control`'s panel (three).
+    pub fn counters(&self) -> [String; 3] {
+        self.transport.counters(&self.link.stats())
+    }
+
+    /// Ends the session (see [`Transport::finish`]).
+    pub fn finish(self) {
+        self.transport.finish()
+    }
+}
+
+/// Polls `transport` over `link` until nothing more waits (at most 64 polls, so a flood
+/// cannot stall the caller's loop).
+pub fn pump<T: Transport>(
+    transport: &mut T,
+    link: &mut Link<8, 8, T::Medium>,
+    now: Instant,
+) -> Result<(), Failure> {
+    for _ in 0..64 {
+        transport.poll(link, now)?;
+        if transport.drained() {
+            break;
+        }
+    }
+    Ok(())
 }
 
 /// The host's monotonic clock as the library's millisecond tick, from `start`.

@@ -5,12 +5,12 @@
 //!
 //! `no_std`, allocation-free, `forbid(unsafe_code)`, and sans-IO like the core: MAVLink 2
 //! bytes in ([`Bridge::receive`]), MAVLink 2 bytes out ([`Bridge::transmit_bytes`]), time
-//! passed in ([`Bridge::poll`]); it drives the gimbal through the core's
-//! [`GimbalControl`](idu_gimbal::GimbalControl), implemented for its links and drivers on
-//! either transport (CAN or UART), and never reads a clock. Where the transport carries no
-//! vehicle frames (the UART), the vehicle's data is kept for point-at and headings stay
-//! nose-referenced, which the status and the setpoint conversion read from
-//! [`GimbalControl::north_referenced`](idu_gimbal::GimbalControl::north_referenced).
+//! passed in ([`Bridge::poll`]); it drives the gimbal through the application's
+//! [`Link`](idu_gimbal::Link), handed to each of those calls, on either transport (CAN or
+//! UART), and never reads a clock. Where the transport carries no vehicle frames (a
+//! [`SerialLink`](idu_gimbal::SerialLink)), the vehicle's data is kept for point-at and
+//! headings stay nose-referenced, which the status and the setpoint conversion read from
+//! [`Link::north_referenced`](idu_gimbal::Link::north_referenced).
 //!
 //! # What it does
 //!

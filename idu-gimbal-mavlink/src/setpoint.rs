@@ -1,7 +1,7 @@
 //! `GIMBAL_DEVICE_SET_ATTITUDE`: angles, rates, neutral and retract, in the yaw frame the
 //! setpoint names.
 //!
-//! - A quaternion becomes an aim for the core's link ([`GimbalControl::aim`]): its yaw in
+//! - A quaternion becomes an aim for the core's link ([`Link::aim`]): its yaw in
 //!   the setpoint's frame, its pitch. The link holds it closed loop: it sends the heading in
 //!   the gimbal's reference (north once the attitude has reached the gimbal, the nose
 //!   otherwise), sends it again when the vehicle turns, when the gimbal's reference changes
@@ -22,7 +22,7 @@
 //!   forward whatever the gimbal holds in lock) and `RETRACT` looks down (the gimbal has no
 //!   retracted pose), once each when the flag appears.
 
-use idu_gimbal::link::{Aim, Yaw};
+use idu_gimbal::link::{Aim, Link, Medium, Yaw};
 use idu_gimbal::wire::control::{GimbalCommand, Heading, Pitch, Rate};
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::GimbalDeviceFlags;
@@ -32,7 +32,6 @@ use crate::attitude::{is_nan_quaternion, YawPitch};
 use crate::bridge::State;
 use crate::status::Pose;
 use crate::tx::bump;
-use idu_gimbal::GimbalControl;
 
 /// Whether `flags` put a setpoint's yaw in the earth frame.
 fn earth_yaw(flags: GimbalDeviceFlags) -> bool {
@@ -44,9 +43,9 @@ fn earth_yaw(flags: GimbalDeviceFlags) -> bool {
 }
 
 impl State {
-    pub(crate) fn set_attitude<G: GimbalControl>(
+    pub(crate) fn set_attitude<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         set: &GimbalDeviceSetAttitude,
         now: Instant,
     ) {
@@ -124,9 +123,9 @@ impl State {
         }
     }
 
-    fn rate<G: GimbalControl>(
+    fn rate<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         set: &GimbalDeviceSetAttitude,
         now: Instant,
     ) {

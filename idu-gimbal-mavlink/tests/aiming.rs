@@ -15,7 +15,7 @@ use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::BridgeConfig;
 use mavio::dialects::common::enums::{GimbalDeviceErrorFlags, MavSeverity};
 use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd};
 use mavio::dialects::common::messages::{
@@ -29,7 +29,7 @@ const PX4_EARTH: GimbalDeviceFlags =
     GimbalDeviceFlags::YAW_LOCK.union(GimbalDeviceFlags::YAW_IN_EARTH_FRAME);
 
 struct Rig {
-    bridge: Bridge<Link>,
+    bridge: Firmware,
     sim: Simulator,
     now: u32,
     vehicle_deg: f32,
@@ -89,7 +89,7 @@ impl Rig {
     }
 
     fn with(sim: SimConfig) -> Self {
-        let bridge = Bridge::new(
+        let bridge = Firmware::new(
             Link::new(Config::default()),
             BridgeConfig {
                 camera: Some(CameraConfig::new("rtsp://192.168.42.108:554/stream=0").unwrap()),
@@ -133,7 +133,7 @@ impl Rig {
         if let (Some(p), true) = (self.position.clone(), self.now.is_multiple_of(200)) {
             self.send(&p);
         }
-        let link = self.bridge.gimbal_mut();
+        let link = &mut self.bridge.link;
         link.poll(now);
         while let Some(f) = link.next_transmit() {
             link.transmit_done(None);
@@ -141,7 +141,7 @@ impl Rig {
         }
         let _ = self.sim.poll(now);
         while let Some(f) = self.sim.pop_frame() {
-            self.bridge.gimbal_mut().receive(f.id, &f.data, now);
+            self.bridge.link.receive(f.id, &f.data, now);
         }
         self.bridge.poll(now);
         let frames = sent(&mut self.bridge);
@@ -349,8 +349,7 @@ fn an_image_carries_the_cameras_attitude_in_the_earth_frame() {
     // Unknown without a vehicle heading: NaN.
     let mut b = camera_bridge(CameraConfig::new("rtsp://192.168.42.108:554/stream=0").unwrap());
     for d in idu_gimbal::wire::postback::Postback::default().to_can_frames() {
-        b.gimbal_mut()
-            .receive(idu_gimbal::wire::ids::POSTBACK, &d, t(10));
+        b.link.receive(idu_gimbal::wire::ids::POSTBACK, &d, t(10));
     }
     b.receive_all(
         &frame(
@@ -400,7 +399,7 @@ fn a_setpoint_beyond_the_yaw_travel_or_not_reached_is_reported_once() {
     rig.setpoint = Some((GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 90.0, 0.0));
     rig.run(20_000);
     assert_eq!(rig.texts, ["Gimbal: setpoint not reached, re-sent 3 times"]);
-    assert_eq!(rig.bridge.gimbal().stats().aim_not_reached, 1);
+    assert_eq!(rig.bridge.link.stats().aim_not_reached, 1);
 }
 
 #[cfg(feature = "roi")]

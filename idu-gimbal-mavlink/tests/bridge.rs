@@ -4,13 +4,13 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::serial::SerialLink;
+use idu_gimbal::link::SerialLink;
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal_mavlink::attitude::YawPitch;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig, AUTOPILOT_SILENCE_MS};
+use idu_gimbal_mavlink::{BridgeConfig, AUTOPILOT_SILENCE_MS};
 use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
@@ -35,13 +35,13 @@ fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> Gimba
     }
 }
 
-fn fresh() -> Bridge<Link> {
-    Bridge::new(Link::new(Config::default()), BridgeConfig::default())
+fn fresh() -> Firmware {
+    Firmware::new(Link::new(Config::default()), BridgeConfig::default())
 }
 
 /// A bridge that has heard the autopilot's heartbeat (so its system id is the autopilot's),
 /// its output so far drained.
-fn bridge() -> Bridge<Link> {
+fn bridge() -> Firmware {
     let mut b = fresh();
     b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
     let _ = sent(&mut b);
@@ -73,7 +73,7 @@ fn heartbeats_at_1_hz_with_the_autopilots_system_id() {
 }
 
 /// The system id of the next gimbal heartbeat after `ms`.
-fn system_id_after(b: &mut Bridge<Link>, ms: u32) -> u8 {
+fn system_id_after(b: &mut Firmware, ms: u32) -> u8 {
     for ms in ms..ms + 1_100 {
         b.poll(t(ms));
         if let Some(f) = sent(b).iter().find(|f| f.message_id() == 0) {
@@ -86,7 +86,7 @@ fn system_id_after(b: &mut Bridge<Link>, ms: u32) -> u8 {
 #[test]
 fn the_first_autopilot_is_kept_until_it_falls_silent() {
     let mut b = fresh();
-    let hb_at = |b: &mut Bridge<Link>, from: (u8, u8), ms: u32| {
+    let hb_at = |b: &mut Firmware, from: (u8, u8), ms: u32| {
         b.receive_all(&frame(from, 0, &heartbeat()), t(ms));
     };
     assert_eq!(b.system_id(), 1);
@@ -180,7 +180,7 @@ fn the_vehicles_roll_pitch_and_heading_from_autopilot_state_reach_the_gimbal() {
         };
         let ms = 100 * (i as u32 + 1);
         b.receive_all(&frame(AP, i as u8, &state), t(ms));
-        let a = b.gimbal().attitude().expect("an attitude");
+        let a = b.link.attitude().expect("an attitude");
         assert_eq!(
             (a.roll_centideg(), a.pitch_centideg(), a.heading_centideg()),
             (roll * 100, pitch * 100, yaw * 100),
@@ -191,7 +191,7 @@ fn the_vehicles_roll_pitch_and_heading_from_autopilot_state_reach_the_gimbal() {
 
 #[test]
 fn a_configured_system_id_follows_only_its_own_autopilot() {
-    let mut b = Bridge::new(
+    let mut b = Firmware::new(
         Link::new(Config::default()),
         BridgeConfig {
             system_id: Some(9),
@@ -285,7 +285,7 @@ fn information_on_request_broadcast_or_addressed_and_an_ack_for_every_command() 
 #[test]
 fn the_attitude_status_interval_is_honoured() {
     let mut b = bridge();
-    let status_times = |b: &mut Bridge<Link>, from: u32, to: u32| {
+    let status_times = |b: &mut Firmware, from: u32, to: u32| {
         let mut n = 0;
         for ms in from..to {
             b.poll(t(ms));
@@ -336,9 +336,9 @@ fn the_attitude_status_interval_is_honoured() {
 }
 
 /// The postback's frames into the link, and the status the bridge sends next.
-fn status_after(b: &mut Bridge<Link>, p: &Postback, ms: u32) -> GimbalDeviceAttitudeStatus {
+fn status_after(b: &mut Firmware, p: &Postback, ms: u32) -> GimbalDeviceAttitudeStatus {
     for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+        b.link.receive(ids::POSTBACK, &data, t(ms));
     }
     let _ = sent(b);
     b.receive_all(
@@ -359,12 +359,12 @@ fn delta_yaw_is_the_vehicle_heading_when_the_gimbal_reported() {
         motor_heading: 1_000,
         ..Postback::default()
     };
-    let postback_at = |b: &mut Bridge<Link>, ms: u32| {
+    let postback_at = |b: &mut Firmware, ms: u32| {
         for data in p.to_can_frames() {
-            b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+            b.link.receive(ids::POSTBACK, &data, t(ms));
         }
     };
-    let delta_yaw_at = |b: &mut Bridge<Link>, ms: u32| {
+    let delta_yaw_at = |b: &mut Firmware, ms: u32| {
         let _ = sent(b);
         let c = command((0, 154), MavCmd::RequestMessage, 285.0, 0.0);
         b.receive_all(&frame(GCS, 0, &c), t(ms));
@@ -426,7 +426,7 @@ fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
     let mut state = autopilot_state(225.0 - 360.0);
     state.angular_velocity_z = 0.1;
     b.receive_all(&frame(AP, 0, &state), t(50));
-    b.gimbal_mut().poll(t(100));
+    b.link.poll(t(100));
     let s = status_after(&mut b, &p, 100);
     assert!(s.flags.contains(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME));
     let a = YawPitch::from_quaternion(s.q).unwrap();
@@ -446,7 +446,7 @@ fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
     let s = status_after(&mut b, &p, 1_051);
     assert!(s.delta_yaw.is_nan());
     // The link times out after 1.5 s without postbacks: COMMS_ERROR for pre-arm checks.
-    b.gimbal_mut().poll(t(3_000));
+    b.link.poll(t(3_000));
     b.poll(t(3_000));
     let s = &of::<GimbalDeviceAttitudeStatus>(&sent(&mut b))[0];
     assert!(s
@@ -501,7 +501,7 @@ fn the_status_flags_say_what_the_device_holds_not_the_postbacks_mode() {
     b.receive_all(&frame(AP, 5, &rate), t(40));
     assert!(yaw_lock(&status_after(&mut b, &lock, 40)));
     // The rate stream stops: the core's dead-man ends the hold, nothing is held.
-    b.gimbal_mut().poll(t(400));
+    b.link.poll(t(400));
     assert!(!yaw_lock(&status_after(&mut b, &lock, 400)));
     // Neutral: forward in the vehicle frame, NEUTRAL and no YAW_LOCK.
     b.receive_all(
@@ -530,8 +530,8 @@ fn the_status_flags_say_what_the_device_holds_not_the_postbacks_mode() {
 fn a_yaw_beyond_the_motors_travel_is_reported_at_the_yaw_limit() {
     let mut b = bridge();
     b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(0));
-    b.gimbal_mut().poll(t(0));
-    let _ = queued(b.gimbal_mut());
+    b.link.poll(t(0));
+    let _ = queued(&mut b.link);
     let limit = |s: &GimbalDeviceAttitudeStatus| {
         s.failure_flags
             .contains(GimbalDeviceErrorFlags::AT_YAW_LIMIT)
@@ -542,7 +542,7 @@ fn a_yaw_beyond_the_motors_travel_is_reported_at_the_yaw_limit() {
     assert!(!limit(&status_after(&mut b, &Postback::default(), 10)));
     // Earth -175 (185): beyond.
     b.receive_all(&frame(AP, 2, &set_attitude(earth, -175.0, 0.0)), t(20));
-    b.gimbal_mut().poll(t(20));
+    b.link.poll(t(20));
     assert!(limit(&status_after(&mut b, &Postback::default(), 20)));
     assert_eq!(b.stats().refused_setpoints, 0, "followed as far as it goes");
 }
@@ -552,8 +552,8 @@ fn angle_setpoints_become_heading_and_pitch_in_the_gimbals_reference() {
     // North-referenced (attitude pushed, vehicle heading 45°).
     let mut b = bridge();
     b.receive_all(&frame(AP, 0, &autopilot_state(45.0)), t(0));
-    b.gimbal_mut().poll(t(0));
-    let _ = queued(b.gimbal_mut());
+    b.link.poll(t(0));
+    let _ = queued(&mut b.link);
     let cases = [
         // (flags, yaw, pitch) -> heading commanded
         (GimbalDeviceFlags::YAW_IN_EARTH_FRAME, 90.0, -30.0, 900),
@@ -566,7 +566,7 @@ fn angle_setpoints_become_heading_and_pitch_in_the_gimbals_reference() {
         // Alternate pitch so that the dead-band never hides the pitch command.
         let pitch = pitch - i as f32;
         b.receive_all(&frame(AP, i as u8, &set_attitude(flags, yaw, pitch)), t(10));
-        let q = queued(b.gimbal_mut());
+        let q = queued(&mut b.link);
         assert_eq!(q.len(), 2, "{flags:?}: {q:?}");
         match (q[0], q[1]) {
             (GimbalCommand::Heading(h), GimbalCommand::Pitch(p)) => {
@@ -577,7 +577,7 @@ fn angle_setpoints_become_heading_and_pitch_in_the_gimbals_reference() {
         }
     }
     // Nose-referenced (serial link: no attitude reaches the gimbal), vehicle heading 45°.
-    let mut s = Bridge::new(
+    let mut s = Firmware::new(
         SerialLink::<8>::new(Config::default()),
         BridgeConfig::default(),
     );
@@ -592,9 +592,10 @@ fn angle_setpoints_become_heading_and_pitch_in_the_gimbals_reference() {
         t(10),
     );
     let mut commands = Vec::new();
-    while !s.gimbal_mut().transmit_bytes().is_empty() {
-        let bytes = s.gimbal_mut().transmit_bytes().to_vec();
-        s.gimbal_mut().transmit_written(bytes.len());
+    let mut stream = idu_gimbal::port::SerialStream::new();
+    while !stream.transmit_bytes(&mut s.link).is_empty() {
+        let bytes = stream.transmit_bytes(&mut s.link).to_vec();
+        stream.transmit_written(&mut s.link, bytes.len());
         let mut p = idu_gimbal::wire::serial::StreamParser::new();
         for item in p.feed(&bytes) {
             if let idu_gimbal::wire::serial::StreamItem::Control(d) = item {
@@ -620,13 +621,13 @@ fn setpoints_within_the_dead_band_are_not_re_sent() {
     let mut b = bridge();
     let earth = GimbalDeviceFlags::YAW_LOCK;
     // The autopilot's state at 50 Hz, as autopilots send it, keeps attitude pushed.
-    let at = |b: &mut Bridge<Link>, ms: u32, set: Option<GimbalDeviceSetAttitude>| {
+    let at = |b: &mut Firmware, ms: u32, set: Option<GimbalDeviceSetAttitude>| {
         b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(ms));
         if let Some(set) = set {
             b.receive_all(&frame(AP, 1, &set), t(ms));
         }
-        b.gimbal_mut().poll(t(ms));
-        queued(b.gimbal_mut())
+        b.link.poll(t(ms));
+        queued(&mut b.link)
     };
     let angles = |q: Vec<GimbalCommand>| -> Vec<GimbalCommand> {
         q.into_iter()
@@ -666,11 +667,11 @@ fn setpoints_within_the_dead_band_are_not_re_sent() {
 fn a_yaw_frame_needing_a_stale_vehicle_heading_is_refused() {
     let mut b = bridge();
     b.receive_all(&frame(AP, 0, &autopilot_state(30.0)), t(0));
-    b.gimbal_mut().poll(t(0));
-    let _ = queued(b.gimbal_mut());
+    b.link.poll(t(0));
+    let _ = queued(&mut b.link);
     // 1.2 s later the vehicle state is stale: the gimbal is nose-referenced, and an
     // earth-frame yaw would need the vehicle heading.
-    b.gimbal_mut().poll(t(1_200));
+    b.link.poll(t(1_200));
     b.receive_all(
         &frame(
             AP,
@@ -679,7 +680,7 @@ fn a_yaw_frame_needing_a_stale_vehicle_heading_is_refused() {
         ),
         t(1_200),
     );
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
     assert_eq!(b.stats().refused_setpoints, 1);
     // A vehicle-frame yaw needs none.
     b.receive_all(
@@ -690,7 +691,7 @@ fn a_yaw_frame_needing_a_stale_vehicle_heading_is_refused() {
         ),
         t(1_210),
     );
-    let q = queued(b.gimbal_mut());
+    let q = queued(&mut b.link);
     assert!(
         matches!(q[0], GimbalCommand::Heading(h) if h.deci() == 200),
         "{q:?}"
@@ -712,8 +713,8 @@ fn rate_setpoints_hold_and_stop_with_the_core_dead_man() {
         if ms < 500 && ms % 50 == 0 {
             b.receive_all(&frame(AP, (ms / 50) as u8, &set), t(ms));
         }
-        b.gimbal_mut().poll(t(ms));
-        for c in queued(b.gimbal_mut()) {
+        b.link.poll(t(ms));
+        for c in queued(&mut b.link) {
             if let GimbalCommand::Rate(r) = c {
                 rates.push((ms, r));
             }
@@ -733,8 +734,8 @@ fn rate_setpoints_hold_and_stop_with_the_core_dead_man() {
 fn neutral_holds_forward_and_retract_looks_down_once_each() {
     let mut b = bridge();
     b.receive_all(&frame(AP, 0, &autopilot_state(40.0)), t(0));
-    b.gimbal_mut().poll(t(0));
-    let _ = queued(b.gimbal_mut());
+    b.link.poll(t(0));
+    let _ = queued(&mut b.link);
     // The quaternion of a neutral setpoint is not followed, neither at the flag's edge
     // nor while the flag stays.
     for i in 0..3 {
@@ -748,7 +749,7 @@ fn neutral_holds_forward_and_retract_looks_down_once_each() {
         );
     }
     // Forward and level in the vehicle frame: north-referenced, the vehicle's 40°.
-    let q = queued(b.gimbal_mut());
+    let q = queued(&mut b.link);
     assert!(
         matches!(q[..], [GimbalCommand::Heading(h), GimbalCommand::Pitch(p)] if h.deci() == 400 && p.deci() == 0),
         "{q:?}"
@@ -757,7 +758,7 @@ fn neutral_holds_forward_and_retract_looks_down_once_each() {
         &frame(AP, 5, &set_attitude(GimbalDeviceFlags::RETRACT, 0.0, 0.0)),
         t(10),
     );
-    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::LookDown]);
+    assert_eq!(queued(&mut b.link), [GimbalCommand::LookDown]);
 }
 
 #[test]
@@ -771,13 +772,13 @@ fn a_rolled_setpoint_is_refused() {
     b.receive_all(&frame(AP, 0, &rolled), t(0));
     assert_eq!(b.stats().refused_setpoints, before.refused_setpoints + 1);
     assert_eq!(b.stats().angle_setpoints, before.angle_setpoints);
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
 }
 
 #[test]
 fn streams_are_asked_of_the_autopilot_until_they_come() {
     let mut b = fresh();
-    let asks = |b: &mut Bridge<Link>, from: u32, to: u32| {
+    let asks = |b: &mut Firmware, from: u32, to: u32| {
         let mut n = Vec::new();
         for ms in from..to {
             b.poll(t(ms));
@@ -845,8 +846,8 @@ fn streams_are_asked_of_the_autopilot_until_they_come() {
         assert_eq!(a, expect, "at {ms}");
     }
     // The core now holds and pushes the position.
-    b.gimbal_mut().poll(t(26_000));
-    let _ = queued(b.gimbal_mut());
+    b.link.poll(t(26_000));
+    let _ = queued(&mut b.link);
 }
 
 #[test]
@@ -971,7 +972,7 @@ fn an_angle_with_rates_beside_it_is_followed_as_an_angle() {
     set.angular_velocity_y = 0.2;
     set.angular_velocity_z = 0.0;
     b.receive_all(&frame(AP, 0, &set), t(10));
-    let q = queued(b.gimbal_mut());
+    let q = queued(&mut b.link);
     assert_eq!(q.len(), 2, "{q:?}");
     assert!(matches!(q[0], GimbalCommand::Heading(h) if h.deci() == 300));
     assert!(matches!(q[1], GimbalCommand::Pitch(p) if p.deci() == -200));
@@ -987,7 +988,7 @@ fn an_earth_frame_yaw_rate_becomes_a_motor_rate_or_is_refused() {
     set.angular_velocity_z = 0.5;
     // No vehicle yaw rate: refused, counted, nothing sent.
     b.receive_all(&frame(AP, 0, &set), t(10));
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
     assert_eq!(b.stats().refused_setpoints, 1);
     // The vehicle turns right at 0.2 rad/s: the motor turns at 0.5 − 0.2 = 0.3 rad/s,
     // 17.19°/s (the wire's 0.01°/s: 1718.87 rounds to 1719).
@@ -995,7 +996,7 @@ fn an_earth_frame_yaw_rate_becomes_a_motor_rate_or_is_refused() {
     state.angular_velocity_z = 0.2;
     b.receive_all(&frame(AP, 1, &state), t(20));
     b.receive_all(&frame(AP, 2, &set), t(30));
-    let rates: Vec<Rate> = queued(b.gimbal_mut())
+    let rates: Vec<Rate> = queued(&mut b.link)
         .into_iter()
         .filter_map(|c| match c {
             GimbalCommand::Rate(r) => Some(r),
@@ -1006,7 +1007,7 @@ fn an_earth_frame_yaw_rate_becomes_a_motor_rate_or_is_refused() {
     // The same rate in the vehicle frame (YAW_IN_VEHICLE_FRAME wins over YAW_LOCK).
     set.flags = GimbalDeviceFlags::YAW_LOCK | GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME;
     b.receive_all(&frame(AP, 3, &set), t(40));
-    let rates: Vec<GimbalCommand> = queued(b.gimbal_mut());
+    let rates: Vec<GimbalCommand> = queued(&mut b.link);
     assert_eq!(
         rates,
         [GimbalCommand::Rate(
@@ -1027,7 +1028,7 @@ fn unknown_flag_bits_do_not_change_a_setpoint() {
     let known = GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME;
     let mut plain = bridge();
     plain.receive_all(&frame(AP, 0, &set_attitude(known, 30.0, -20.0)), t(10));
-    let expected = queued(plain.gimbal_mut());
+    let expected = queued(&mut plain.link);
     assert_eq!(expected.len(), 2);
     for unknown in [0x0400u16, 0x8000, 0xFC00] {
         let mut b = bridge();
@@ -1035,7 +1036,7 @@ fn unknown_flag_bits_do_not_change_a_setpoint() {
         b.receive_all(&frame(AP, 0, &set_attitude(flags, 30.0, -20.0)), t(10));
         assert_eq!(b.stats().reader.bad_frames, 0, "{unknown:#x}");
         assert_eq!(b.stats().refused_setpoints, 0, "{unknown:#x}");
-        assert_eq!(queued(b.gimbal_mut()), expected, "{unknown:#x}");
+        assert_eq!(queued(&mut b.link), expected, "{unknown:#x}");
     }
 }
 
@@ -1043,7 +1044,7 @@ fn unknown_flag_bits_do_not_change_a_setpoint() {
 fn a_pitch_is_rounded_to_the_wires_tenth_before_its_range_is_checked() {
     let mut b = bridge();
     b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(0));
-    let _ = queued(b.gimbal_mut());
+    let _ = queued(&mut b.link);
     // −100.04° is −100.0° on the wire (a setpoint of −100° arrives a few ulps past it);
     // −100.06° is −100.1°, beyond the gimbal's range, refused.
     for (i, (pitch, expected)) in [(-100.04, Some(-1000)), (-100.06, None), (60.04, Some(600))]
@@ -1056,7 +1057,7 @@ fn a_pitch_is_rounded_to_the_wires_tenth_before_its_range_is_checked() {
             &frame(AP, i as u8, &set_attitude(flags, 10.0 * i as f32, pitch)),
             t(10),
         );
-        let pitches: Vec<i16> = queued(b.gimbal_mut())
+        let pitches: Vec<i16> = queued(&mut b.link)
             .into_iter()
             .filter_map(|c| match c {
                 GimbalCommand::Pitch(p) => Some(p.deci()),
@@ -1077,7 +1078,7 @@ fn a_pitch_is_rounded_to_the_wires_tenth_before_its_range_is_checked() {
 fn setpoints_and_vehicle_states_for_another_gimbal_are_not_followed() {
     let mut b = fresh();
     b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
-    let _ = queued_all(b.gimbal_mut());
+    let _ = queued_all(&mut b.link);
     let mut set = set_attitude(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 30.0, -20.0);
     let mut state = autopilot_state(45.0);
     // Another component of this system, and this component of another system.
@@ -1092,8 +1093,8 @@ fn setpoints_and_vehicle_states_for_another_gimbal_are_not_followed() {
     let s = b.stats();
     assert_eq!((s.angle_setpoints, s.vehicle_updates), (0, 0));
     assert_eq!(s.not_for_us, 4);
-    assert!(queued_all(b.gimbal_mut()).is_empty());
-    assert_eq!(b.gimbal().attitude(), None);
+    assert!(queued_all(&mut b.link).is_empty());
+    assert_eq!(b.link.attitude(), None);
     // To every component of every system, and to this one's: followed.
     for (i, (system, component)) in [(0, 0), (AP.0, 154)].into_iter().enumerate() {
         set.target_system = system;

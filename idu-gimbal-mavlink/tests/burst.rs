@@ -5,12 +5,11 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::{Bridge, SerialInput, ANSWER_ROOM};
+use idu_gimbal_mavlink::{SerialInput, ANSWER_ROOM};
 use mavio::dialects::common::enums::{MavCmd, MavResult};
 use mavio::dialects::common::messages::CommandAck;
 use proptest::prelude::*;
@@ -21,7 +20,7 @@ const REQUESTS: [(u8, u32); 5] = [(100, 259), (100, 260), (100, 261), (100, 262)
 const CLIENTS: [(u8, u8); 3] = [(255, 190), (255, 191), (1, 191)];
 
 /// A camera bridge whose gimbal type is known (so CAMERA_INFORMATION is answered).
-fn bridge() -> Bridge<Link> {
+fn bridge() -> Firmware {
     let mut b =
         camera_bridge(CameraConfig::with_streams_of(&VideoCamera::new(Family::X3)).unwrap());
     let p = Postback {
@@ -29,7 +28,7 @@ fn bridge() -> Bridge<Link> {
         ..Postback::default()
     };
     for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(1));
+        b.link.receive(ids::POSTBACK, &data, t(1));
     }
     b.poll(t(1));
     let _ = sent(&mut b);
@@ -53,7 +52,7 @@ struct Answers {
 }
 
 impl Answers {
-    fn take(&mut self, b: &mut Bridge<Link>) {
+    fn take(&mut self, b: &mut Firmware) {
         if self.acks.is_empty() {
             self.acks = vec![Vec::new(); CLIENTS.len()];
         }
@@ -74,7 +73,7 @@ impl Answers {
 
 /// The answers to `asked` requests a client each: one ACCEPTED ACK a request and one message
 /// an ACCEPTED, nothing dropped.
-fn assert_all_answered(a: &Answers, asked: &[usize], b: &Bridge<Link>) {
+fn assert_all_answered(a: &Answers, asked: &[usize], b: &Firmware) {
     for (c, &n) in asked.iter().enumerate() {
         assert_eq!(a.acks[c], vec![MavResult::Accepted; n], "client {c}: {a:?}");
     }
@@ -145,7 +144,9 @@ fn a_burst_read_from_a_serial_line_through_serial_input_is_answered_in_full() {
             at += n;
             Ok::<usize, ()>(n)
         };
-        input.receive(&mut b, t(10), read).unwrap();
+        input
+            .receive(&mut b.bridge, &mut b.link, t(10), read)
+            .unwrap();
         a.take(&mut b);
         if at == line.len() && input.held() == 0 && !b.reader().is_waiting() {
             break;
@@ -156,7 +157,7 @@ fn a_burst_read_from_a_serial_line_through_serial_input_is_answered_in_full() {
     assert_all_answered(&a, &asked, &b);
     // A read error ends the call, and is the caller's; nothing held is lost.
     assert_eq!(
-        input.receive(&mut b, t(12), |_| Err("overrun")),
+        input.receive(&mut b.bridge, &mut b.link, t(12), |_| Err("overrun")),
         Err("overrun")
     );
 }

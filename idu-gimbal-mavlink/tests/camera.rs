@@ -9,7 +9,7 @@ use idu_gimbal::wire::control::{GimbalCommand, Photo, Video, Zoom};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{camera_model, CameraConfig, StreamError, UriTooLong};
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::BridgeConfig;
 use mavio::dialects::common::enums::{
     CameraCapFlags, CameraMode, MavCmd, MavResult, MavType, StorageStatus, VideoStreamStatusFlags,
     VideoStreamType,
@@ -23,7 +23,7 @@ use mavio::protocol::{Frame, V2};
 
 const URI: &str = "rtsp://admin:admin@192.168.42.108:554/cam/realmonitor?channel=1&subtype=0";
 
-fn bridge() -> Bridge<Link> {
+fn bridge() -> Firmware {
     camera_bridge(
         CameraConfig::new(
             VideoCamera::new(Family::DualLight)
@@ -37,7 +37,7 @@ fn bridge() -> Bridge<Link> {
 
 /// The ACK (from `component`) and the other frames a command produced.
 fn ask(
-    b: &mut Bridge<Link>,
+    b: &mut Firmware,
     to: u8,
     cmd: MavCmd,
     p: [f32; 3],
@@ -48,7 +48,7 @@ fn ask(
 
 /// [`ask`] with param4.
 fn ask4(
-    b: &mut Bridge<Link>,
+    b: &mut Firmware,
     to: u8,
     cmd: MavCmd,
     p: [f32; 4],
@@ -74,7 +74,7 @@ fn ask4(
 #[test]
 fn camera_heartbeats_beside_the_gimbals_once_its_identity_is_known() {
     let mut b = bridge();
-    let heartbeats = |b: &mut Bridge<Link>, from: u32, to: u32| {
+    let heartbeats = |b: &mut Firmware, from: u32, to: u32| {
         for ms in from..to {
             b.poll(t(ms));
         }
@@ -115,7 +115,7 @@ fn the_mode_is_set_and_told_back_in_the_settings() {
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(mode(&frames), CameraMode::Video);
     // Recording and a photo need no switch either way: nothing sent to the gimbal for it.
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
     let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 2.0, 0.0], 3);
     assert_eq!(ack.result, MavResult::Denied, "survey: no such mode");
     let (_, frames) = ask(
@@ -226,10 +226,7 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
         10,
     );
     assert_eq!(ack.result, MavResult::Accepted);
-    assert_eq!(
-        queued(b.gimbal_mut()),
-        [GimbalCommand::Photo(Photo::Single)]
-    );
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
     // The ACK, then the image, then the status.
     let ids: Vec<u32> = frames.iter().map(|f| f.message_id()).collect();
     assert_eq!(ids, [77, 263, 262]);
@@ -244,7 +241,7 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
         20,
     );
     assert_eq!(ack.result, MavResult::Accepted);
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
     assert!(indexes(&frames).is_empty());
     // The next sequence number is a new picture; MAVSDK's first is 0 ("none"): always new.
     for (ms, seq, index) in [(30, 2.0, 1), (40, 0.0, 2), (50, 0.0, 3)] {
@@ -255,10 +252,7 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
             [0.0, 0.0, 1.0, seq],
             ms,
         );
-        assert_eq!(
-            queued(b.gimbal_mut()),
-            [GimbalCommand::Photo(Photo::Single)]
-        );
+        assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
         assert_eq!(indexes(&frames), [index]);
     }
 }
@@ -279,11 +273,11 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     assert_eq!(indexes(&frames), [0]);
     let status = &of::<CameraCaptureStatus>(&frames)[0];
     assert_eq!((status.image_status, status.image_interval), (3, 0.5));
-    let mut shots = vec![(1_000, queued(b.gimbal_mut()))];
+    let mut shots = vec![(1_000, queued(&mut b.link))];
     let mut images = Vec::new();
     for ms in 1_001..4_000 {
         b.poll(t(ms));
-        let q = queued(b.gimbal_mut());
+        let q = queued(&mut b.link);
         if !q.is_empty() {
             shots.push((ms, q));
         }
@@ -311,7 +305,7 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
         5_000,
     );
     assert_eq!(indexes(&frames), [3]);
-    let _ = queued(b.gimbal_mut());
+    let _ = queued(&mut b.link);
     let mut images = Vec::new();
     for ms in 5_001..12_000 {
         if ms == 9_500 {
@@ -324,7 +318,7 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     }
     assert_eq!(images, [(7_000, 4), (9_000, 5)]);
     assert_eq!(
-        queued(b.gimbal_mut()),
+        queued(&mut b.link),
         [GimbalCommand::Photo(Photo::Single); 2]
     );
     // Out of common.xml's ranges: denied, nothing taken.
@@ -338,11 +332,11 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
         let (ack, _) = ask(&mut b, 100, MavCmd::ImageStartCapture, p, 13_000);
         assert_eq!(ack.result, MavResult::Denied, "{p:?}");
     }
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
 }
 
 /// `n` single images, 10 ms apart from 0, each one photo command for the gimbal.
-fn take_single_images(b: &mut Bridge<Link>, n: u32) {
+fn take_single_images(b: &mut Firmware, n: u32) {
     for k in 0..n {
         let _ = ask4(
             b,
@@ -351,7 +345,7 @@ fn take_single_images(b: &mut Bridge<Link>, n: u32) {
             [0.0, 0.0, 1.0, 0.0],
             k * 10,
         );
-        assert_eq!(queued(b.gimbal_mut()).len(), 1);
+        assert_eq!(queued(&mut b.link).len(), 1);
     }
 }
 
@@ -460,7 +454,7 @@ fn video_start_and_stop_with_the_capture_status() {
     let (_, frames) = ask(&mut b, 100, MavCmd::VideoStopCapture, [0.0; 3], 4_000);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].video_status, 0);
     assert_eq!(
-        queued(b.gimbal_mut()),
+        queued(&mut b.link),
         [
             GimbalCommand::Video(Video::Start),
             GimbalCommand::Video(Video::Stop)
@@ -472,7 +466,7 @@ fn video_start_and_stop_with_the_capture_status() {
 fn while_recording_the_capture_status_comes_at_the_rate_asked() {
     let mut b = bridge();
     // Statuses (their time and recording time) sent unasked between two instants.
-    let unasked = |b: &mut Bridge<Link>, from: u32, to: u32| {
+    let unasked = |b: &mut Firmware, from: u32, to: u32| {
         let mut got = Vec::new();
         for ms in from..to {
             b.poll(t(ms));
@@ -515,7 +509,7 @@ fn while_recording_the_capture_status_comes_at_the_rate_asked() {
     }
     // A negative rate, more than 1 kHz, or a period over 1000 s (beyond the tick's half
     // range at the smallest rates): refused, and the gimbal not told.
-    let _ = queued(b.gimbal_mut());
+    let _ = queued(&mut b.link);
     for hz in [-1.0, 1_000.5, f32::INFINITY, 0.000_9, 1e-30] {
         let (ack, _) = ask(
             &mut b,
@@ -526,17 +520,17 @@ fn while_recording_the_capture_status_comes_at_the_rate_asked() {
         );
         assert_eq!(ack.result, MavResult::Denied, "{hz}");
     }
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
 }
 
 /// A postback from a gimbal of type `gimbal_type` into the bridge's link.
-fn postback(b: &mut Bridge<Link>, gimbal_type: GimbalType, ms: u32) {
+fn postback(b: &mut Firmware, gimbal_type: GimbalType, ms: u32) {
     let p = Postback {
         gimbal_type,
         ..Postback::default()
     };
     for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+        b.link.receive(ids::POSTBACK, &data, t(ms));
     }
 }
 
@@ -550,7 +544,7 @@ fn zoom_by_range_continuous_and_step() {
     // 50 % of 1×..30×: 15.5×.
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 10);
     assert_eq!(ack.result, MavResult::Accepted);
-    match queued(b.gimbal_mut())[..] {
+    match queued(&mut b.link)[..] {
         [GimbalCommand::ZoomRatio(r)] => assert_eq!(r.centi(), 1550),
         ref other => panic!("{other:?}"),
     }
@@ -565,33 +559,30 @@ fn zoom_by_range_continuous_and_step() {
     ] {
         let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [1.0, v, 0.0], 20);
         assert_eq!(ack.result, MavResult::Accepted, "{v}");
-        assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Zoom(z)]);
+        assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(z)]);
         // Where a continuous zoom stops is not reported: the level is unknown.
         assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
     }
     // A step after a continuous zoom: still unknown, not 1×.
     let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 30);
-    assert_eq!(
-        queued(b.gimbal_mut()),
-        [GimbalCommand::Zoom(Zoom::Double); 2]
-    );
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(Zoom::Double); 2]);
     assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
     // From a known level, steps double and halve it within the range.
     let _ = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 0.0, 0.0], 31);
-    let _ = queued(b.gimbal_mut());
+    let _ = queued(&mut b.link);
     let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 32);
-    let _ = queued(b.gimbal_mut());
+    let _ = queued(&mut b.link);
     // 4× of 1×..30×: (4 − 1) / 29 = 10.34 %.
     let level = of::<CameraSettings>(&frames)[0].zoom_level;
     assert!((level - 300.0 / 29.0).abs() < 1e-4, "{level}");
     // A queue with room for four of five halvings: none sent, the level kept, the client
     // told to try again (a part would leave the lens where the level does not say).
-    while b.gimbal_mut().command_room() > 4 {
-        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    while b.link.command_room() > 4 {
+        b.link.send(GimbalCommand::Recenter).unwrap();
     }
     let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
     assert_eq!(ack.result, MavResult::TemporarilyRejected);
-    assert_eq!(queued(b.gimbal_mut()), [GimbalCommand::Recenter; 4]);
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Recenter; 4]);
     let (_, frames) = ask(
         &mut b,
         100,
@@ -604,13 +595,13 @@ fn zoom_by_range_continuous_and_step() {
     // QGroundControl's pinch out: round(scale × −10) steps (FlightDisplayViewVideo.qml), here
     // −10: five halvings take any level of the range to its wide end, 1×.
     // Room for exactly the five: taken.
-    while b.gimbal_mut().command_room() > 5 {
-        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    while b.link.command_room() > 5 {
+        b.link.send(GimbalCommand::Recenter).unwrap();
     }
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(
-        queued(b.gimbal_mut()),
+        queued(&mut b.link),
         [
             [GimbalCommand::Recenter; 3].as_slice(),
             &[GimbalCommand::Zoom(Zoom::Half); 5]
@@ -621,10 +612,7 @@ fn zoom_by_range_continuous_and_step() {
     // And 7 steps in from 1×: five doublings, 30× (32 beyond the range's end).
     let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
     assert_eq!(ack.result, MavResult::Accepted);
-    assert_eq!(
-        queued(b.gimbal_mut()),
-        [GimbalCommand::Zoom(Zoom::Double); 5]
-    );
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(Zoom::Double); 5]);
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
     for (p, result) in [
         ([2.0, 150.0, 0.0], MavResult::Denied),
@@ -637,7 +625,7 @@ fn zoom_by_range_continuous_and_step() {
         let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, p, 40);
         assert_eq!(ack.result, result, "{p:?}");
     }
-    assert!(queued(b.gimbal_mut()).is_empty());
+    assert!(queued(&mut b.link).is_empty());
 }
 
 #[test]
@@ -646,7 +634,7 @@ fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
     postback(&mut b, GimbalType::Zoom3_5x, 0);
     // 100 % of a 3.5× camera is 3.5×, not 30×.
     let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 100.0, 0.0], 10);
-    match queued(b.gimbal_mut())[..] {
+    match queued(&mut b.link)[..] {
         [GimbalCommand::ZoomRatio(r)] => assert_eq!(r.centi(), 350),
         ref other => panic!("{other:?}"),
     }
@@ -681,7 +669,7 @@ fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
 #[test]
 fn the_camera_names_its_gimbal_by_the_configured_component() {
     let camera = CameraConfig::new(URI).unwrap();
-    let mut b = Bridge::new(
+    let mut b = Firmware::new(
         Link::new(Config::default()),
         BridgeConfig {
             gimbal_component: 171,
@@ -810,7 +798,7 @@ fn messages_no_component_handles_are_neither_bad_nor_answered() {
 /// Fills the outbox with 300 bytes or more of answers not yet sent (the gimbal's
 /// information, asked again and again), still short of what a request waits for; the next
 /// sequence number.
-fn part_fill_outbox(b: &mut Bridge<Link>) -> u8 {
+fn part_fill_outbox(b: &mut Firmware) -> u8 {
     let mut seq = 0;
     while b.transmit_bytes().len() < 300 {
         let c = command((AP.0, 154), MavCmd::RequestMessage, 283.0, 0.0);
@@ -873,11 +861,11 @@ fn stream_information_beyond_the_outboxs_room_waits_for_it_and_none_is_lost() {
 fn an_image_taken_while_the_gimbal_link_is_down_has_no_attitude() {
     let mut b = bridge();
     // The image taken at `ms`, its report's quaternion.
-    let image_q = |b: &mut Bridge<Link>, ms: u32| {
+    let image_q = |b: &mut Firmware, ms: u32| {
         let (_, mut frames) = ask4(b, 100, MavCmd::ImageStartCapture, [0.0, 0.0, 1.0, 0.0], ms);
         b.poll(t(ms));
         frames.extend(sent(b));
-        let _ = queued(b.gimbal_mut());
+        let _ = queued(&mut b.link);
         of::<CameraImageCaptured>(&frames)[0].q
     };
     postback(&mut b, GimbalType::X30, 0);
@@ -886,7 +874,7 @@ fn an_image_taken_while_the_gimbal_link_is_down_has_no_attitude() {
     // No postback for longer than the link's timeout (1.5 s), the vehicle's heading fresh:
     // the last postback's angles are stale, the attitude unknown.
     b.receive_all(&frame(AP, 1, &autopilot_state(0.0)), t(1_600));
-    b.gimbal_mut().poll(t(1_600));
-    assert!(!b.gimbal().is_link_up());
+    b.link.poll(t(1_600));
+    assert!(!b.link.is_link_up());
     assert!(image_q(&mut b, 1_610).iter().all(|v| v.is_nan()));
 }

@@ -5,7 +5,6 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::control::{
     Command, DualLightCommand, Focus, GimbalCommand, ImagePoint, TrackingBox,
@@ -13,7 +12,6 @@ use idu_gimbal::wire::control::{
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{
     CameraTrackingMode, CameraTrackingStatusFlags, CameraTrackingTargetData, MavCmd, MavResult,
 };
@@ -23,14 +21,14 @@ use mavio::protocol::{Frame, V2};
 const CAMERA: u8 = 100;
 const GIMBAL: u8 = 154;
 
-fn bridge(family: Family) -> Bridge<Link> {
+fn bridge(family: Family) -> Firmware {
     camera_bridge(CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap())
 }
 
 /// Sends `cmd` to `to` with params 1 to 7; the ACK's result, the frames after it and the
 /// commands queued for the gimbal.
 fn ask(
-    b: &mut Bridge<Link>,
+    b: &mut Firmware,
     to: u8,
     cmd: MavCmd,
     p: [f32; 7],
@@ -42,7 +40,7 @@ fn ask(
     assert_eq!(acks.len(), 1, "{cmd:?}: one ACK");
     assert_eq!(frames[0].component_id(), to);
     assert_eq!(acks[0].command, cmd);
-    let queued = queued_all(b.gimbal_mut());
+    let queued = queued_all(&mut b.link);
     (acks[0].result, frames, queued)
 }
 
@@ -297,14 +295,14 @@ fn the_infrared_source_needs_a_thermal_sensor() {
 }
 
 /// A postback with the tracking flag as given, into the link.
-fn postback(b: &mut Bridge<Link>, tracking: bool, ms: u32) {
+fn postback(b: &mut Firmware, tracking: bool, ms: u32) {
     let p = Postback {
         gimbal_type: GimbalType::X30,
         tracking,
         ..Postback::default()
     };
     for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+        b.link.receive(ids::POSTBACK, &data, t(ms));
     }
 }
 
@@ -424,11 +422,11 @@ fn fast_calibration_is_the_gyroscope_calibration_addressed_to_the_gimbal() {
     );
     assert_eq!(b.stats().queue_full, 0);
     // No room in the gimbal's queue: try again, and counted.
-    while b.gimbal_mut().send(GimbalCommand::Recenter).is_ok() {}
+    while b.link.send(GimbalCommand::Recenter).is_ok() {}
     let (r, _, _) = ask(&mut b, GIMBAL, cal, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 10);
     assert_eq!(r, MavResult::TemporarilyRejected);
     assert_eq!(b.stats().queue_full, 1);
-    let _ = queued_all(b.gimbal_mut());
+    let _ = queued_all(&mut b.link);
     // Any other calibration, or more than the gyroscope's: denied, nothing sent.
     for p in [
         [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -446,7 +444,7 @@ fn fast_calibration_is_the_gyroscope_calibration_addressed_to_the_gimbal() {
     c.param5 = 0.0;
     b.receive_all(&frame(GCS, 0, &c), t(20));
     assert!(of::<CommandAck>(&sent(&mut b)).is_empty());
-    assert!(queued_all(b.gimbal_mut()).is_empty());
+    assert!(queued_all(&mut b.link).is_empty());
 }
 
 #[test]

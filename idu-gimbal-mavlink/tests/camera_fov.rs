@@ -5,14 +5,12 @@ mod common;
 use common::*;
 
 use idu_gimbal::geo::{look_at, Position};
-use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{MavCmd, MavResult};
 use mavio::dialects::common::messages::{
     CameraCaptureStatus, CameraFovStatus, CameraTrackingImageStatus, CommandAck, GlobalPositionInt,
@@ -25,7 +23,7 @@ const STREAM_INFORMATION: f32 = 269.0;
 const LENS: (f64, f64) = (60.0, 34.0);
 
 /// A dual light (a visible stream and the infrared one among its three), with `lens`.
-fn bridge(lens: Option<FieldOfView>) -> Bridge<Link> {
+fn bridge(lens: Option<FieldOfView>) -> Firmware {
     let mut camera = CameraConfig::with_streams_of(&VideoCamera::new(Family::DualLight)).unwrap();
     camera.fov = lens;
     camera.resolution = Some((1920, 1080));
@@ -37,7 +35,7 @@ fn lens() -> Option<FieldOfView> {
 }
 
 /// The postback: a 30× gimbal, its camera at `pitch_cdeg` and its motor at `motor_cdeg`.
-fn postback(b: &mut Bridge<Link>, pitch_cdeg: i16, motor_cdeg: i16, ms: u32) {
+fn postback(b: &mut Firmware, pitch_cdeg: i16, motor_cdeg: i16, ms: u32) {
     let p = Postback {
         gimbal_type: GimbalType::X30,
         pitch: pitch_cdeg,
@@ -45,13 +43,13 @@ fn postback(b: &mut Bridge<Link>, pitch_cdeg: i16, motor_cdeg: i16, ms: u32) {
         ..Postback::default()
     };
     for data in p.to_can_frames() {
-        b.gimbal_mut().receive(ids::POSTBACK, &data, t(ms));
+        b.link.receive(ids::POSTBACK, &data, t(ms));
     }
     b.poll(t(ms));
 }
 
 /// `COMMAND_LONG` to the camera: its one ACK's result.
-fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResult {
+fn ask(b: &mut Firmware, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResult {
     b.receive_all(&frame(GCS, 0, &command((AP.0, 100), cmd, p1, p2)), t(ms));
     let acks = of::<CommandAck>(&sent(b));
     assert_eq!(acks.len(), 1, "{cmd:?}: one ACK");
@@ -59,7 +57,7 @@ fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32, ms: u32) -> MavResul
 }
 
 /// `CAMERA_FOV_STATUS` asked for: ACCEPTED, then the one status.
-fn fov_status(b: &mut Bridge<Link>, ms: u32) -> CameraFovStatus {
+fn fov_status(b: &mut Firmware, ms: u32) -> CameraFovStatus {
     b.receive_all(
         &frame(
             GCS,
@@ -76,7 +74,7 @@ fn fov_status(b: &mut Bridge<Link>, ms: u32) -> CameraFovStatus {
 }
 
 /// The visible (main) stream's and the infrared stream's `hfov`.
-fn stream_hfov(b: &mut Bridge<Link>, ms: u32) -> (u16, u16) {
+fn stream_hfov(b: &mut Firmware, ms: u32) -> (u16, u16) {
     b.receive_all(
         &frame(
             GCS,
@@ -182,7 +180,7 @@ fn placed(
     vehicle_yaw_deg: f32,
     pitch_cdeg: i16,
     motor_cdeg: i16,
-) -> Bridge<Link> {
+) -> Firmware {
     let mut b = bridge(lens());
     b.receive_all(&frame(AP, 1, &pos), t(10));
     b.receive_all(&frame(AP, 2, &autopilot_state(vehicle_yaw_deg)), t(10));
@@ -299,7 +297,7 @@ fn the_status_is_streamed_at_the_interval_asked_and_stops() {
     postback(&mut b, 0, 0, 0);
     let _ = sent(&mut b);
     // Nothing unasked: common.xml gives the message no default rate.
-    let count = |b: &mut Bridge<Link>, from: u32, to: u32| {
+    let count = |b: &mut Firmware, from: u32, to: u32| {
         let mut times = Vec::new();
         for ms in from..to {
             b.poll(t(ms));

@@ -5,7 +5,6 @@
 mod common;
 use common::*;
 
-use idu_gimbal::link::Link;
 use idu_gimbal::video::{Camera as VideoCamera, Family, Stream};
 use idu_gimbal::wire::control::{
     Command, DualLightCommand, ElectronicZoom, Focus, GimbalCommand, Palette,
@@ -13,7 +12,6 @@ use idu_gimbal::wire::control::{
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{definition, CameraConfig};
-use idu_gimbal_mavlink::Bridge;
 use mavio::dialects::common::enums::{
     MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
 };
@@ -25,11 +23,11 @@ use mavio::protocol::{Frame, V2};
 
 const CAMERA: u8 = 100;
 
-fn bridge(family: Family) -> Bridge<Link> {
+fn bridge(family: Family) -> Firmware {
     camera_bridge(CameraConfig::with_streams_of(&VideoCamera::new(family)).unwrap())
 }
 
-fn ask(b: &mut Bridge<Link>, cmd: MavCmd, p1: f32, p2: f32) -> (MavResult, Vec<Frame<V2>>) {
+fn ask(b: &mut Firmware, cmd: MavCmd, p1: f32, p2: f32) -> (MavResult, Vec<Frame<V2>>) {
     b.receive_all(&frame(GCS, 0, &command((AP.0, CAMERA), cmd, p1, p2)), t(10));
     let mut frames = sent(b);
     // What did not fit the outbox at once follows at the next polls.
@@ -135,7 +133,7 @@ fn values(frames: &[Frame<V2>]) -> Vec<(String, u8, u16, u16)> {
         .collect()
 }
 
-fn list(b: &mut Bridge<Link>) -> Vec<(String, u8, u16, u16)> {
+fn list(b: &mut Firmware) -> Vec<(String, u8, u16, u16)> {
     let m = ParamExtRequestList {
         target_system: AP.0,
         target_component: CAMERA,
@@ -147,7 +145,7 @@ fn list(b: &mut Bridge<Link>) -> Vec<(String, u8, u16, u16)> {
     values(&frames)
 }
 
-fn set(b: &mut Bridge<Link>, name: &str, value: [u8; 128], ty: MavParamExtType) -> ParamExtAck {
+fn set(b: &mut Firmware, name: &str, value: [u8; 128], ty: MavParamExtType) -> ParamExtAck {
     let m = ParamExtSet {
         target_system: AP.0,
         target_component: CAMERA,
@@ -187,7 +185,7 @@ fn setting_the_palette_sends_the_gimbal_its_command_and_acks_the_value() {
         (value_of(10), MavParamExtType::Uint8)
     );
     assert_eq!(
-        queued_all(b.gimbal_mut()),
+        queued_all(&mut b.link),
         vec![Command::DualLight(DualLightCommand::Palette(
             Palette::IceBlue
         ))]
@@ -233,7 +231,7 @@ fn setting_the_palette_sends_the_gimbal_its_command_and_acks_the_value() {
             (ack.param_result, ack.param_value[0]),
             (ParamAck::Accepted, v)
         );
-        let queued: Vec<Command> = queued_all(b.gimbal_mut());
+        let queued: Vec<Command> = queued_all(&mut b.link);
         assert_eq!(queued, vec![c], "{name} = {v}");
     }
 }
@@ -245,7 +243,7 @@ fn a_value_outside_the_options_is_refused_with_the_value_kept() {
         set(&mut b, "IR_PALETTE", value_of(3), MavParamExtType::Uint8).param_result,
         ParamAck::Accepted
     );
-    let _ = queued_all(b.gimbal_mut());
+    let _ = queued_all(&mut b.link);
     for (value, ty) in [
         (value_of(15), MavParamExtType::Uint8),
         (value_of(255), MavParamExtType::Uint8),
@@ -264,7 +262,7 @@ fn a_value_outside_the_options_is_refused_with_the_value_kept() {
             (ack.param_value, ack.param_type),
             (value_of(3), MavParamExtType::Uint8)
         );
-        assert!(queued_all(b.gimbal_mut()).is_empty());
+        assert!(queued_all(&mut b.link).is_empty());
     }
     // An unknown name, and a thermal setting on a camera without a thermal sensor.
     let ack = set(&mut b, "CAM_ISO", value_of(1), MavParamExtType::Uint8);
@@ -272,7 +270,7 @@ fn a_value_outside_the_options_is_refused_with_the_value_kept() {
     let mut z = bridge(Family::X3);
     let ack = set(&mut z, "IR_PALETTE", value_of(1), MavParamExtType::Uint8);
     assert_eq!(ack.param_result, ParamAck::ValueUnsupported);
-    assert!(queued_all(z.gimbal_mut()).is_empty());
+    assert!(queued_all(&mut z.link).is_empty());
 }
 
 #[test]
@@ -286,7 +284,7 @@ fn a_value_is_read_by_its_types_width_whatever_follows_it() {
     assert_eq!(ack.param_result, ParamAck::Accepted);
     assert_eq!(ack.param_value, value_of(7));
     assert_eq!(
-        queued_all(b.gimbal_mut()),
+        queued_all(&mut b.link),
         [Command::from(DualLightCommand::Palette(
             Palette::from_code(7).unwrap()
         ))]
@@ -300,14 +298,14 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
         let ack = set(&mut b, name, value_of(v), MavParamExtType::Uint8);
         assert_eq!(ack.param_result, ParamAck::Accepted, "{name}");
     }
-    let _ = queued_all(b.gimbal_mut());
+    let _ = queued_all(&mut b.link);
     // QGroundControl sends param1 1 and, until ACCEPTED, TEMPORARILY_REJECTED or FAILED,
     // blocks its photo, video and mode buttons (VehicleCameraControl.cc _mavCommandResult).
     let (result, frames) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
     assert_eq!(result, MavResult::Accepted);
     assert_eq!(of::<CameraSettings>(&frames).len(), 1);
     assert_eq!(
-        queued_all(b.gimbal_mut()),
+        queued_all(&mut b.link),
         [
             Command::from(GimbalCommand::Focus(Focus::Stop)),
             Command::from(DualLightCommand::Palette(Palette::from_code(0).unwrap())),
@@ -320,14 +318,14 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
     // QGroundControl also lets go of, and nothing sent or changed (all or none).
     let ack = set(&mut b, "IR_PALETTE", value_of(9), MavParamExtType::Uint8);
     assert_eq!(ack.param_result, ParamAck::Accepted);
-    let _ = queued_all(b.gimbal_mut());
-    while b.gimbal_mut().command_room() > 2 {
-        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    let _ = queued_all(&mut b.link);
+    while b.link.command_room() > 2 {
+        b.link.send(GimbalCommand::Recenter).unwrap();
     }
     let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
     assert_eq!(result, MavResult::TemporarilyRejected);
     assert_eq!(
-        queued_all(b.gimbal_mut()),
+        queued_all(&mut b.link),
         [Command::from(GimbalCommand::Recenter); 6]
     );
     let listed = list(&mut b);
@@ -336,20 +334,20 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
         "the palette kept: {listed:?}"
     );
     // Room for exactly the three: reset.
-    let _ = queued_all(b.gimbal_mut());
-    while b.gimbal_mut().command_room() > 3 {
-        b.gimbal_mut().send(GimbalCommand::Recenter).unwrap();
+    let _ = queued_all(&mut b.link);
+    while b.link.command_room() > 3 {
+        b.link.send(GimbalCommand::Recenter).unwrap();
     }
     let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
     assert_eq!(result, MavResult::Accepted);
-    assert_eq!(queued_all(b.gimbal_mut()).len(), 5 + 3);
+    assert_eq!(queued_all(&mut b.link).len(), 5 + 3);
 }
 
 #[test]
 fn a_setting_the_gimbals_queue_cannot_take_fails_and_keeps_the_value() {
     let mut b = bridge(Family::DualLight);
     // Fill the link's command queue.
-    while b.gimbal_mut().send(GimbalCommand::Recenter).is_ok() {}
+    while b.link.send(GimbalCommand::Recenter).is_ok() {}
     let ack = set(&mut b, "IR_PALETTE", value_of(5), MavParamExtType::Uint8);
     assert_eq!(ack.param_result, ParamAck::Failed);
     assert_eq!(ack.param_value, value_of(0));
@@ -412,7 +410,7 @@ fn ftp(seq: u16, session: u8, opcode: u8, offset: u32, data: &[u8]) -> FileTrans
 }
 
 /// The FTP replies to `m`, with the polls that follow a burst.
-fn ftp_ask(b: &mut Bridge<Link>, m: &FileTransferProtocol) -> Vec<FileTransferProtocol> {
+fn ftp_ask(b: &mut Firmware, m: &FileTransferProtocol) -> Vec<FileTransferProtocol> {
     b.receive_all(&frame(GCS, 0, m), t(10));
     let mut frames = sent(b);
     for ms in 11..40 {
@@ -514,7 +512,7 @@ fn the_definitions_model_is_the_camera_informations() {
             ..Postback::default()
         };
         for data in p.to_can_frames() {
-            b.gimbal_mut().receive(ids::POSTBACK, &data, t(5));
+            b.link.receive(ids::POSTBACK, &data, t(5));
         }
         let r = ftp_ask(&mut b, &ftp(1, 0, OPEN, 0, b"/camera.xml"));
         let size = u32::from_le_bytes(r[0].payload[12..16].try_into().unwrap()) as usize;
@@ -583,7 +581,7 @@ fn a_set_of_a_type_the_dialect_does_not_know_is_answered() {
         raw_frame(GCS, 323, ParamExtSet::crc_extra(), &p)
     };
     // PARAM_EXT_ACK: param_id 0..16, param_value 16..144, param_type 144, result 145.
-    let raw_acks = |b: &mut Bridge<Link>| -> Vec<Vec<u8>> {
+    let raw_acks = |b: &mut Firmware| -> Vec<Vec<u8>> {
         sent(b)
             .iter()
             .filter(|f| f.message_id() == 324)
@@ -617,8 +615,5 @@ fn a_set_of_a_type_the_dialect_does_not_know_is_answered() {
             (3, ty, unsupported)
         );
     }
-    assert!(
-        queued(b.gimbal_mut()).is_empty(),
-        "nothing sent to the gimbal"
-    );
+    assert!(queued(&mut b.link).is_empty(), "nothing sent to the gimbal");
 }

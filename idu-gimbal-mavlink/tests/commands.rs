@@ -7,15 +7,15 @@ use common::*;
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{GimbalCommand, Photo};
 use idu_gimbal_mavlink::camera::CameraConfig;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::BridgeConfig;
 use mavio::dialects::common::enums::{MavCmd, MavFrame, MavResult};
 use mavio::dialects::common::messages::{
     CameraImageCaptured, CommandAck, CommandInt, CommandLong, GimbalDeviceInformation,
 };
 use mavio::protocol::{Frame, V2};
 
-fn bridge() -> Bridge<Link> {
-    let mut b = Bridge::new(
+fn bridge() -> Firmware {
+    let mut b = Firmware::new(
         Link::new(Config::default()),
         BridgeConfig {
             camera: Some(CameraConfig::new("rtsp://192.168.42.108:554/live").unwrap()),
@@ -68,7 +68,7 @@ fn roi(frame_: MavFrame, lat: i32, lon: i32, alt_m: f32) -> CommandInt {
 type Ack = (u8, MavCmd, MavResult);
 
 /// The ACKs a message produced, and all frames.
-fn acks_of(b: &mut Bridge<Link>, bytes: &[u8], ms: u32) -> (Vec<Ack>, Vec<Frame<V2>>) {
+fn acks_of(b: &mut Firmware, bytes: &[u8], ms: u32) -> (Vec<Ack>, Vec<Frame<V2>>) {
     b.receive_all(bytes, t(ms));
     let frames = sent(b);
     let acks = frames
@@ -111,10 +111,7 @@ fn command_int_is_answered_for_both_components() {
         [(100, MavCmd::ImageStartCapture, MavResult::Accepted)]
     );
     assert_eq!(of::<CameraImageCaptured>(&frames).len(), 1);
-    assert_eq!(
-        queued(b.gimbal_mut()),
-        [GimbalCommand::Photo(Photo::Single)]
-    );
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
     // Anything else addressed to either: UNSUPPORTED, never silence.
     for to in [154, 100] {
         let c = int(
@@ -153,7 +150,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
     let c = roi(MavFrame::GlobalInt, 473_987_420, 85_465_940, 420.5);
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(acks, [(154, MavCmd::DoSetRoiLocation, MavResult::Accepted)]);
-    let p = b.gimbal().pointing_target().unwrap();
+    let p = b.link.pointing_target().unwrap();
     assert!(
         (p.lat_deg() - 47.398_742).abs() < 1e-7 && (p.lon_deg() - 8.546_594).abs() < 1e-7,
         "{p:?}"
@@ -172,7 +169,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         acks_of(&mut b, &frame(GCS, 1, &c), 20).0[0].2,
         MavResult::Accepted
     );
-    assert!((b.gimbal().pointing_target().unwrap().alt_m() - 420.0).abs() < 0.01);
+    assert!((b.link.pointing_target().unwrap().alt_m() - 420.0).abs() < 0.01);
     let mut long = command((AP.0, 154), MavCmd::DoSetRoiLocation, 0.0, 0.0);
     long.param5 = 47.5;
     long.param6 = -122.25;
@@ -181,7 +178,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         acks_of(&mut b, &frame(GCS, 2, &long), 30).0[0].2,
         MavResult::Accepted
     );
-    let p = b.gimbal().pointing_target().unwrap();
+    let p = b.link.pointing_target().unwrap();
     assert!((p.lat_deg() - 47.5).abs() < 1e-7 && (p.lon_deg() + 122.25).abs() < 1e-7);
     assert!((p.alt_m() - 430.0).abs() < 0.01);
     // ROI none: the point-at ends, the gimbal keeps its aim.
@@ -196,7 +193,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         acks_of(&mut b, &frame(GCS, 3, &c), 40).0,
         [(154, MavCmd::DoSetRoiNone, MavResult::Accepted)]
     );
-    assert!(b.gimbal().pointing_target().is_none());
+    assert!(b.link.pointing_target().is_none());
     // Refused, and nothing pointed at: above terrain (unknown here), another gimbal
     // (param1), a latitude out of range.
     for (frame_, p1, x) in [
@@ -216,7 +213,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
             MavResult::Denied,
             "{frame_:?} {p1}"
         );
-        assert!(b.gimbal().pointing_target().is_none());
+        assert!(b.link.pointing_target().is_none());
     }
     // Broadcast: the autopilot's gimbal manager owns ROI (common.xml: "not to a gimbal
     // device"); the device leaves it alone.
@@ -228,7 +225,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         (473_987_420, 85_465_940, 20.0),
     );
     assert!(acks_of(&mut b, &frame(GCS, 5, &c), 60).0.is_empty());
-    assert!(b.gimbal().pointing_target().is_none());
+    assert!(b.link.pointing_target().is_none());
 }
 
 #[cfg(feature = "roi")]
@@ -250,7 +247,7 @@ fn a_relative_roi_waits_for_home_s_height() {
             MavResult::TemporarilyRejected
         )]
     );
-    assert!(b.gimbal().pointing_target().is_none());
+    assert!(b.link.pointing_target().is_none());
 }
 
 #[cfg(feature = "roi")]
@@ -276,7 +273,7 @@ fn home_s_height_from_extreme_altitudes_is_refused_never_wrapped() {
             [(154, MavCmd::DoSetRoiLocation, MavResult::Denied)],
             "{alt} {relative}"
         );
-        assert!(b.gimbal().pointing_target().is_none());
+        assert!(b.link.pointing_target().is_none());
     }
 }
 
@@ -296,12 +293,12 @@ fn without_the_roi_feature_a_region_of_interest_is_unsupported() {
             acks_of(&mut b, &frame(GCS, 0, &c), 10).0,
             [(154, cmd, MavResult::Unsupported)]
         );
-        assert!(b.gimbal().pointing_target().is_none());
+        assert!(b.link.pointing_target().is_none());
     }
 }
 
 /// The ACKs (from component, raw command id, result byte) among the bridge's frames.
-fn raw_acks(b: &mut Bridge<Link>) -> Vec<(u8, u16, u8)> {
+fn raw_acks(b: &mut Firmware) -> Vec<(u8, u16, u8)> {
     sent(b)
         .iter()
         .filter(|f| f.message_id() == 77)

@@ -8,7 +8,7 @@ use common::*;
 
 use idu_gimbal::link::{Config, Link};
 use idu_gimbal_mavlink::signing::SigningConfig;
-use idu_gimbal_mavlink::{Bridge, BridgeConfig};
+use idu_gimbal_mavlink::BridgeConfig;
 use mavio::dialects::common::enums::MavCmd;
 use sha2::{Digest, Sha256};
 
@@ -18,8 +18,8 @@ fn key(passphrase: &[u8]) -> [u8; 32] {
     Sha256::digest(passphrase).into()
 }
 
-fn signing_bridge() -> Bridge<Link> {
-    Bridge::new(
+fn signing_bridge() -> Firmware {
+    Firmware::new(
         Link::new(Config::default()),
         BridgeConfig {
             signing: Some(SigningConfig::from_passphrase(KEY_PASSPHRASE, 5)),
@@ -48,7 +48,7 @@ fn sign(unsigned: &[u8], crc_extra: u8, key: &[u8; 32], timestamp: u64) -> Vec<u
 
 /// The bridge's output as raw frames: (message id, whether signed and its signature holds
 /// with `key`).
-fn output(b: &mut Bridge<Link>, key: &[u8; 32]) -> Vec<(u32, bool)> {
+fn output(b: &mut Firmware, key: &[u8; 32]) -> Vec<(u32, bool)> {
     let bytes = b.transmit_bytes().to_vec();
     b.transmit_written(bytes.len());
     let mut out = Vec::new();
@@ -150,7 +150,7 @@ fn the_timestamps_sent_go_on_from_the_newest_known() {
 
 #[test]
 fn without_a_key_nothing_is_signed_or_checked() {
-    let mut b = Bridge::new(Link::new(Config::default()), BridgeConfig::default());
+    let mut b = Firmware::new(Link::new(Config::default()), BridgeConfig::default());
     b.receive_all(&request(), t(10));
     assert!(b.signing_stats().is_none());
     let out = output(&mut b, &key(KEY_PASSPHRASE));

@@ -175,7 +175,7 @@ const NO_HEADING: i16 = i16::MIN;
 
 /// An aim being held: the state of the closed loop (see the [module docs](self)).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Hold<const Q: usize, const T: usize> {
+pub(crate) struct Hold<const Q: usize, const T: usize, M: Medium> {
     /// The yaw, in the frame `flags` names.
     yaw: Heading,
     pitch: Pitch,
@@ -194,11 +194,11 @@ pub(crate) struct Hold<const Q: usize, const T: usize> {
     pub(crate) next: Instant,
     /// The steering's step, stored when the aim or point-at starts: firmware that never
     /// aims links none of this.
-    pub(crate) step: fn(&mut Link<Q, T>, Instant, &mut Earliest),
+    pub(crate) step: fn(&mut Link<Q, T, M>, Instant, &mut Earliest),
 }
 
-impl<const Q: usize, const T: usize> Hold<Q, T> {
-    pub(crate) fn new(aim: Aim, step: fn(&mut Link<Q, T>, Instant, &mut Earliest)) -> Self {
+impl<const Q: usize, const T: usize, M: Medium> Hold<Q, T, M> {
+    pub(crate) fn new(aim: Aim, step: fn(&mut Link<Q, T, M>, Instant, &mut Earliest)) -> Self {
         let mut hold = Hold {
             yaw: aim.yaw.heading(),
             pitch: aim.pitch,
@@ -303,7 +303,7 @@ fn cdeg(deci: impl Into<i32>) -> i32 {
     deci.into().saturating_mul(10)
 }
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Holds the gimbal at `aim`, closed loop: see the [module docs](aim). Ends a rate
     /// hold or a point-at (and any aim held). An aim within the dead-band of the one held
     /// changes nothing (a setpoint stream re-sending it); any other is commanded at once,
@@ -387,7 +387,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// polled.
     pub(super) fn hold_step(
         &mut self,
-        h: &mut Hold<Q, T>,
+        h: &mut Hold<Q, T, M>,
         now: Instant,
         earliest: &mut Earliest,
         period: u32,
@@ -403,7 +403,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// what to send (see [`Link::hold_step`]).
     pub(super) fn hold_look(
         &mut self,
-        h: &mut Hold<Q, T>,
+        h: &mut Hold<Q, T, M>,
         now: Instant,
         earliest: &mut Earliest,
         period: u32,
@@ -520,7 +520,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// and the aim's pitch; there is room for both.
     fn send_aim(
         &mut self,
-        h: &mut Hold<Q, T>,
+        h: &mut Hold<Q, T, M>,
         command_cdeg: i32,
         north: bool,
         reference_cdeg: Option<i32>,
@@ -548,7 +548,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// target, getting closer, or off and due a re-command (or not reached).
     fn judge(
         &mut self,
-        h: &mut Hold<Q, T>,
+        h: &mut Hold<Q, T, M>,
         (motor, pitch, followed): (i16, i16, bool),
         motor_cdeg: i32,
     ) {

@@ -3,7 +3,7 @@
 use super::*;
 use crate::wire::control::DualLightCommand;
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// How many commands [`Link::send`] takes now: the free control-frame slots, out of
     /// `Q`. A caller with several commands that only make sense together (a zoom of several
     /// steps) checks it first and sends all or none.
@@ -63,16 +63,25 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         // A zero-rate frame still waiting would arrive after this command and undo it.
         self.tx.cancel_zero_rate();
     }
+}
 
+impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     /// Queues a text message, all of it or nothing.
     ///
-    /// A link without text slots (`T` = 0, as the serial link's, whose transport carries no
-    /// text) has nothing to queue it in: calling this on one does not build.
+    /// Only CAN carries text: a [`SerialLink`] has no such method, and a CAN link built
+    /// without text slots (`T` = 0) has nothing to queue it in: calling this on either does
+    /// not build.
     ///
     /// ```compile_fail
     /// use idu_gimbal::link::{Config, Link};
     /// let mut no_text: Link<8, 0> = Link::new(Config::default());
     /// let _ = no_text.send_text(b"hello");
+    /// ```
+    ///
+    /// ```compile_fail
+    /// use idu_gimbal::link::{Config, SerialLink};
+    /// let mut serial: SerialLink = SerialLink::new(Config::default());
+    /// let _ = serial.send_text(b"hello");
     /// ```
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
         const {

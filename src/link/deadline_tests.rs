@@ -367,7 +367,7 @@ fn transmit<const Q: usize, const T: usize>(
 
 /// One millisecond of both drivers. `reference` is fully polled every millisecond.
 /// `lazy` wakes only at its last `next_deadline` (`now` while frames wait, as
-/// [`crate::Gimbal::next_deadline`]) or on input; when `poll_on_input` is false, an input
+/// [`crate::Port::next_deadline`]) or on input; when `poll_on_input` is false, an input
 /// alone does not make it poll: only a deadline that has come (`next_deadline(now) ==
 /// now`) does. Its polls are full polls too (no idle fast path): the deadline alone
 /// decides.

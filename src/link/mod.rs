@@ -3,9 +3,10 @@
 //! [`Link`] is a sans-IO state machine. Feed it received frames with [`Link::receive`],
 //! call [`Link::poll`] with the current time, and move the frames it hands out with
 //! [`Link::next_transmit`] to whatever CAN stack you have, reporting back with
-//! [`Link::transmit_done`] or [`Link::transmit_refused`]. The [`Gimbal`](crate::Gimbal)
-//! driver does exactly this over an `embedded-can` driver; an async (embassy) or
-//! non-`embedded-can` stack can do the same.
+//! [`Link::transmit_done`] or [`Link::transmit_refused`]. The CAN port
+//! ([`CanPort`](crate::CanPort)) does exactly this over an `embedded-can` driver; an async
+//! (embassy) or non-`embedded-can` stack can do the same. The link is the one command
+//! surface: a port only moves its frames (see [`crate::port`]).
 //!
 //! ```
 //! use idu_gimbal::link::{Config, Event, Link};
@@ -33,6 +34,7 @@
 pub mod aim;
 mod command;
 mod event;
+pub mod medium;
 mod point;
 pub mod postback;
 mod queue;
@@ -41,7 +43,6 @@ mod rate;
 mod receive;
 mod ring;
 mod schedule;
-pub mod serial;
 pub mod text;
 mod transmit;
 mod vehicle;
@@ -55,6 +56,7 @@ use crate::wire::vehicle::{Altitude, Attitude, Gps, VehicleFrame};
 use crate::wire::{ids, text as wire_text, Frame};
 pub use aim::{Aim, AimError, AimState, Yaw};
 pub use event::Event;
+pub use medium::{Can, Medium, Serial};
 use postback::PostbackAssembler;
 use queue::{Requeued, TxQueue, VehicleSlot};
 use rate::RateHold;
@@ -99,7 +101,7 @@ pub struct Config {
     /// The closed loop's period: an aim held is looked at this often, and re-commanded at
     /// most this often (default 50, the document's period for a repeated rate command).
     pub aim_period_ms: u16,
-    /// Frames [`Gimbal::poll`](crate::Gimbal::poll) receives at most in one call, so that a
+    /// Frames a port's [`poll`](crate::Port::poll) receives at most in one call, so that a
     /// flooded bus cannot starve the rest of the main loop (default 32; a poll always
     /// tries at least one).
     pub max_rx_per_poll: core::num::NonZeroU16,
@@ -213,15 +215,15 @@ impl std::error::Error for TextQueueError {}
 /// What keeps the gimbal moving besides single commands. A rate hold, an aim and a
 /// point-at are all pointing, and any pointing ends the others: one place holds any.
 #[derive(Clone, Copy, Debug)]
-enum Steering<const Q: usize, const T: usize> {
+enum Steering<const Q: usize, const T: usize, M: Medium> {
     /// Nothing: the gimbal does what it was last told.
     Manual,
     /// A rate hold.
     Rate(RateHold),
     /// An orientation held closed loop.
-    Aim(aim::Hold<Q, T>),
+    Aim(aim::Hold<Q, T, M>),
     /// Pointing at a location.
-    Point(point::PointAt<Q, T>),
+    Point(point::PointAt<Q, T, M>),
 }
 
 /// Advances a deadline by one period; after a long gap, resynchronises to `now` so that it
@@ -261,12 +263,12 @@ const MAX_QUIET_MS: u32 = 60_000;
 /// `Q` is the number of control-frame slots, `T` the number of text-frame slots; each is at
 /// most 255 (checked when the link is built).
 #[derive(Clone, Debug)]
-pub struct Link<const Q: usize = 8, const T: usize = 8> {
+pub struct Link<const Q: usize = 8, const T: usize = 8, M: Medium = Can> {
     config: Config,
     tx: TxQueue<Q, T>,
     assembler: PostbackAssembler,
     vehicle: VehicleSources,
-    steering: Steering<Q, T>,
+    steering: Steering<Q, T, M>,
     latest: Option<(Postback, Instant)>,
     status: event::Status,
     /// Nothing is due within `quiet` after `last_poll` (0: poll fully next time): the idle
@@ -274,7 +276,13 @@ pub struct Link<const Q: usize = 8, const T: usize = 8> {
     last_poll: Instant,
     quiet: quiet::Quiet,
     stats: Counters,
+    medium: core::marker::PhantomData<M>,
 }
+
+/// The link to a gimbal over its UART: control commands and postbacks only (see
+/// [`medium`]), no text slots. The serial port ([`SerialPort`](crate::port::SerialPort),
+/// or the sans-IO [`SerialStream`](crate::port::serial::SerialStream)) moves its bytes.
+pub type SerialLink<const Q: usize = 8> = Link<Q, 0, Serial>;
 
 /// The counters the link itself keeps; the rest of [`LinkStats`] is the assembler's or
 /// derived.
@@ -287,11 +295,13 @@ struct Counters {
     ignored_frames: u32,
     aim_recommands: u32,
     aim_not_reached: u32,
+    /// Postbacks that arrived whole (the serial stream's).
+    whole_postbacks: u32,
 }
 
 use queue::VehicleSlot::{Altitude as ALTITUDE, Attitude as ATTITUDE, Gps as GPS};
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// A link with the given timing, link down, nothing queued.
     pub fn new(config: Config) -> Self {
         Link {
@@ -305,6 +315,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             last_poll: Instant::from_millis(0),
             quiet: quiet::Quiet::NONE,
             stats: Counters::default(),
+            medium: core::marker::PhantomData,
         }
     }
 
@@ -327,9 +338,12 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         LinkStats {
             // Every received frame is ignored or fed to the assembler, which accounts for
             // each: counting them once more on the hot path would be redundant.
-            frames_received: c.ignored_frames.wrapping_add(a.frames),
+            frames_received: c
+                .ignored_frames
+                .wrapping_add(a.frames)
+                .wrapping_add(c.whole_postbacks),
             frames_sent: c.frames_sent,
-            postbacks: a.messages,
+            postbacks: a.messages.wrapping_add(c.whole_postbacks),
             crc_errors: a.crc_errors,
             restarts: a.restarts,
             dropped_partials: a.dropped_partials,

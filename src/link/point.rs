@@ -90,7 +90,7 @@ impl Target {
 
 /// State of an active point-at.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PointAt<const Q: usize, const T: usize> {
+pub(crate) struct PointAt<const Q: usize, const T: usize, M: Medium> {
     pub(crate) target: Target,
     /// Compute the aim at the next step, whatever the grid says (the first, or a retry).
     pub(crate) due: bool,
@@ -99,11 +99,11 @@ pub(crate) struct PointAt<const Q: usize, const T: usize> {
     /// point-at's: the whole point-at, reached only through this pointer, which
     /// [`Link::point_at`](super::Link::point_at) stores, so that firmware that never points
     /// at a location links none of it, nor the double-precision geodesy behind it.
-    pub(crate) hold: Hold<Q, T>,
+    pub(crate) hold: Hold<Q, T, M>,
     pub(crate) aiming: bool,
 }
 
-impl<const Q: usize, const T: usize> PointAt<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> PointAt<Q, T, M> {
     pub(crate) fn new(target: Position) -> Self {
         let placeholder = Aim {
             yaw: Yaw::Earth(Heading::NORTH),
@@ -119,7 +119,7 @@ impl<const Q: usize, const T: usize> PointAt<Q, T> {
     }
 
     /// The aim held, once one was computed.
-    pub(crate) fn aim_hold(&self) -> Option<&Hold<Q, T>> {
+    pub(crate) fn aim_hold(&self) -> Option<&Hold<Q, T, M>> {
         self.aiming.then_some(&self.hold)
     }
 }
@@ -137,7 +137,7 @@ pub(crate) fn wrap_360(deg: f64) -> f64 {
 // The link's side of pointing: starting, stopping, and the step each poll takes.
 use super::*;
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Keeps the gimbal pointed at `target` while the vehicle moves: every
     /// `point_at_period_ms` ([`Config`]) the exact WGS84 bearing and elevation from the
     /// vehicle's fresh GPS and altitude become an earth-frame aim, held closed loop (see
@@ -208,7 +208,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         self.steering = Steering::Point(p);
     }
 
-    pub(super) fn aim_at(&mut self, p: &mut PointAt<Q, T>, solution: Solution) {
+    pub(super) fn aim_at(&mut self, p: &mut PointAt<Q, T, M>, solution: Solution) {
         match solution {
             Solution::Unknown => {}
             Solution::Unreachable { elevation_cdeg } => {

@@ -10,7 +10,7 @@ pub(super) struct RateHold {
     pub(super) next: Instant,
 }
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Starts, changes or refreshes a rate hold on the gimbal: the rate command is repeated
     /// every `rate_repeat_ms` while this is called again within `rate_deadman_ms`. A rate
     /// hold is a pointing command: it ends a point-at.

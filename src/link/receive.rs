@@ -19,7 +19,7 @@ impl From<u32> for RxId {
     }
 }
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     /// Takes a received frame: the one way in from CAN. `id` is the frame's 29-bit ID (a
     /// `u32`), or [`RxId::Other`] for a standard-ID or remote frame, which is only
     /// counted. The drivers take a faster way in for the postback's frames, with the same
@@ -31,7 +31,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             _ => self.receive_ignored(),
         }
     }
+}
 
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Takes a received data frame whose ID the caller has found to be
     /// [`ids::POSTBACK`]: [`Link::receive`] without the ID check, for a driver that
     /// rejects foreign frames itself before anything else.
@@ -80,9 +82,17 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     /// Takes a whole postback that arrived in one piece, as on the serial link, where the
-    /// stream parser has already checked its header, length byte and CRC. The assembler
-    /// (and its counters) is for CAN frames only and is not involved.
-    pub(crate) fn receive_postback(&mut self, postback: Postback, now: Instant) {
+    /// stream parser has already checked its header, length byte and CRC: counted here, as
+    /// the assembler counts the postbacks it completes from CAN frames. Out of line: the
+    /// serial port's byte loop then keeps none of the link's state in registers.
+    #[inline(never)]
+    pub(crate) fn receive_whole_postback(&mut self, postback: Postback, now: Instant) {
+        self.stats.whole_postbacks = self.stats.whole_postbacks.wrapping_add(1);
+        self.receive_postback(postback, now);
+    }
+
+    /// Takes a postback checked whole: the link's health, the latest postback, the event.
+    pub(super) fn receive_postback(&mut self, postback: Postback, now: Instant) {
         // The health deadline follows this postback: earlier than the one the idle fast
         // path knows of when the link was down (none) or `now` is behind the last postback.
         // While the link is up the fast path wakes for the last postback's deadline (the

@@ -2,7 +2,7 @@
 
 use super::*;
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Runs the schedules up to `now`: vehicle pushes, the rate hold and its dead-man, link
     /// health, an aim's closed loop or a point-at, and expiry of partial postbacks.
     ///
@@ -67,7 +67,7 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     ///
     /// Frames waiting for transmission are not a deadline of `poll`, which does not send
     /// them: hand them to the CAN driver while [`Link::has_transmit`] and the driver has
-    /// room. ([`Gimbal::next_deadline`](crate::Gimbal::next_deadline), whose `poll` does
+    /// room. ([`Port::next_deadline`](crate::Port::next_deadline), whose `poll` does
     /// transmit, is `now` while frames wait.)
     ///
     /// While a rate hold or point-at has a frame to queue and the transmit queue is full

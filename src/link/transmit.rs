@@ -2,11 +2,36 @@
 
 use super::*;
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+/// The frame-level I/O of a CAN link: what a CAN port (or an async or non-`embedded-can`
+/// stack of the application's own) moves between the link and the bus. A serial link's
+/// frames leave as bytes, through its port, and have no such methods.
+impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     /// Takes the next frame to transmit, highest priority first. Report what happened to
     /// it with [`Link::transmit_done`] or [`Link::transmit_refused`].
     #[inline]
     pub fn next_transmit(&mut self) -> Option<Frame> {
+        self.next_frame()
+    }
+
+    /// The CAN driver accepted the frame last taken. `displaced` is a frame it handed back
+    /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
+    #[inline]
+    pub fn transmit_done(&mut self, displaced: Option<Frame>) {
+        self.frame_done(displaced)
+    }
+
+    /// The CAN driver did not take the frame last taken (it was busy or failed): it goes
+    /// back to the front of its class.
+    #[inline]
+    pub fn transmit_refused(&mut self, frame: Frame) {
+        self.frame_refused(frame)
+    }
+}
+
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
+    /// [`Link::next_transmit`] on any medium, for a port.
+    #[inline]
+    pub(crate) fn next_frame(&mut self) -> Option<Frame> {
         // Inline: nothing waiting, or a control frame (what most polls that send send).
         if let Some(data) = self.next_control() {
             return Some(Frame::new(ids::CONTROL, data));
@@ -67,10 +92,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         !self.tx.is_empty()
     }
 
-    /// The driver accepted the frame last taken. `displaced` is a frame it handed back
-    /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
+    /// [`Link::transmit_done`] on any medium, for a port.
     #[inline]
-    pub fn transmit_done(&mut self, displaced: Option<Frame>) {
+    pub(crate) fn frame_done(&mut self, displaced: Option<Frame>) {
         self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
         if let Some(frame) = displaced {
             self.displaced(frame);
@@ -94,9 +118,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
         }
     }
 
-    /// The driver did not take the frame last taken (it was busy or failed): it goes back
-    /// to the front of its class.
-    pub fn transmit_refused(&mut self, frame: Frame) {
+    /// [`Link::transmit_refused`] on any medium, for a port.
+    pub(crate) fn frame_refused(&mut self, frame: Frame) {
         if frame.id == ids::ATTITUDE {
             self.attitude_refused();
         }

@@ -92,7 +92,7 @@ impl VehicleSources {
     }
 }
 
-impl<const Q: usize, const T: usize> Link<Q, T> {
+impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Bookkeeping before slot `slot` takes a value measured at `stamp`.
     pub(super) fn set_vehicle(&mut self, slot: VehicleSlot, stamp: Instant) {
         if !self.vehicle.has(slot) {
@@ -106,7 +106,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
             .vehicle
             .stamp(slot)
             .is_some_and(|old| !stamp.is_at_or_after(old));
-        if self.vehicle.due(slot) || older {
+        // A serial link sends no vehicle frames: its data only waits to be used.
+        if M::VEHICLE_FRAMES && (self.vehicle.due(slot) || older) {
             self.quiet = quiet::Quiet::NONE;
         }
         self.vehicle.stamped(slot, stamp);
@@ -162,7 +163,8 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     /// Always false on the UART, which carries no vehicle frames.
     pub fn north_referenced(&self, now: Instant) -> bool {
         let stale = u32::from(self.config.vehicle_stale_ms);
-        self.config.attitude_period_ms != 0
+        M::VEHICLE_FRAMES
+            && self.config.attitude_period_ms != 0
             && self.vehicle.has & ATTITUDE_SENT != 0
             && Self::age(self.vehicle.attitude_sent_stamp, now) <= stale
             && self.is_fresh(ATTITUDE, now)
@@ -198,6 +200,9 @@ impl<const Q: usize, const T: usize> Link<Q, T> {
     }
 
     pub(super) fn poll_vehicle(&mut self, now: Instant, earliest: &mut Earliest) {
+        if !M::VEHICLE_FRAMES {
+            return;
+        }
         let periods = [
             u32::from(self.config.attitude_period_ms),
             u32::from(self.config.gps_period_ms),

@@ -4,7 +4,7 @@
 //! half [`Rx`] and a transmit half [`Tx`] that implement both `embedded-io` 0.7 (`Read` +
 //! `ReadReady`, `Write` + `WriteReady`) and `embedded-hal-nb` 1.0 serial (`Read<u8>`,
 //! `Write<u8>`), so a driver over either runs on it unchanged, through the adapters
-//! [`Io`](crate::driver::Io) and [`Nb`](crate::driver::Nb). Nothing allocates, nothing is
+//! [`Io`](crate::port::Io) and [`Nb`](crate::port::Nb). Nothing allocates, nothing is
 //! `unsafe`, nothing panics, and it works without `std`.
 //!
 //! # Model
@@ -403,7 +403,7 @@ impl<const N: usize> embedded_io::ErrorType for Tx<'_, N> {
 
 impl<const N: usize> embedded_io::Read for Rx<'_, N> {
     /// Never blocks: `Ok(0)` when nothing waits (ask `read_ready` first, as
-    /// [`Io`](crate::driver::Io) does, for the `embedded-io` contract).
+    /// [`Io`](crate::port::Io) does, for the `embedded-io` contract).
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, MockSerialError> {
         self.pipe.read(self.line, buf)
     }
@@ -417,7 +417,7 @@ impl<const N: usize> embedded_io::ReadReady for Rx<'_, N> {
 
 impl<const N: usize> embedded_io::Write for Tx<'_, N> {
     /// Never blocks: `Ok(0)` when the slow writer takes nothing now (ask `write_ready`
-    /// first, as [`Io`](crate::driver::Io) does, for the `embedded-io` contract).
+    /// first, as [`Io`](crate::port::Io) does, for the `embedded-io` contract).
     fn write(&mut self, buf: &[u8]) -> Result<usize, MockSerialError> {
         self.pipe.write(self.line, buf, true)
     }

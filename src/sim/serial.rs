@@ -27,7 +27,7 @@
 use heapless::Deque;
 
 use super::{SimConfig, Simulator};
-use crate::driver::SerialPort;
+use crate::port::Uart;
 use crate::time::Instant;
 use crate::wire::ids;
 use crate::wire::postback::{Postback, MESSAGE_LEN};
@@ -106,17 +106,17 @@ impl<const OUT: usize> SerialSimulator<OUT> {
 
     /// One exchange over a port: reads what waits, polls, writes what the port takes. A
     /// port error ends the exchange; it is returned, and nothing is lost.
-    pub fn serve<P: SerialPort>(
+    pub fn serve<P: Uart>(
         &mut self,
         port: &mut P,
         now: Instant,
-    ) -> Result<Option<Postback>, crate::driver::PortError<P::ReadError, P::WriteError>> {
+    ) -> Result<Option<Postback>, crate::port::PortError<P::ReadError, P::WriteError>> {
         let mut buf = [0u8; 32];
         loop {
             match port.read(&mut buf) {
                 Ok(0) => break,
                 Ok(n) => self.receive(buf.get(..n).unwrap_or(&buf), now),
-                Err(e) => return Err(crate::driver::PortError::Read(e)),
+                Err(e) => return Err(crate::port::PortError::Read(e)),
             }
         }
         let status = self.poll(now);
@@ -128,7 +128,7 @@ impl<const OUT: usize> SerialSimulator<OUT> {
             match port.write(bytes) {
                 Ok(0) => break,
                 Ok(n) => self.transmit_written(n),
-                Err(e) => return Err(crate::driver::PortError::Write(e)),
+                Err(e) => return Err(crate::port::PortError::Write(e)),
             }
         }
         Ok(status)

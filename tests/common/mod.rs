@@ -1,13 +1,14 @@
-//! What the driver tests over the simulated gimbal share (`tests/driver_sim.rs` on the
+//! What the port tests over the simulated gimbal share (`tests/driver_sim.rs` on the
 //! in-memory CAN bus, `tests/serial.rs` on the in-memory serial line).
 
+use idu_gimbal::link::Medium;
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::{Event, GimbalControl, Instant};
+use idu_gimbal::{Event, Instant, Link};
 
-/// Takes every event the gimbal raised by `now_ms`, with its time, and each postback it
+/// Takes every event the link raised by `now_ms`, with its time, and each postback it
 /// delivered fresh (age 0) as the event came.
-pub fn take_events<G: GimbalControl>(
-    gimbal: &mut G,
+pub fn take_events<const Q: usize, const T: usize, M: Medium>(
+    gimbal: &mut Link<Q, T, M>,
     now_ms: u32,
     delivered: &mut Vec<Postback>,
     events: &mut Vec<(u32, Event)>,

@@ -1,5 +1,6 @@
 //! The common part of the footprint builds (`footprint_base`, `footprint_driver`,
-//! `footprint_serial`, `footprint_bridge`), a module of each.
+//! `footprint_serial`, `footprint_bridge`; and `footprint_generic`, whose code
+//! `scripts/port-generic.sh` compares), a module of each.
 //!
 //! `scripts/size-report.sh` builds them and subtracts the base's sizes from each driver's:
 //! what remains is what that driver costs a firmware (flash: code and constant data; RAM:
@@ -78,7 +79,7 @@ impl embedded_can::nb::Can for RegCan {
 #[allow(dead_code)] // each build uses it directly or through its driver
 pub struct RegPort;
 
-impl idu_gimbal::driver::SerialPort for RegPort {
+impl idu_gimbal::port::Uart for RegPort {
     type ReadError = u32;
     type WriteError = u32;
 
@@ -137,7 +138,7 @@ pub fn can_skeleton() {
 #[inline(never)]
 #[allow(dead_code)] // each build uses one or both
 pub fn port_skeleton() {
-    use idu_gimbal::driver::SerialPort;
+    use idu_gimbal::port::Uart;
 
     let mut buf = [0u8; 32];
     match RegPort.read(&mut buf) {
@@ -176,27 +177,28 @@ fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
     cortex_m::asm::udf()
 }
 
-/// Drives a CAN driver with every kind of call: commands, a rate hold, text, vehicle data,
-/// polling, events and counters (`footprint_driver`, and `footprint_bridge` beneath its
-/// bridge).
-#[allow(dead_code)] // not every build drives the CAN driver
+/// Drives a CAN link and its port with every kind of call: commands, a rate hold, text,
+/// vehicle data, polling, events and counters (`footprint_driver`, and `footprint_bridge`
+/// beneath its bridge).
+#[allow(dead_code)] // not every build drives the CAN port
 #[inline(never)]
-pub fn drive(gimbal: &mut idu_gimbal::Gimbal<RegCan>) {
+pub fn drive(link: &mut idu_gimbal::Link, port: &mut idu_gimbal::CanPort<RegCan>) {
+    use idu_gimbal::Port;
     let now = idu_gimbal::Instant::from_millis(input(4));
-    command_surface(gimbal, now, |g| g.send_text(b"survey leg 3 done").is_ok());
-    output(u32::from(gimbal.poll(now).is_ok()));
-    events(gimbal, now);
-    output(gimbal.stats().link.postbacks);
+    command_surface(link, now, |l| l.send_text(b"survey leg 3 done").is_ok());
+    output(u32::from(port.poll(link, now).is_ok()));
+    events(link, now);
+    output(link.stats().postbacks);
 }
 
 /// Every kind of call of the command surface, the same on every transport (`send_text`
 /// where the transport carries text), chosen by an opaque input.
 #[allow(dead_code)] // not every build uses it
 #[inline(always)]
-pub fn command_surface<G: idu_gimbal::GimbalControl>(
-    gimbal: &mut G,
+pub fn command_surface<const Q: usize, const T: usize, M: idu_gimbal::link::Medium>(
+    gimbal: &mut idu_gimbal::Link<Q, T, M>,
     now: idu_gimbal::Instant,
-    send_text: impl FnOnce(&mut G) -> bool,
+    send_text: impl FnOnce(&mut idu_gimbal::Link<Q, T, M>) -> bool,
 ) {
     use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
@@ -239,7 +241,10 @@ pub fn command_surface<G: idu_gimbal::GimbalControl>(
 /// The events and the link's state after a poll, the same on every transport.
 #[allow(dead_code)] // not every build uses it
 #[inline(always)]
-pub fn events<G: idu_gimbal::GimbalControl>(gimbal: &mut G, now: idu_gimbal::Instant) {
+pub fn events<const Q: usize, const T: usize, M: idu_gimbal::link::Medium>(
+    gimbal: &mut idu_gimbal::Link<Q, T, M>,
+    now: idu_gimbal::Instant,
+) {
     use idu_gimbal::Event;
     while let Some(event) = gimbal.next_event() {
         output(match event {

@@ -24,7 +24,7 @@ use esp_hal::twai::{BaudRate, ExtendedId, TwaiConfiguration, TwaiMode};
 use esp_println::println;
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
+use idu_gimbal::{CanPort, Config, Event, Instant, Link};
 
 // The main loop and the stand-in vehicle data shared with the other CAN firmware.
 use idu_firmware_support::app::{App, Report};
@@ -68,10 +68,11 @@ fn main() -> ! {
     let twai = config.start();
     println!("TWAI up: 1 Mbit/s, filter passes postbacks only");
 
-    let mut gimbal: Gimbal<_> = Gimbal::new(twai, Config::default());
+    let mut link: Link = Link::new(Config::default());
+    let mut port = CanPort::new(twai);
     if let Ok(pitch) = Pitch::new(-30.0) {
         // The queue is empty: this cannot be refused.
-        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+        let _ = link.send(GimbalCommand::Pitch(pitch));
     }
 
     // Busy polling: the TWAI's receive FIFO (64 bytes) holds the four frames of a
@@ -79,7 +80,8 @@ fn main() -> ! {
     let mut app = App::new(now());
     loop {
         app.step(
-            &mut gimbal,
+            &mut link,
+            &mut port,
             now(),
             vehicle_stand_in,
             |report| match report {
@@ -90,7 +92,7 @@ fn main() -> ! {
                     p.heading_deg()
                 ),
                 Report::Event(event, _) => println!("event: {:?}", event),
-                Report::Stats(stats) => println!("stats: {:?}", stats),
+                Report::Stats(link, port) => println!("stats: {:?} {:?}", link, port),
             },
         );
     }

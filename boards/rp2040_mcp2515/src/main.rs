@@ -38,7 +38,7 @@ use panic_halt as _;
 use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
 
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Gimbal, GimbalControl, Instant};
+use idu_gimbal::{CanPort, Config, Instant, Link};
 
 // The main loop shared with the other CAN firmware.
 use idu_firmware_support::app::App;
@@ -153,18 +153,19 @@ fn main() -> ! {
     }
 
     // `MCP25xx` implements `embedded_can::nb::Can` with a real `WouldBlock`: no adapter.
-    let mut gimbal: Gimbal<_> = Gimbal::new(mcp, Config::default());
+    let mut link: Link = Link::new(Config::default());
+    let mut port = CanPort::new(mcp);
     if let Some(pitch) = look_down() {
         // The queue is empty: this cannot be refused.
-        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+        let _ = link.send(GimbalCommand::Pitch(pitch));
     }
 
-    // A driver error (an SPI failure) is counted in gimbal.stats(); there is no log here,
+    // A driver error (an SPI failure) is counted in port.stats(); there is no log here,
     // the LED shows the link.
     let mut app = App::new(now());
     loop {
-        app.step(&mut gimbal, now(), vehicle_stand_in, |_| {});
-        let _ = if gimbal.is_link_up() {
+        app.step(&mut link, &mut port, now(), vehicle_stand_in, |_| {});
+        let _ = if link.is_link_up() {
             led.set_high()
         } else {
             led.set_low()

@@ -1,5 +1,5 @@
 //! STM32H743 (Pixhawk-class flight controller: Pixhawk 6X, Cube Orange, …) driving an IDU
-//! gimbal on FDCAN1, through stm32h7xx-hal and `idu_gimbal::driver::fdcan::FdCan`.
+//! gimbal on FDCAN1, through stm32h7xx-hal and `idu_gimbal_fdcan::FdCan`.
 //!
 //! * FDCAN1 on **PD0 (RX) / PD1 (TX)** (CAN1 on Pixhawk boards), classic CAN at 1 Mbit/s
 //!   with extended IDs. The FDCAN's kernel clock is PLL1 Q at 32 MHz: 32 time quanta a bit,
@@ -32,9 +32,9 @@ use stm32h7xx_hal::gpio::Speed;
 use stm32h7xx_hal::rcc::rec;
 use stm32h7xx_hal::{pac, prelude::*};
 
-use idu_gimbal::driver::fdcan::FdCan;
 use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant};
+use idu_gimbal::{CanPort, Config, Event, Instant, Link};
+use idu_gimbal_fdcan::FdCan;
 
 // The main loop and the stand-in vehicle data shared with the other CAN firmware.
 use idu_firmware_support::app::{App, Report};
@@ -139,10 +139,11 @@ fn main() -> ! {
         idu_gimbal::interface::CAN_BITRATE
     );
 
-    let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+    let mut link: Link = Link::new(Config::default());
+    let mut port = CanPort::new(can);
     if let Ok(pitch) = Pitch::new(-30.0) {
         // The queue is empty: this cannot be refused.
-        let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+        let _ = link.send(GimbalCommand::Pitch(pitch));
     }
 
     // Busy polling: the adapter keeps one frame in flight, and the FIFO holds the four
@@ -150,7 +151,8 @@ fn main() -> ! {
     let mut app = App::new(now());
     loop {
         app.step(
-            &mut gimbal,
+            &mut link,
+            &mut port,
             now(),
             vehicle_stand_in,
             |report| match report {
@@ -165,7 +167,7 @@ fn main() -> ! {
                     defmt::warn!("gimbal link down: no postback for 1.5 s")
                 }
                 Report::Event(event, _) => defmt::info!("event: {}", event),
-                Report::Stats(stats) => defmt::info!("stats: {}", stats),
+                Report::Stats(link, port) => defmt::info!("stats: {} {}", link, port),
             },
         );
     }

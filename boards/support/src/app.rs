@@ -1,19 +1,20 @@
 //! The main loop of every CAN firmware, whatever its HAL: `boards/stm32f405` (`stm32f405`),
 //! `boards/rp2040_mcp2515`, `boards/esp32c3_twai` and `boards/stm32h743_fdcan` (the stand-in
 //! vehicle data is [`crate::vehicle`]). A board sets up its clocks, its CAN controller and
-//! its tick, builds a [`Gimbal`], then calls [`App::step`] forever with the
+//! its tick, builds a [`Link`] and a [`CanPort`], then calls [`App::step`] forever with the
 //! time and what it does with each [`Report`] (defmt, a serial console, nothing).
 //!
-//! What it does each turn: pushes the vehicle's estimates at 10 Hz (the driver sends each
-//! at its own rate while fresh), polls the driver (busy polling: a postback is four
+//! What it does each turn: pushes the vehicle's estimates at 10 Hz (the link sends each
+//! at its own rate while fresh), polls the port (busy polling: a postback is four
 //! back-to-back frames, ~0.5 ms at 1 Mbit/s, more than some receive FIFOs hold), and hands
-//! out each driver error, each event with the newest postback, and the counters every 10 s.
+//! out each CAN driver error, each event with the newest postback, and the counters every 10 s.
 
 use embedded_can::nb::Can;
-use idu_gimbal::driver::{DriverError, GimbalStats};
+use idu_gimbal::link::LinkStats;
+use idu_gimbal::port::{CanPort, CanPortStats, DriverError, Port};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Event, Gimbal, GimbalControl, Instant};
+use idu_gimbal::{Event, Instant, Link};
 
 /// What a turn of the loop has to tell.
 pub enum Report {
@@ -21,8 +22,8 @@ pub enum Report {
     Driver(DriverError),
     /// An event, with the newest postback (for [`Event::Postback`]).
     Event(Event, Option<Postback>),
-    /// The counters, every 10 s.
-    Stats(GimbalStats),
+    /// The counters, every 10 s: the link's and the port's.
+    Stats(LinkStats, CanPortStats),
 }
 
 /// The loop's schedule: the next vehicle push and the next counters line.
@@ -43,7 +44,8 @@ impl App {
     /// One turn at `now`: vehicle data from `vehicle` when due, a poll, and every report.
     pub fn step<C: Can, const Q: usize, const T: usize>(
         &mut self,
-        gimbal: &mut Gimbal<C, Q, T>,
+        link: &mut Link<Q, T>,
+        port: &mut CanPort<C>,
         now: Instant,
         vehicle: impl FnOnce(Instant) -> Option<(Gps, Altitude, Attitude)>,
         mut report: impl FnMut(Report),
@@ -51,23 +53,23 @@ impl App {
         if now.is_at_or_after(self.next_vehicle) {
             self.next_vehicle = now.add_millis(100);
             if let Some((gps, altitude, attitude)) = vehicle(now) {
-                gimbal.set_gps(gps, now);
-                gimbal.set_altitude(altitude, now);
-                gimbal.set_attitude(attitude, now);
+                link.set_gps(gps, now);
+                link.set_altitude(altitude, now);
+                link.set_attitude(attitude, now);
             }
         }
-        if let Err(e) = gimbal.poll(now) {
+        if let Err(e) = port.poll(link, now) {
             report(Report::Driver(e));
         }
-        while let Some(event) = gimbal.next_event() {
+        while let Some(event) = link.next_event() {
             report(Report::Event(
                 event,
-                gimbal.latest_postback(now).map(|(p, _)| p),
+                link.latest_postback(now).map(|(p, _)| p),
             ));
         }
         if now.is_at_or_after(self.next_stats) {
             self.next_stats = now.add_millis(10_000);
-            report(Report::Stats(gimbal.stats()));
+            report(Report::Stats(link.stats(), port.stats()));
         }
     }
 }

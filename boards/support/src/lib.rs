@@ -5,7 +5,7 @@
 //! its stand-in vehicle data ([`vehicle`]); these are what the RP2040 (thumbv6m) and
 //! ESP32-C3 (RISC-V) boards use. Behind features:
 //!
-//! * `session`: the scripted session of the driver against the simulated gimbal, played by
+//! * `session`: the scripted session of the link and its port against the simulated gimbal, played by
 //!   the QEMU demo and `host_sim`;
 //! * `qemu`: semihosting output and exit, and the panic and HardFault handlers of the QEMU
 //!   firmware (Cortex-M, cortex-m-rt);

@@ -1,4 +1,4 @@
-//! A scripted bench session: the driver against the simulated gimbal, over the in-memory
+//! A scripted bench session: the flight controller's link and port against the simulated gimbal, over the in-memory
 //! CAN bus or the in-memory serial line, shared by the root crate's two examples, `host_sim`
 //! (host) and `qemu_demo` (an emulated STM32F405). `no_std`, no allocation; telemetry goes to
 //! any `core::fmt::Write`.
@@ -7,58 +7,54 @@
 //! deterministic whatever the host or emulator speed.
 //!
 //! The script is the same on both transports; what differs is what the transport carries
-//! (see [`Rig`]): over serial no vehicle frames reach the gimbal, so its headings are
+//! (see [`Medium`]): over serial no vehicle frames reach the gimbal, so its headings are
 //! nose-referenced, and there is no text.
 
 use core::fmt::Write;
 
 use embedded_can::{nb::Can, Frame as _};
-use idu_gimbal::driver::Io;
+use idu_gimbal::link::{LinkStats, Medium, Serial};
 use idu_gimbal::mock::serial::{Pipe, Rx, Tx};
 use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
+use idu_gimbal::port::{CanPort, Io, Port, SerialPort};
 use idu_gimbal::sim::serial::SerialSimulator;
 use idu_gimbal::sim::{SimConfig, SimState, SimStats, Simulator};
 use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::{Config, Event, Gimbal, GimbalControl, Instant, SerialGimbal};
+use idu_gimbal::{Config, Event, Instant, Link};
 
 /// Endpoints and receive FIFO depth of the in-memory bus.
 pub type DemoBus = Bus<2, 32>;
 /// The in-memory serial line: 256 bytes of receive buffer each way.
 pub type DemoPipe = Pipe<256>;
 
-/// One transport with the driver on one end and the simulated gimbal on the other.
+/// One transport between two ports: the flight controller's port on one end, the
+/// simulated gimbal on the other.
 pub trait Rig {
     /// What connects them, for the telemetry.
     const WIRE: &'static str;
-    /// Whether the vehicle attitude reaches the gimbal (headings north-referenced).
-    const CARRIES_VEHICLE: bool;
-    /// Polls the driver.
-    fn poll(&mut self, now: Instant);
-    /// The driver: commands, vehicle data, events and postbacks through the core's command
-    /// surface, the same on both transports.
-    type Driver: GimbalControl;
-    /// The driver, to ask.
-    fn driver(&self) -> &Self::Driver;
-    /// The driver, to command.
-    fn driver_mut(&mut self) -> &mut Self::Driver;
-    /// Moves what the driver sent to the gimbal, runs it, and sends back its postbacks.
+    /// What the transport carries.
+    type Medium: Medium;
+    /// The flight controller's port.
+    type Port: Port<Medium = Self::Medium>;
+    /// The flight controller's port, to poll.
+    fn port(&mut self) -> &mut Self::Port;
+    /// Moves what the port sent to the gimbal, runs it, and sends back its postbacks.
     fn run_gimbal(&mut self, now: Instant);
-    /// Postbacks the driver received.
-    fn postbacks(&self) -> u32;
     /// Queues a text: `None` when the transport carries none, `Some(false)` when refused.
-    fn send_text(&mut self, text: &[u8]) -> Option<bool>;
+    fn send_text(link: &mut Link<8, 8, Self::Medium>, text: &[u8]) -> Option<bool>;
     /// The simulated gimbal's state and counters.
     fn sim_state(&self) -> &SimState;
+    /// The simulated gimbal's counters.
     fn sim_stats(&self) -> SimStats;
-    /// One line of the driver's counters.
-    fn summary(&self, out: &mut dyn Write);
+    /// One line of the link's and the port's counters.
+    fn summary(&self, link: &LinkStats, out: &mut dyn Write);
 }
 
-/// The CAN rig: [`Gimbal`] on endpoint 0, [`Simulator`] on endpoint 1.
+/// The CAN rig: a [`CanPort`] on endpoint 0, [`Simulator`] on endpoint 1.
 pub struct CanRig<'a> {
-    gimbal: Gimbal<Endpoint<'a, 2, 32>>,
+    port: CanPort<Endpoint<'a, 2, 32>>,
     sim: Simulator,
     sim_can: Endpoint<'a, 2, 32>,
 }
@@ -67,7 +63,7 @@ impl<'a> CanRig<'a> {
     /// A rig on `bus`, its clock starting at `now`.
     pub fn new(bus: &'a DemoBus, now: Instant) -> Option<Self> {
         Some(CanRig {
-            gimbal: Gimbal::new(bus.endpoint(0)?, Config::default()),
+            port: CanPort::new(bus.endpoint(0)?),
             sim: Simulator::new(SimConfig::default(), now),
             sim_can: bus.endpoint(1)?,
         })
@@ -76,17 +72,10 @@ impl<'a> CanRig<'a> {
 
 impl<'a> Rig for CanRig<'a> {
     const WIRE: &'static str = "an in-memory CAN bus";
-    const CARRIES_VEHICLE: bool = true;
-    type Driver = Gimbal<Endpoint<'a, 2, 32>>;
-    fn driver(&self) -> &Self::Driver {
-        &self.gimbal
-    }
-    fn driver_mut(&mut self) -> &mut Self::Driver {
-        &mut self.gimbal
-    }
-    fn poll(&mut self, now: Instant) {
-        // A driver error is counted in the stats; the session goes on.
-        let _ = self.gimbal.poll(now);
+    type Medium = idu_gimbal::link::Can;
+    type Port = CanPort<Endpoint<'a, 2, 32>>;
+    fn port(&mut self) -> &mut Self::Port {
+        &mut self.port
     }
     fn run_gimbal(&mut self, now: Instant) {
         while let Ok(f) = Can::receive(&mut self.sim_can) {
@@ -99,11 +88,8 @@ impl<'a> Rig for CanRig<'a> {
             }
         }
     }
-    fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.postbacks
-    }
-    fn send_text(&mut self, text: &[u8]) -> Option<bool> {
-        Some(self.gimbal.send_text(text).is_ok())
+    fn send_text(link: &mut Link<8, 8>, text: &[u8]) -> Option<bool> {
+        Some(link.send_text(text).is_ok())
     }
     fn sim_state(&self) -> &SimState {
         self.sim.state()
@@ -111,20 +97,23 @@ impl<'a> Rig for CanRig<'a> {
     fn sim_stats(&self) -> SimStats {
         self.sim.stats()
     }
-    fn summary(&self, out: &mut dyn Write) {
-        let s = self.gimbal.stats().link;
+    fn summary(&self, s: &LinkStats, out: &mut dyn Write) {
         let _ = writeln!(
             out,
-            "frames sent {} received {}; postbacks {}; superseded vehicle frames {}",
-            s.frames_sent, s.frames_received, s.postbacks, s.superseded
+            "frames sent {} received {}; postbacks {}; superseded vehicle frames {}; driver errors {}",
+            s.frames_sent,
+            s.frames_received,
+            s.postbacks,
+            s.superseded,
+            self.port.stats().driver_errors.total()
         );
     }
 }
 
-/// The serial rig: [`SerialGimbal`] on port 0 through the `embedded-io` adapter,
+/// The serial rig: a [`SerialPort`] on port 0 through the `embedded-io` adapter,
 /// [`SerialSimulator`] on port 1.
 pub struct SerialRig<'a> {
-    gimbal: SerialGimbal<Io<Rx<'a, 256>, Tx<'a, 256>>>,
+    port: SerialPort<Io<Rx<'a, 256>, Tx<'a, 256>>>,
     sim: SerialSimulator,
     sim_port: Io<Rx<'a, 256>, Tx<'a, 256>>,
 }
@@ -135,7 +124,7 @@ impl<'a> SerialRig<'a> {
         let (rx, tx) = pipe.port(0)?;
         let (sim_rx, sim_tx) = pipe.port(1)?;
         Some(SerialRig {
-            gimbal: SerialGimbal::new(Io::new(rx, tx), Config::default()),
+            port: SerialPort::new(Io::new(rx, tx)),
             sim: SerialSimulator::new(SimConfig::default(), now),
             sim_port: Io::new(sim_rx, sim_tx),
         })
@@ -144,25 +133,15 @@ impl<'a> SerialRig<'a> {
 
 impl<'a> Rig for SerialRig<'a> {
     const WIRE: &'static str = "an in-memory serial line (the 24/27-byte UART framing)";
-    const CARRIES_VEHICLE: bool = false;
-    type Driver = SerialGimbal<Io<Rx<'a, 256>, Tx<'a, 256>>>;
-    fn driver(&self) -> &Self::Driver {
-        &self.gimbal
-    }
-    fn driver_mut(&mut self) -> &mut Self::Driver {
-        &mut self.gimbal
-    }
-    fn poll(&mut self, now: Instant) {
-        // A port error is counted in stats().port_errors; the session goes on.
-        let _ = self.gimbal.poll(now);
+    type Medium = Serial;
+    type Port = SerialPort<Io<Rx<'a, 256>, Tx<'a, 256>>>;
+    fn port(&mut self) -> &mut Self::Port {
+        &mut self.port
     }
     fn run_gimbal(&mut self, now: Instant) {
         let _ = self.sim.serve(&mut self.sim_port, now);
     }
-    fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.postbacks
-    }
-    fn send_text(&mut self, _text: &[u8]) -> Option<bool> {
+    fn send_text(_link: &mut Link<8, 8, Serial>, _text: &[u8]) -> Option<bool> {
         None
     }
     fn sim_state(&self) -> &SimState {
@@ -171,24 +150,25 @@ impl<'a> Rig for SerialRig<'a> {
     fn sim_stats(&self) -> SimStats {
         self.sim.sim().stats()
     }
-    fn summary(&self, out: &mut dyn Write) {
-        let s = self.gimbal.stats();
+    fn summary(&self, link: &LinkStats, out: &mut dyn Write) {
+        let s = self.port.stats();
         let _ = writeln!(
             out,
             "bytes sent {} received {}; frames sent {}; postbacks {}; bytes skipped {}, CRC errors {}",
             s.bytes_sent,
             s.bytes_received,
-            s.link.frames_sent,
-            s.link.postbacks,
+            link.frames_sent,
+            link.postbacks,
             s.stream.skipped_bytes,
             s.stream.crc_errors
         );
     }
 }
 
-/// The rig, the telemetry output and the clock.
-pub struct Session<R: Rig, W: Write> {
+/// The scripted session: the link, the rig, the telemetry output and the clock.
+pub struct Script<R: Rig, W: Write> {
     out: W,
+    link: Link<8, 8, R::Medium>,
     rig: R,
     now: u32,
     start: u32,
@@ -199,11 +179,12 @@ pub struct Session<R: Rig, W: Write> {
 /// What a step waits for.
 type Check<'s> = &'s dyn Fn(&Postback, &SimState) -> bool;
 
-impl<R: Rig, W: Write> Session<R, W> {
+impl<R: Rig, W: Write> Script<R, W> {
     /// A session over `rig`, its clock starting at `start` ms (the rig's too).
     pub fn new(rig: R, out: W, start: u32) -> Self {
-        Session {
+        Script {
             out,
+            link: Link::new(Config::default()),
             rig,
             now: start,
             start,
@@ -218,7 +199,7 @@ impl<R: Rig, W: Write> Session<R, W> {
     }
 
     /// One millisecond: vehicle data at 10 Hz from a stand-in flight controller, the
-    /// driver, the simulated gimbal, and a telemetry line per postback.
+    /// port, the simulated gimbal, and a telemetry line per postback.
     fn tick(&mut self) {
         let now = Instant::from_millis(self.now);
         let elapsed = self.now.wrapping_sub(self.start);
@@ -229,17 +210,17 @@ impl<R: Rig, W: Write> Session<R, W> {
                 Gps::new(47.397_742, 8.545_594),
                 Altitude::new(450.0),
             ) {
-                let driver = self.rig.driver_mut();
-                driver.set_attitude(att, now);
-                driver.set_gps(gps, now);
-                driver.set_altitude(alt, now);
+                self.link.set_attitude(att, now);
+                self.link.set_gps(gps, now);
+                self.link.set_altitude(alt, now);
             }
         }
-        self.rig.poll(now);
-        while let Some(event) = self.rig.driver_mut().next_event() {
+        // A port error is counted in the port's stats; the session goes on.
+        let _ = self.rig.port().poll(&mut self.link, now);
+        while let Some(event) = self.link.next_event() {
             match event {
                 Event::Postback => {
-                    let Some(p) = self.rig.driver().latest_postback(now).map(|(p, _age)| p) else {
+                    let Some(p) = self.link.latest_postback(now).map(|(p, _age)| p) else {
                         continue;
                     };
                     self.latest = Some(p);
@@ -251,7 +232,7 @@ impl<R: Rig, W: Write> Session<R, W> {
                         p.heading_deg(),
                         p.motor_heading_deg(),
                         p.mode.name().unwrap_or("unknown"),
-                        if self.rig.driver().is_link_up() { "up" } else { "down" },
+                        if self.link.is_link_up() { "up" } else { "down" },
                     );
                 }
                 Event::LinkUp => {
@@ -281,10 +262,10 @@ impl<R: Rig, W: Write> Session<R, W> {
 
     /// Runs until `check` holds on a postback received after this call, or `timeout_ms`.
     fn expect(&mut self, what: &str, timeout_ms: u32, check: Check<'_>) {
-        let mut seen = self.rig.postbacks();
+        let mut seen = self.link.stats().postbacks;
         for _ in 0..timeout_ms {
             self.tick();
-            let count = self.rig.postbacks();
+            let count = self.link.stats().postbacks;
             if count != seen {
                 seen = count;
                 if let Some(p) = self.latest {
@@ -302,7 +283,7 @@ impl<R: Rig, W: Write> Session<R, W> {
 
     fn step(&mut self, what: &str, command: GimbalCommand) {
         let _ = writeln!(self.out, "> {what}");
-        if self.rig.driver_mut().send(command).is_err() {
+        if self.link.send(command).is_err() {
             self.failures += 1;
             let _ = writeln!(self.out, "  FAIL queue full");
         }
@@ -312,7 +293,7 @@ impl<R: Rig, W: Write> Session<R, W> {
     pub fn play(mut self) -> u32 {
         let _ = writeln!(
             self.out,
-            "idu-gimbal session: driver <-> simulated gimbal over {}",
+            "idu-gimbal session: link and port <-> simulated gimbal over {}",
             R::WIRE
         );
         self.expect("postbacks arrive, link up", 1500, &|_, _| true);
@@ -329,7 +310,7 @@ impl<R: Rig, W: Write> Session<R, W> {
 
         if let Ok(heading) = Heading::new(90.0) {
             self.step(
-                if R::CARRIES_VEHICLE {
+                if R::Medium::VEHICLE_FRAMES {
                     "heading 90° (north-referenced: attitude is pushed, vehicle heading 30°)"
                 } else {
                     "heading 90° (nose-referenced: the serial link carries no attitude)"
@@ -337,7 +318,7 @@ impl<R: Rig, W: Write> Session<R, W> {
                 GimbalCommand::Heading(heading),
             );
         }
-        if R::CARRIES_VEHICLE {
+        if R::Medium::VEHICLE_FRAMES {
             self.expect("heading 90.00°, motor 60.00°", 3000, &|p, _| {
                 p.heading == 9000 && p.motor_heading == 6000
             });
@@ -355,7 +336,7 @@ impl<R: Rig, W: Write> Session<R, W> {
         if let Ok(rate) = Rate::new(20.0, 0.0) {
             for _ in 0..50 {
                 let now = Instant::from_millis(self.now);
-                let _ = self.rig.driver_mut().set_rate(rate, now);
+                let _ = self.link.set_rate(rate, now);
                 self.run(20);
             }
         }
@@ -396,7 +377,7 @@ impl<R: Rig, W: Write> Session<R, W> {
         self.step("recording off", GimbalCommand::Video(Video::Stop));
         self.expect("not recording", 1500, &|_, s| !s.recording);
 
-        match self.rig.send_text(b"HELLO FROM THE FLIGHT CONTROLLER") {
+        match R::send_text(&mut self.link, b"HELLO FROM THE FLIGHT CONTROLLER") {
             Some(queued) => {
                 let _ = writeln!(self.out, "> text message");
                 if !queued {
@@ -411,7 +392,7 @@ impl<R: Rig, W: Write> Session<R, W> {
             }
         }
 
-        self.rig.summary(&mut self.out);
+        self.rig.summary(&self.link.stats(), &mut self.out);
         let sim = self.rig.sim_stats();
         let _ = writeln!(
             self.out,
@@ -419,7 +400,7 @@ impl<R: Rig, W: Write> Session<R, W> {
             sim.vehicle_frames, sim.commands
         );
         // Vehicle frames reach the gimbal exactly when the transport carries them.
-        if (sim.vehicle_frames > 0) != R::CARRIES_VEHICLE {
+        if (sim.vehicle_frames > 0) != R::Medium::VEHICLE_FRAMES {
             self.failures += 1;
             let _ = writeln!(
                 self.out,

@@ -6,7 +6,7 @@ use std::io::ErrorKind;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::Instant as StdInstant;
 
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::Bridge;
@@ -26,8 +26,8 @@ pub(super) struct Clients {
 
 /// Sends what the bridge has queued, one frame a datagram (as MAVLink on UDP goes), to
 /// every peer and `--to` address.
-pub(super) fn send_udp<G: GimbalControl>(
-    bridge: &mut Bridge<G>,
+pub(super) fn send_udp(
+    bridge: &mut Bridge,
     socket: &UdpSocket,
     to: &[SocketAddr],
     clients: &mut Clients,
@@ -79,15 +79,16 @@ fn heard(clients: &mut Clients, from: SocketAddr, good: u32, clock: StdInstant) 
 /// Reads up to [`DATAGRAMS_PER_TICK`] datagrams into the bridge, each on its own, keeping
 /// the peer table; whether the socket was emptied.
 #[allow(clippy::too_many_arguments)] // the loop's state, lent for one tick
-pub(super) fn receive_udp<G: GimbalControl>(
-    bridge: &mut Bridge<G>,
+pub(super) fn receive_udp<M: Medium>(
+    bridge: &mut Bridge,
+    link: &mut Link<8, 8, M>,
     socket: &UdpSocket,
     to: &[SocketAddr],
     clients: &mut Clients,
     buf: &mut [u8],
     t: Instant,
     clock: StdInstant,
-    mut move_gimbal: impl FnMut(&mut Bridge<G>) -> Result<(), Failure>,
+    mut move_gimbal: impl FnMut(&mut Link<8, 8, M>) -> Result<(), Failure>,
 ) -> Result<bool, Failure> {
     let Clients { peers, log, .. } = clients;
     log.tick(clock);
@@ -104,7 +105,7 @@ pub(super) fn receive_udp<G: GimbalControl>(
                 // answers at once, too: a burst of datagrams never piles up in the outbox.
                 let mut at = 0;
                 while at < n {
-                    let taken = bridge.receive_datagram(&buf[at..n], t);
+                    let taken = bridge.receive_datagram(link, &buf[at..n], t);
                     at += taken.bytes;
                     // Before sending: a peer that joins hears its first answers.
                     if !to.contains(&from) {
@@ -115,7 +116,7 @@ pub(super) fn receive_udp<G: GimbalControl>(
                 // What the datagram asked of the gimbal leaves before the next is read: a
                 // client that sends again as soon as it is answered (QGroundControl's pinch,
                 // five zoom steps a command) never finds the gimbal's queue still full.
-                move_gimbal(bridge)?;
+                move_gimbal(link)?;
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
             // A peer that went away (ICMP port unreachable) must not stop the bridge.

@@ -1,4 +1,4 @@
-//! The CAN transport: the library's `Gimbal<C>` over a [`Tap`] around any
+//! The CAN transport: the library's `CanPort<C>` over a [`Tap`] around any
 //! `embedded_can::nb::Can` driver: a SocketCAN socket in non-blocking mode on Linux, the
 //! core's in-memory mock bus in the tests (the same session code, only the socket's opening
 //! differs).
@@ -13,10 +13,11 @@ use std::fmt::Write as _;
 use std::rc::Rc;
 
 use embedded_can::{nb::Can, Frame as _, Id};
-use idu_gimbal::link::Link;
-use idu_gimbal::{Gimbal, Instant, Transport};
+use idu_gimbal::link::{Can as CanMedium, Link, LinkStats};
+use idu_gimbal::port::{CanPort, Port};
+use idu_gimbal::Instant;
 
-use super::{Mode, Session};
+use super::{Mode, Transport};
 use crate::error::Failure;
 
 /// What a CAN driver's error means to the user.
@@ -150,13 +151,14 @@ where
     }
 }
 
-/// The library's `Gimbal<C>` over a tapped CAN driver.
-pub struct CanSession<C> {
-    gimbal: Gimbal<Tap<C>>,
+/// The library's `CanPort<C>` over a tapped CAN driver.
+pub struct CanTransport<C> {
+    port: CanPort<Tap<C>>,
     log: Rc<RefCell<TapLog>>,
     name: String,
-    /// Frames and errors counted at the start of the last poll, and the poll's bound.
+    /// Frames and errors counted at the start of the last poll, and after it.
     before: u64,
+    after: u64,
     per_poll: u64,
 }
 
@@ -164,63 +166,54 @@ pub struct CanSession<C> {
 /// completes at most one.
 const MONITOR_FRAMES: u16 = 4;
 
-impl<C> CanSession<C>
+impl<C> CanTransport<C>
 where
     C: Can,
     C::Error: BusFault,
 {
-    /// A session on `can`, named `name` (the interface) in messages.
+    /// A transport on `can`, named `name` (the interface) in messages.
     pub fn new(can: C, name: &str, mode: Mode) -> Self {
         let log = Rc::new(RefCell::new(TapLog {
             record: mode == Mode::Monitor,
             ..TapLog::default()
         }));
-        let config = mode.config(MONITOR_FRAMES);
-        CanSession {
-            gimbal: Gimbal::new(Tap::new(can, log.clone()), config),
+        CanTransport {
+            port: CanPort::new(Tap::new(can, log.clone())),
             log,
             name: name.to_owned(),
             before: 0,
-            per_poll: u64::from(config.max_rx_per_poll.get()),
+            after: 0,
+            per_poll: u64::from(mode.config(Self::per_poll(mode)).max_rx_per_poll.get()),
         }
     }
 
     /// Frames received and driver errors so far: what a poll's receive loop consumed.
-    fn consumed(&self) -> u64 {
-        let s = self.gimbal.stats();
-        u64::from(s.link.frames_received) + u64::from(s.driver_errors.total())
+    fn consumed(&self, link: &Link) -> u64 {
+        u64::from(link.stats().frames_received) + u64::from(self.port.stats().driver_errors.total())
     }
 }
 
-impl<C> Transport for CanSession<C>
+impl<C> Transport for CanTransport<C>
 where
     C: Can,
     C::Error: BusFault,
 {
-    type Link = Link;
+    type Medium = CanMedium;
+    const IS_CAN: bool = true;
 
-    fn link(&self) -> &Link {
-        self.gimbal.link()
-    }
-
-    fn link_mut(&mut self) -> &mut Link {
-        self.gimbal.link_mut()
-    }
-}
-
-impl<C> Session for CanSession<C>
-where
-    C: Can,
-    C::Error: BusFault,
-{
     fn name(&self) -> &str {
         &self.name
     }
 
-    fn poll_once(&mut self, now: Instant) -> Result<(), Failure> {
-        self.before = self.consumed();
-        // A driver error is counted by the driver and noted by the tap; the poll went on.
-        let _ = self.gimbal.poll(now);
+    fn per_poll(_mode: Mode) -> u16 {
+        MONITOR_FRAMES
+    }
+
+    fn poll(&mut self, link: &mut Link, now: Instant) -> Result<(), Failure> {
+        self.before = self.consumed(link);
+        // A driver error is counted by the port and noted by the tap; the poll went on.
+        let _ = self.port.poll(link, now);
+        self.after = self.consumed(link);
         match &self.log.borrow().fatal {
             Some(why) => Err(Failure::Runtime(format!("{}: {why}", self.name))),
             None => Ok(()),
@@ -228,37 +221,28 @@ where
     }
 
     fn drained(&self) -> bool {
-        self.consumed().wrapping_sub(self.before) < self.per_poll
+        self.after.wrapping_sub(self.before) < self.per_poll
     }
 
-    fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.postbacks
+    fn has_transmit(&self, link: &Link) -> bool {
+        link.has_transmit()
     }
 
-    fn sent(&self) -> u64 {
-        u64::from(self.gimbal.stats().link.frames_sent)
+    fn send_text(link: &mut Link, text: &[u8]) -> Result<(), String> {
+        link.send_text(text).map_err(|e| format!("{e:?}"))
     }
 
-    fn has_transmit(&self) -> bool {
-        self.gimbal.link().has_transmit()
-    }
-
-    fn send_text(&mut self, text: &[u8]) -> Result<(), String> {
-        self.gimbal.send_text(text).map_err(|e| format!("{e:?}"))
-    }
-
-    fn counters(&self) -> [String; 3] {
-        let s = self.gimbal.stats();
+    fn counters(&self, s: &LinkStats) -> [String; 3] {
         let log = self.log.borrow();
         let errors: u64 = log.faults.iter().map(|f| f.count).sum();
         [
             format!(
                 "postbacks {}  crc errors {}  frames received {}  other frames {}",
-                s.link.postbacks, s.link.crc_errors, s.link.frames_received, s.link.ignored_frames
+                s.postbacks, s.crc_errors, s.frames_received, s.ignored_frames
             ),
             format!(
                 "frames sent {}  queue full {}  requeued {}",
-                s.link.frames_sent, s.link.queue_full, s.link.requeued
+                s.frames_sent, s.queue_full, s.requeued
             ),
             match &log.last_fault {
                 Some(last) => format!("bus errors {errors}  last: {last}"),
@@ -285,10 +269,6 @@ where
 
     fn take_frames(&mut self) -> Vec<Seen> {
         std::mem::take(&mut self.log.borrow_mut().frames)
-    }
-
-    fn is_can(&self) -> bool {
-        true
     }
 
     fn finish(self) {}
@@ -322,7 +302,10 @@ pub fn check_name(iface: &str) -> Result<(), Failure> {
 #[cfg(target_os = "linux")]
 pub fn run_socketcan<J: super::Job>(iface: &str, mode: Mode, job: J) -> Result<J::Out, Failure> {
     let socket = socketcan_open::open(iface)?;
-    job.run(CanSession::new(socket, iface, mode))
+    job.run(super::Session::new(
+        CanTransport::new(socket, iface, mode),
+        mode,
+    ))
 }
 
 /// SocketCAN is Linux only ([`check_name`] already said so).

@@ -1,20 +1,20 @@
 //! The byte-stream transports: the serial server over TCP and the gimbal's UART on a serial
-//! port, both through the library's `SerialGimbal` over a non-blocking [`StreamPort`].
+//! port, both through the library's `SerialPort` over a non-blocking [`StreamPort`].
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
-use idu_gimbal::driver::{PortError, SerialGimbal, SerialPort};
-use idu_gimbal::link::serial::SerialLink;
+use idu_gimbal::link::{LinkStats, Serial};
+use idu_gimbal::port::{Port, PortError, SerialPort, Uart};
 use idu_gimbal::wire::serial::StreamStats;
-use idu_gimbal::{Instant, Transport};
+use idu_gimbal::{Instant, Link};
 
-use super::{Mode, SerialSpec, Session, GIMBAL_BAUD};
+use super::{Mode, SerialSpec, Transport, GIMBAL_BAUD};
 use crate::error::Failure;
 
 /// A non-blocking byte stream: a TCP connection or a serial port, for the library's
-/// [`SerialGimbal`] (as its [`SerialPort`]) and for `mavlink --autopilot-serial`.
+/// [`SerialPort`] (as its [`Uart`]) and for `mavlink --autopilot-serial`.
 ///
 /// Reads and writes never wait: nothing to read or no room is `Ok(0)`. Every error is the
 /// end of the stream, already worded for the user: the server closed the connection, the
@@ -145,7 +145,7 @@ impl StreamPort {
     }
 }
 
-impl SerialPort for StreamPort {
+impl Uart for StreamPort {
     type ReadError = Ended;
     type WriteError = Ended;
 
@@ -216,9 +216,9 @@ fn owner_hint(_path: &str) -> String {
 /// A serial port's reads in [`Mode::Monitor`]: at most one postback (27 bytes) each.
 const MONITOR_READ: usize = 27;
 
-/// The library's `SerialGimbal` over a [`StreamPort`]: the serial server or the UART.
-pub struct StreamSession {
-    gimbal: SerialGimbal<StreamPort>,
+/// The library's `SerialPort` over a [`StreamPort`]: the serial server or the UART.
+pub struct StreamTransport {
+    port: SerialPort<StreamPort>,
     name: String,
     /// The baud rate, for the hint on garbage (a TCP stream has none).
     baud: Option<u32>,
@@ -229,14 +229,14 @@ pub struct StreamSession {
     per_poll: u32,
 }
 
-impl StreamSession {
+impl StreamTransport {
     /// The serial server (or `gimbalctl sim`) at `target`.
-    pub fn tcp(target: &str, mode: Mode) -> Result<StreamSession, Failure> {
+    pub fn tcp(target: &str, mode: Mode) -> Result<StreamTransport, Failure> {
         Ok(Self::new(StreamPort::tcp(target)?, None, mode))
     }
 
     /// The gimbal's UART.
-    pub fn serial(spec: &SerialSpec, mode: Mode) -> Result<StreamSession, Failure> {
+    pub fn serial(spec: &SerialSpec, mode: Mode) -> Result<StreamTransport, Failure> {
         Ok(Self::new(
             StreamPort::serial(spec, "--serial")?,
             Some(spec.baud),
@@ -244,24 +244,24 @@ impl StreamSession {
         ))
     }
 
-    /// A session over an open port; `baud` for the wrong-baud hint.
-    pub fn new(mut port: StreamPort, baud: Option<u32>, mode: Mode) -> StreamSession {
-        // The library's driver reads 32 bytes at a time, `max_rx_per_poll` times.
-        let (reads, chunk) = match mode {
-            Mode::Drive => (32, 32),
+    /// A transport over an open port; `baud` for the wrong-baud hint.
+    pub fn new(mut port: StreamPort, baud: Option<u32>, mode: Mode) -> StreamTransport {
+        // The library's port reads 32 bytes at a time, `max_rx_per_poll` times.
+        let chunk = match mode {
+            Mode::Drive => 32,
             Mode::Monitor => {
                 port.read_cap = MONITOR_READ;
-                (1, MONITOR_READ as u32)
+                MONITOR_READ as u32
             }
         };
         let name = port.name.clone();
-        StreamSession {
-            gimbal: SerialGimbal::new(port, mode.config(reads)),
+        StreamTransport {
+            port: SerialPort::new(port),
             name,
             baud,
             noted: StreamStats::default(),
             before: 0,
-            per_poll: u32::from(reads) * chunk,
+            per_poll: u32::from(Self::per_poll(mode)) * chunk,
         }
     }
 
@@ -285,26 +285,23 @@ impl StreamSession {
     }
 }
 
-impl Transport for StreamSession {
-    type Link = SerialLink;
+impl Transport for StreamTransport {
+    type Medium = Serial;
 
-    fn link(&self) -> &SerialLink {
-        self.gimbal.link()
-    }
-
-    fn link_mut(&mut self) -> &mut SerialLink {
-        self.gimbal.link_mut()
-    }
-}
-
-impl Session for StreamSession {
     fn name(&self) -> &str {
         &self.name
     }
 
-    fn poll_once(&mut self, now: Instant) -> Result<(), Failure> {
-        self.before = self.gimbal.stats().bytes_received;
-        match self.gimbal.poll(now) {
+    fn per_poll(mode: Mode) -> u16 {
+        match mode {
+            Mode::Drive => 32,
+            Mode::Monitor => 1,
+        }
+    }
+
+    fn poll(&mut self, link: &mut Link<8, 8, Serial>, now: Instant) -> Result<(), Failure> {
+        self.before = self.port.stats().bytes_received;
+        match self.port.poll(link, now) {
             Ok(()) => Ok(()),
             Err(PortError::Read(Ended(why)) | PortError::Write(Ended(why))) => {
                 Err(Failure::Runtime(why))
@@ -313,41 +310,33 @@ impl Session for StreamSession {
     }
 
     fn drained(&self) -> bool {
-        self.gimbal.stats().bytes_received.wrapping_sub(self.before) < self.per_poll
+        self.port.stats().bytes_received.wrapping_sub(self.before) < self.per_poll
     }
 
-    fn postbacks(&self) -> u32 {
-        self.gimbal.stats().link.postbacks
+    fn has_transmit(&self, link: &Link<8, 8, Serial>) -> bool {
+        self.port.stream().has_transmit(link)
     }
 
-    fn sent(&self) -> u64 {
-        u64::from(self.gimbal.stats().bytes_sent) / 24
-    }
-
-    fn has_transmit(&self) -> bool {
-        self.gimbal.link().has_transmit()
-    }
-
-    fn send_text(&mut self, _text: &[u8]) -> Result<(), String> {
+    fn send_text(_link: &mut Link<8, 8, Serial>, _text: &[u8]) -> Result<(), String> {
         Err("the serial link carries no text (CAN only)".into())
     }
 
-    fn counters(&self) -> [String; 3] {
-        let s = self.gimbal.stats();
+    fn counters(&self, link: &LinkStats) -> [String; 3] {
+        let s = self.port.stats();
         let garbage = Self::garbage(&s.stream);
         [
             format!(
                 "postbacks {}  crc errors {}  skipped bytes {}",
-                s.link.postbacks, s.stream.crc_errors, s.stream.skipped_bytes
+                link.postbacks, s.stream.crc_errors, s.stream.skipped_bytes
             ),
             format!(
                 "frames sent {}  bytes sent {}  bytes received {}  queue full {}",
                 s.bytes_sent / 24,
                 s.bytes_sent,
                 s.bytes_received,
-                s.link.queue_full
+                link.queue_full
             ),
-            if garbage > 0 && s.link.postbacks == 0 {
+            if garbage > 0 && link.postbacks == 0 {
                 // Fits the 80-column panel.
                 match self.baud {
                     Some(b) if b != GIMBAL_BAUD => format!(
@@ -365,7 +354,7 @@ impl Session for StreamSession {
     }
 
     fn take_notes(&mut self) -> Vec<String> {
-        let s = self.gimbal.stats().stream;
+        let s = self.port.stats().stream;
         let new = Self::garbage(&s).saturating_sub(Self::garbage(&self.noted));
         if new == 0 {
             return Vec::new();
@@ -385,6 +374,6 @@ impl Session for StreamSession {
     }
 
     fn finish(self) {
-        self.gimbal.release().close();
+        self.port.release().close();
     }
 }

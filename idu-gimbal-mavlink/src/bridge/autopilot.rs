@@ -13,7 +13,7 @@ use mavio::dialects::common::messages::{
 use super::{State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
 use crate::attitude;
 use crate::tx::{bump, push_counted};
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// How often to ask the autopilot again for a stream that does not come.
 const STREAM_RETRY_MS: u32 = 5_000;
@@ -158,9 +158,9 @@ impl State {
         }
     }
 
-    pub(super) fn autopilot_state<G: GimbalControl>(
+    pub(super) fn autopilot_state<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         state: &AutopilotStateForGimbalDevice,
         now: Instant,
     ) {
@@ -189,9 +189,9 @@ impl State {
         }
     }
 
-    pub(super) fn position<G: GimbalControl>(
+    pub(super) fn position<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         pos: &GlobalPositionInt,
         now: Instant,
     ) {

@@ -17,7 +17,7 @@ use super::State;
 use crate::codec;
 use crate::status;
 use crate::tx::name;
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
 /// ±325.00° on the 3.5× models (the document's Motor_psi scope,
@@ -80,7 +80,11 @@ impl State {
     /// stations read a camera's identity once, at its first heartbeat, and name its cached
     /// definition after it (QGroundControl's `QGCCameraManager`), so the camera is not
     /// announced under a provisional one.
-    pub(super) fn send_heartbeats<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+    pub(super) fn send_heartbeats<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) {
         if !self.next_heartbeat.is_none_or(|t| now.is_at_or_after(t)) {
             return;
         }
@@ -109,7 +113,11 @@ impl State {
         }
     }
 
-    pub(super) fn information<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+    pub(super) fn information<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) {
         let gimbal_type = gimbal.gimbal_type();
         let yaw_limit = yaw_limit_deg(gimbal_type).to_radians();
         let info = GimbalDeviceInformation {
@@ -138,7 +146,11 @@ impl State {
         self.send(self.config.gimbal_component, &info);
     }
 
-    pub(super) fn status<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+    pub(super) fn status<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) {
         let latest = gimbal.latest_postback(now).map(|(p, _)| p);
         // The heading that goes with the postback's motor angle: `q_earth = q_delta_yaw ·
         // q_vehicle` holds for the moment the gimbal reported.

@@ -24,7 +24,7 @@ use crate::framing::{Check, ReceivedFrame};
 #[cfg(feature = "roi")]
 use crate::status::Pose;
 use crate::tx::{bump, id_of};
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// Decodes `frame` as `M` when its CRC holds with `M`'s `CRC_EXTRA`.
 fn decode<M>(frame: &ReceivedFrame<'_>) -> Option<M>
@@ -37,9 +37,9 @@ where
 impl State {
     /// A whole frame from the reader: acted on when the outbox has room for the most it can
     /// ask ([`ANSWER_ROOM`]), else it waits, so that no answer is promised and then dropped.
-    pub(super) fn take<G: GimbalControl>(
+    pub(super) fn take<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
@@ -52,9 +52,9 @@ impl State {
     // Out of line: decoding needs a large stack frame (mavio's 255-byte payload and the
     // message), which would otherwise be set up on every `receive` call, a frame or not.
     #[inline(never)]
-    pub(super) fn dispatch<G: GimbalControl>(
+    pub(super) fn dispatch<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
@@ -131,9 +131,9 @@ impl State {
     /// FTP and the extended parameters, for the camera; unhandled without one. Out of line:
     /// rare messages, kept from adding to the common path's frame (receive cost per byte).
     #[inline(never)]
-    pub(super) fn camera_message<G: GimbalControl>(
+    pub(super) fn camera_message<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         frame: &ReceivedFrame<'_>,
         from: (u8, u8),
         now: Instant,
@@ -218,9 +218,9 @@ impl State {
         Check::Handled
     }
 
-    pub(super) fn command<G: GimbalControl>(
+    pub(super) fn command<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         from: (u8, u8),
         cmd: &Command,
         now: Instant,
@@ -300,9 +300,9 @@ impl State {
 
     /// A gimbal command's result (the gimbal owns it).
     #[cfg_attr(not(feature = "roi"), allow(unused_variables))]
-    pub(super) fn gimbal_command<G: GimbalControl>(
+    pub(super) fn gimbal_command<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
         now: Instant,
     ) -> MavResult {
@@ -329,9 +329,9 @@ impl State {
     /// has no gimbal calibration of its own; the gyroscope's is the one a gimbal's
     /// quick calibration is (its IMU's zero). The gimbal does not report the calibration
     /// running, so `CALIBRATION_RUNNING` is never set in the status.
-    pub(super) fn calibrate<G: GimbalControl>(
+    pub(super) fn calibrate<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
     ) -> MavResult {
         let [gyro, p2, p3, p4] = cmd.params;
@@ -364,9 +364,9 @@ impl State {
     /// mean sea level (the height the vehicle's altitude is pushed in). A height relative
     /// to home needs home's, from GLOBAL_POSITION_INT (alt − relative_alt); a height above
     /// terrain cannot be known here and is refused.
-    pub(super) fn roi_location<G: GimbalControl>(
+    pub(super) fn roi_location<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
     ) -> MavResult {
         if !self.addresses_this_gimbal(cmd.params[0]) {

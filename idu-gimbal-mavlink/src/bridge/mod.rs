@@ -1,5 +1,5 @@
-//! The bridge: MAVLink 2 bytes in and out, the gimbal driven through [`GimbalControl`], time
-//! passed in.
+//! The bridge: MAVLink 2 bytes in and out, the gimbal driven through the application's
+//! [`Link`], time passed in.
 //!
 //! Here the bridge's state and what it sends with; by concern beside it: `dispatch` (each
 //! frame and command to what handles it), `autopilot` (the streams asked of the autopilot,
@@ -18,7 +18,7 @@ use crate::capture::Vantage;
 use crate::framing::{self, Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::status::Pose;
 use crate::tx::{bump, push_ack, push_counted, push_encoded, Tx};
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 mod autopilot;
 mod device;
@@ -145,13 +145,12 @@ pub struct BridgeStats {
 // reach 1020 bytes); the order the compiler chose put them beyond, at about 3 instructions
 // more a received byte.
 #[repr(C)]
-pub struct Bridge<G: GimbalControl> {
+pub struct Bridge {
     reader: FrameReader,
-    gimbal: G,
     state: State,
 }
 
-/// Everything but the gimbal and the reader, so that the reader's callback can borrow it.
+/// Everything but the reader, so that the reader's callback can borrow it.
 pub(crate) struct State {
     pub(crate) config: BridgeConfig,
     out: Outbox<OUTBOX_LEN>,
@@ -186,9 +185,10 @@ pub(crate) struct State {
     pub(crate) stats: BridgeStats,
 }
 
-impl<G: GimbalControl> Bridge<G> {
-    /// A bridge in front of `gimbal`.
-    pub fn new(gimbal: G, config: BridgeConfig) -> Self {
+impl Bridge {
+    /// A bridge with the given configuration; each call that acts on the gimbal takes the
+    /// application's link.
+    pub fn new(config: BridgeConfig) -> Self {
         let camera = config
             .camera
             .as_ref()
@@ -202,7 +202,6 @@ impl<G: GimbalControl> Bridge<G> {
             out.sign_with(signing);
         }
         Bridge {
-            gimbal,
             reader: FrameReader::new(),
             state: State {
                 config,
@@ -236,14 +235,14 @@ impl<G: GimbalControl> Bridge<G> {
     /// send what [`Bridge::transmit_bytes`] holds, then offer them again. So a burst of
     /// requests is answered in full, each exactly once, never faster than the link drains.
     #[must_use = "bytes not taken must be offered again once the outbox has drained"]
-    pub fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
-        let Bridge {
-            gimbal,
-            reader,
-            state,
-            ..
-        } = self;
-        reader.feed(bytes, |frame| state.take(gimbal, frame, now))
+    pub fn receive<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        link: &mut Link<Q, T, M>,
+        bytes: &[u8],
+        now: Instant,
+    ) -> usize {
+        let Bridge { reader, state } = self;
+        reader.feed(bytes, |frame| state.take(link, frame, now))
     }
 
     /// Takes one UDP datagram: MAVLink on UDP carries whole frames, so a frame cut at the
@@ -253,16 +252,16 @@ impl<G: GimbalControl> Bridge<G> {
     /// keeps nothing of it: send what [`Bridge::transmit_bytes`] holds and offer the rest
     /// (`&datagram[taken.bytes..]`), until all of it is taken.
     #[must_use = "a datagram not taken whole must be offered again once the outbox has drained"]
-    pub fn receive_datagram(&mut self, datagram: &[u8], now: Instant) -> Taken {
-        let Bridge {
-            gimbal,
-            reader,
-            state,
-            ..
-        } = self;
+    pub fn receive_datagram<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        link: &mut Link<Q, T, M>,
+        datagram: &[u8],
+        now: Instant,
+    ) -> Taken {
+        let Bridge { reader, state } = self;
         let mut good = 0u32;
         let mut check = |frame: &ReceivedFrame<'_>| {
-            let verdict = state.take(gimbal, frame, now);
+            let verdict = state.take(link, frame, now);
             if verdict == Check::Handled {
                 good = good.wrapping_add(1);
             }
@@ -283,12 +282,16 @@ impl<G: GimbalControl> Bridge<G> {
 
     /// Sends what is due at `now`: heartbeats, the attitude status, the stream requests,
     /// scheduled images.
-    pub fn poll(&mut self, now: Instant) {
+    pub fn poll<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        link: &mut Link<Q, T, M>,
+        now: Instant,
+    ) {
         // A frame waiting for room goes first: it came before anything due now.
         if self.reader.is_waiting() {
-            let _none_taken = self.receive(&[], now);
+            let _none_taken = self.receive(link, &[], now);
         }
-        self.state.poll(&mut self.gimbal, now);
+        self.state.poll(link, now);
     }
 
     /// The MAVLink bytes to write next; empty when nothing waits. Report with
@@ -310,16 +313,6 @@ impl<G: GimbalControl> Bridge<G> {
     /// The configuration.
     pub fn config(&self) -> &BridgeConfig {
         &self.state.config
-    }
-
-    /// The gimbal.
-    pub fn gimbal(&self) -> &G {
-        &self.gimbal
-    }
-
-    /// The gimbal, mutably (to poll its driver).
-    pub fn gimbal_mut(&mut self) -> &mut G {
-        &mut self.gimbal
     }
 
     /// The frame reader, for its state ([`FrameReader::pending`]).
@@ -424,11 +417,11 @@ impl State {
 
     /// Runs `f` with the camera, the gimbal and a sender into the outbox; `None` without a
     /// camera.
-    fn with_camera<G: GimbalControl, R>(
+    fn with_camera<const Q: usize, const T: usize, M: Medium, R>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         now: Instant,
-        f: impl FnOnce(&mut CameraComponent, &CameraConfig, &mut G, &mut Tx<'_>) -> R,
+        f: impl FnOnce(&mut CameraComponent, &CameraConfig, &mut Link<Q, T, M>, &mut Tx<'_>) -> R,
     ) -> Option<R> {
         let vantage = self.vantage(gimbal, now);
         let State {
@@ -450,7 +443,11 @@ impl State {
         Some(f(camera, config, gimbal, &mut tx))
     }
 
-    fn poll<G: GimbalControl>(&mut self, gimbal: &mut G, now: Instant) {
+    fn poll<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+        now: Instant,
+    ) {
         self.note_postback(gimbal, now);
         self.send_heartbeats(gimbal, now);
         if self.camera.as_ref().is_some_and(|c| c.has_work(now)) {
@@ -466,7 +463,11 @@ impl State {
     }
 
     /// A postback new since the last poll: the vehicle's yaw now goes with it.
-    fn note_postback<G: GimbalControl>(&mut self, gimbal: &G, now: Instant) {
+    fn note_postback<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) {
         if let Some((_, age)) = gimbal.latest_postback(now) {
             let at = Instant::from_millis(now.as_millis().wrapping_sub(age));
             if self.postback_yaw.is_none_or(|(seen, _)| seen != at) {
@@ -479,9 +480,9 @@ impl State {
     /// motor angle is turned into the earth frame with: a motor angle up to 500 ms old
     /// beside the heading now would be off by the vehicle's turn since (15° at 30°/s).
     /// The heading now while no postback was noted.
-    pub(crate) fn postback_vehicle_yaw<G: GimbalControl>(
+    pub(crate) fn postback_vehicle_yaw<const Q: usize, const T: usize, M: Medium>(
         &self,
-        gimbal: &G,
+        gimbal: &Link<Q, T, M>,
         now: Instant,
     ) -> Option<f32> {
         let latest = gimbal
@@ -496,7 +497,11 @@ impl State {
     /// Where an image taken now is taken from: the vehicle's position, and the camera's
     /// attitude from north (the latest postback's motor angle and pitch with the vehicle's
     /// heading then; none while the gimbal link is down).
-    pub(crate) fn vantage<G: GimbalControl>(&self, gimbal: &G, now: Instant) -> Vantage {
+    pub(crate) fn vantage<const Q: usize, const T: usize, M: Medium>(
+        &self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) -> Vantage {
         let yaw = self.postback_vehicle_yaw(gimbal, now);
         let attitude = match (gimbal.latest_postback(now), yaw) {
             (Some((p, _)), Some(yaw)) if gimbal.is_link_up() => {
@@ -519,7 +524,11 @@ impl State {
     }
 
     /// Queues a command for the gimbal other than an angle; a full queue is counted.
-    fn command_gimbal_raw<G: GimbalControl>(&mut self, gimbal: &mut G, c: GimbalCommand) -> bool {
+    fn command_gimbal_raw<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+        c: GimbalCommand,
+    ) -> bool {
         let sent = gimbal.send(GimbalCmd::from(c)).is_ok();
         if !sent {
             bump(&mut self.stats.queue_full);
@@ -529,9 +538,9 @@ impl State {
 
     /// Queues a setpoint's command for the gimbal, counted in `angle_setpoints`; a full
     /// queue is counted.
-    pub(crate) fn command_gimbal<G: GimbalControl>(
+    pub(crate) fn command_gimbal<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         c: GimbalCommand,
     ) -> bool {
         let sent = self.command_gimbal_raw(gimbal, c);

@@ -5,7 +5,7 @@ use core::ops::Range;
 use idu_gimbal::Instant;
 
 use super::Bridge;
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// What a firmware read from the autopilot's serial line (a UART) for the bridge: the bytes
 /// the bridge has not yet taken are held here and offered again, first, at the next
@@ -20,13 +20,12 @@ use idu_gimbal::GimbalControl;
 /// use idu_gimbal::Instant;
 /// use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
 ///
-/// // The link alone stands for a gimbal driver here.
-/// let link: Link = Link::new(Config::default());
-/// let mut bridge = Bridge::new(link, BridgeConfig::default());
+/// let mut link: Link = Link::new(Config::default());
+/// let mut bridge = Bridge::new(BridgeConfig::default());
 /// let mut input: SerialInput<64> = SerialInput::new();
 /// // A UART with nothing waiting: `read` answers 0 bytes.
 /// let nothing = |_: &mut [u8]| Ok::<usize, ()>(0);
-/// input.receive(&mut bridge, Instant::from_millis(0), nothing).unwrap();
+/// input.receive(&mut bridge, &mut link, Instant::from_millis(0), nothing).unwrap();
 /// assert_eq!(input.held(), 0);
 /// ```
 #[derive(Clone, Debug)]
@@ -49,9 +48,10 @@ impl<const N: usize> SerialInput<N> {
     /// nothing waiting), until `read` has nothing more or a frame waits for room in the
     /// outbox: then send what [`Bridge::transmit_bytes`] holds and call again. A read error
     /// ends the call and is returned; nothing held is lost.
-    pub fn receive<G: GimbalControl, E>(
+    pub fn receive<const Q: usize, const T: usize, M: Medium, E>(
         &mut self,
-        bridge: &mut Bridge<G>,
+        bridge: &mut Bridge,
+        link: &mut Link<Q, T, M>,
         now: Instant,
         mut read: impl FnMut(&mut [u8]) -> Result<usize, E>,
     ) -> Result<(), E> {
@@ -65,7 +65,7 @@ impl<const N: usize> SerialInput<N> {
                 self.held = 0..n.min(N);
             }
             let bytes = self.buf.get(self.held.clone()).unwrap_or(&[]);
-            let taken = bridge.receive(bytes, now);
+            let taken = bridge.receive(link, bytes, now);
             self.held.start = self.held.start.saturating_add(taken);
             if !self.held.is_empty() {
                 return Ok(());

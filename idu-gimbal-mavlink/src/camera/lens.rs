@@ -32,7 +32,7 @@ use idu_gimbal::wire::control::{Command as GimbalCmd, Focus, GimbalCommand, Zoom
 use idu_gimbal::wire::postback::GimbalType;
 use mavio::dialects::common::enums::{CameraZoomType, MavResult, SetFocusType};
 
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 use super::{CameraComponent, CameraConfig};
 
@@ -42,7 +42,10 @@ fn is(kind: f32, e: u8) -> bool {
 }
 
 /// `MAV_CMD_SET_CAMERA_FOCUS`: param1 the focus type, param2 the value.
-pub(crate) fn focus<G: GimbalControl>(gimbal: &mut G, params: [f32; 4]) -> MavResult {
+pub(crate) fn focus<const Q: usize, const T: usize, M: Medium>(
+    gimbal: &mut Link<Q, T, M>,
+    params: [f32; 4],
+) -> MavResult {
     let [kind, v, _, _] = params;
     let f = if is(kind, SetFocusType::FocusTypeContinuous as u8) {
         // common.xml: "Other values should be clipped to the range": only the sign counts.
@@ -80,9 +83,9 @@ pub(crate) fn focus<G: GimbalControl>(gimbal: &mut G, params: [f32; 4]) -> MavRe
 const MAX_STEPS: usize = 5;
 
 impl CameraComponent {
-    pub(crate) fn zoom<G: GimbalControl>(
+    pub(crate) fn zoom<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         config: &CameraConfig,
         params: [f32; 4],
         gimbal_type: Option<GimbalType>,

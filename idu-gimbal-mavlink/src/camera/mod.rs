@@ -63,7 +63,7 @@ use crate::framing::MAX_FRAME_LEN;
 use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
 use crate::tx::{id_of, name, Tx};
 use fov::FieldOfView;
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 use periodic::Periodic;
 use settings::Settings;
 use stream::{VideoStream, MAX_STREAMS};
@@ -382,10 +382,10 @@ impl CameraComponent {
     }
 
     /// Acts on a command it owns: the ACK's result, and what to send after the ACK.
-    pub(crate) fn command<G: GimbalControl>(
+    pub(crate) fn command<const Q: usize, const T: usize, M: Medium>(
         &mut self,
         config: &CameraConfig,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
         now: Instant,
         vantage: Vantage,
@@ -592,9 +592,9 @@ impl CameraComponent {
         (MavResult::Accepted, Reply::Images(first, last))
     }
 
-    fn start_capture<G: GimbalControl>(
+    fn start_capture<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
         now: Instant,
         vantage: Vantage,
@@ -620,10 +620,10 @@ impl CameraComponent {
     }
 
     /// Sends what a command produced (after its ACK).
-    pub(crate) fn reply<G: GimbalControl>(
+    pub(crate) fn reply<const Q: usize, const T: usize, M: Medium>(
         &mut self,
         config: &CameraConfig,
-        gimbal: &G,
+        gimbal: &Link<Q, T, M>,
         reply: Reply,
         now: Instant,
         tx: &mut Tx<'_>,
@@ -686,10 +686,10 @@ impl CameraComponent {
 
     /// Images as they fall due, what requests left waiting for room in the outbox, the
     /// burst read in progress and the tracking status.
-    pub(crate) fn poll<G: GimbalControl>(
+    pub(crate) fn poll<const Q: usize, const T: usize, M: Medium>(
         &mut self,
         config: &CameraConfig,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         now: Instant,
         tx: &mut Tx<'_>,
     ) {
@@ -729,10 +729,10 @@ impl CameraComponent {
 
     /// A message other than a command, addressed to the camera ([`handles`]): FTP and the
     /// extended parameters.
-    pub(crate) fn message<G: GimbalControl>(
+    pub(crate) fn message<const Q: usize, const T: usize, M: Medium>(
         &mut self,
         config: &CameraConfig,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         message: Message,
         from: (u8, u8),
         now: Instant,

@@ -36,7 +36,7 @@ use mavio::dialects::common::messages::{ParamExtAck, ParamExtValue};
 use crate::codec::param_ext::{self, ParamSet};
 use crate::framing::MAX_FRAME_LEN;
 use crate::tx::{name, Tx};
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// A parameter of the definition.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -189,9 +189,9 @@ impl Settings {
     }
 
     /// `PARAM_EXT_SET`: the setting sent to the gimbal, and the `PARAM_EXT_ACK`.
-    pub(crate) fn set<G: GimbalControl>(
+    pub(crate) fn set<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         set: &ParamSet,
         component: u8,
         tx: &mut Tx<'_>,
@@ -210,7 +210,11 @@ impl Settings {
         });
     }
 
-    fn apply<G: GimbalControl>(&mut self, gimbal: &mut G, set: &ParamSet) -> ParamAck {
+    fn apply<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+        set: &ParamSet,
+    ) -> ParamAck {
         let Some(i) = self.index_of(&set.param_id) else {
             return ParamAck::ValueUnsupported;
         };
@@ -231,7 +235,10 @@ impl Settings {
     /// `MAV_CMD_RESET_CAMERA_SETTINGS`: every parameter back to its default, each sent to
     /// the gimbal. `TEMPORARILY_REJECTED`, nothing sent, when the gimbal's queue has no room
     /// for them all: the client may try again.
-    pub(crate) fn reset<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
+    pub(crate) fn reset<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+    ) -> MavResult {
         // Each parameter is one command.
         if gimbal.command_room() < self.count {
             return MavResult::TemporarilyRejected;
@@ -246,7 +253,12 @@ impl Settings {
     }
 
     /// Sends parameter `i`'s setting `v` (within its range) to the gimbal and keeps it.
-    fn put<G: GimbalControl>(&mut self, gimbal: &mut G, i: usize, v: u8) -> ParamAck {
+    fn put<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+        i: usize,
+        v: u8,
+    ) -> ParamAck {
         let (Some(p), Some(slot)) = (PARAMETERS.get(i), self.values.get_mut(i)) else {
             return ParamAck::ValueUnsupported;
         };

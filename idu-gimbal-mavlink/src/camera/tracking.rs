@@ -50,7 +50,7 @@ use mavio::dialects::common::messages::CameraTrackingImageStatus;
 
 use crate::command::Interval;
 use crate::tx::Tx;
-use idu_gimbal::GimbalControl;
+use idu_gimbal::link::{Link, Medium};
 
 /// The status's period while tracking when no interval was set, ms: QGroundControl's own
 /// ask (500,000 µs).
@@ -110,9 +110,9 @@ fn tracking_box(cx: f32, cy: f32, w: f32, h: f32) -> Option<TrackingBox> {
 
 impl Tracking {
     /// `MAV_CMD_CAMERA_TRACK_POINT`: param1, param2 the point, param3 the radius.
-    pub(crate) fn point<G: GimbalControl>(
+    pub(crate) fn point<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         params: [f32; 4],
     ) -> MavResult {
         let [x, y, r, _] = params;
@@ -128,9 +128,9 @@ impl Tracking {
 
     /// `MAV_CMD_CAMERA_TRACK_RECTANGLE`: param1, param2 the top-left corner, param3, param4
     /// the bottom-right one.
-    pub(crate) fn rectangle<G: GimbalControl>(
+    pub(crate) fn rectangle<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         params: [f32; 4],
     ) -> MavResult {
         let [x1, y1, x2, y2] = params;
@@ -145,9 +145,9 @@ impl Tracking {
         self.start(gimbal, b, CameraTrackingMode::Rectangle, size)
     }
 
-    fn start<G: GimbalControl>(
+    fn start<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &mut G,
+        gimbal: &mut Link<Q, T, M>,
         b: TrackingBox,
         mode: CameraTrackingMode,
         size: (f32, f32),
@@ -171,7 +171,10 @@ impl Tracking {
     }
 
     /// `MAV_CMD_CAMERA_STOP_TRACKING`, on the image the tracking was started on.
-    pub(crate) fn stop<G: GimbalControl>(&mut self, gimbal: &mut G) -> MavResult {
+    pub(crate) fn stop<const Q: usize, const T: usize, M: Medium>(
+        &mut self,
+        gimbal: &mut Link<Q, T, M>,
+    ) -> MavResult {
         let source = self.started.map_or(self.source, |s| s.source);
         let command = match source {
             Source::Visible => GimbalCmd::from(GimbalCommand::StopTracking),
@@ -213,9 +216,9 @@ impl Tracking {
     }
 
     /// Sends the status, due or asked for.
-    pub(crate) fn send_status<G: GimbalControl>(
+    pub(crate) fn send_status<const Q: usize, const T: usize, M: Medium>(
         &mut self,
-        gimbal: &G,
+        gimbal: &Link<Q, T, M>,
         component: u8,
         now: Instant,
         tx: &mut Tx<'_>,

@@ -2,10 +2,9 @@
 //! parsed back, the core link's queue read out.
 #![allow(dead_code)] // each test file uses some
 
-use idu_gimbal::link::{Config, Link};
+use idu_gimbal::link::{Can, Config, Link, Medium};
 use idu_gimbal::wire::control::{Command, GimbalCommand};
 use idu_gimbal::wire::ids;
-use idu_gimbal::GimbalControl;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
@@ -18,6 +17,51 @@ use mavio::dialects::common::messages::{
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::protocol::{Frame, V2};
 use mavio::Message;
+
+/// A bridge and the link it drives, as a firmware holds them; the bridge's own methods
+/// through `Deref`, those that take the link here.
+pub struct Firmware<const Q: usize = 8, const T: usize = 8, M: Medium = Can> {
+    pub bridge: Bridge,
+    pub link: Link<Q, T, M>,
+}
+
+impl<const Q: usize, const T: usize, M: Medium> Firmware<Q, T, M> {
+    pub fn new(link: Link<Q, T, M>, config: BridgeConfig) -> Self {
+        Firmware {
+            bridge: Bridge::new(config),
+            link,
+        }
+    }
+
+    pub fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
+        self.bridge.receive(&mut self.link, bytes, now)
+    }
+
+    pub fn receive_datagram(
+        &mut self,
+        datagram: &[u8],
+        now: Instant,
+    ) -> idu_gimbal_mavlink::bridge::Taken {
+        self.bridge.receive_datagram(&mut self.link, datagram, now)
+    }
+
+    pub fn poll(&mut self, now: Instant) {
+        self.bridge.poll(&mut self.link, now)
+    }
+}
+
+impl<const Q: usize, const T: usize, M: Medium> core::ops::Deref for Firmware<Q, T, M> {
+    type Target = Bridge;
+    fn deref(&self) -> &Bridge {
+        &self.bridge
+    }
+}
+
+impl<const Q: usize, const T: usize, M: Medium> core::ops::DerefMut for Firmware<Q, T, M> {
+    fn deref_mut(&mut self) -> &mut Bridge {
+        &mut self.bridge
+    }
+}
 
 pub const AP: (u8, u8) = (7, 1);
 pub const GCS: (u8, u8) = (255, 190);
@@ -42,7 +86,7 @@ pub fn frame(from: (u8, u8), seq: u8, message: &dyn Message) -> Vec<u8> {
 }
 
 /// Every frame the bridge wrote since the last call, drained.
-pub fn sent<G: GimbalControl>(bridge: &mut Bridge<G>) -> Vec<Frame<V2>> {
+pub fn sent(bridge: &mut Bridge) -> Vec<Frame<V2>> {
     let bytes = bridge.transmit_bytes().to_vec();
     bridge.transmit_written(bytes.len());
     let mut more = bridge.transmit_bytes().to_vec();
@@ -115,7 +159,7 @@ pub trait ReceiveAll {
     fn receive_all(&mut self, bytes: &[u8], now: Instant);
 }
 
-impl<G: GimbalControl> ReceiveAll for Bridge<G> {
+impl<const Q: usize, const T: usize, M: Medium> ReceiveAll for Firmware<Q, T, M> {
     fn receive_all(&mut self, bytes: &[u8], now: Instant) {
         let taken = self.receive(bytes, now);
         assert_eq!(taken, bytes.len(), "a frame waits for room in the outbox");
@@ -124,8 +168,8 @@ impl<G: GimbalControl> ReceiveAll for Bridge<G> {
 
 /// [`Bridge::receive`] of all of `bytes`, the outbox drained whenever a frame waits for room
 /// in it, as a transport drains it; the frames sent meanwhile.
-pub fn receive_draining<G: GimbalControl>(
-    b: &mut Bridge<G>,
+pub fn receive_draining<const Q: usize, const T: usize, M: Medium>(
+    b: &mut Firmware<Q, T, M>,
     mut bytes: &[u8],
     now: Instant,
 ) -> Vec<Frame<V2>> {
@@ -141,8 +185,8 @@ pub fn receive_draining<G: GimbalControl>(
 
 /// A bridge on the core's CAN link with `camera`, that has heard the autopilot's heartbeat
 /// (so its system id is the autopilot's), its output so far drained.
-pub fn camera_bridge(camera: CameraConfig) -> Bridge<Link> {
-    let mut b = Bridge::new(
+pub fn camera_bridge(camera: CameraConfig) -> Firmware {
+    let mut b = Firmware::new(
         Link::new(Config::default()),
         BridgeConfig {
             camera: Some(camera),

@@ -13,9 +13,9 @@ mod footprint;
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use footprint::{input, output, RegCan, RegPort};
-    use idu_gimbal::driver::SerialPort;
+    use idu_gimbal::port::Uart;
     use idu_gimbal::video::{Camera, Family};
-    use idu_gimbal::{Config, Gimbal, Instant};
+    use idu_gimbal::{CanPort, Config, Instant, Link};
     use idu_gimbal_mavlink::camera::fov::FieldOfView;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
@@ -38,15 +38,18 @@ fn main() -> ! {
         key: [input(8) as u8; 32],
         link_id: input(9) as u8,
     });
-    let Some(bridge) = cortex_m::singleton!(: Bridge<Gimbal<RegCan>> = Bridge::new(
-        Gimbal::new(RegCan, Config::default()),
-        BridgeConfig {
-            camera,
-            #[cfg(feature = "signing")]
-            signing,
-            ..BridgeConfig::default()
-        },
-    )) else {
+    let Some(bridge) = cortex_m::singleton!(: Bridge = Bridge::new(BridgeConfig {
+        camera,
+        #[cfg(feature = "signing")]
+        signing,
+        ..BridgeConfig::default()
+    })) else {
+        cortex_m::asm::udf()
+    };
+    // As `footprint_driver` holds them.
+    let Some((link, can)) = cortex_m::singleton!(
+        : (Link, CanPort<RegCan>) = (Link::new(Config::default()), CanPort::new(RegCan))
+    ) else {
         cortex_m::asm::udf()
     };
     footprint::use_mem_builtins();
@@ -54,12 +57,12 @@ fn main() -> ! {
     // What the bridge has not taken of the line's bytes (a frame waits for room in its outbox).
     let mut from_line: SerialInput<64> = SerialInput::new();
     loop {
-        // The same as `footprint_driver`: the port used directly, the driver driven.
+        // The same as `footprint_driver`: the UART used directly, the link and port driven.
         footprint::port_skeleton();
-        footprint::drive(bridge.gimbal_mut());
+        footprint::drive(link, can);
         let now = Instant::from_millis(input(4));
-        let _ = from_line.receive(bridge, now, |buf| port.read(buf));
-        bridge.poll(now);
+        let _ = from_line.receive(bridge, link, now, |buf| port.read(buf));
+        bridge.poll(link, now);
         let bytes = bridge.transmit_bytes();
         if let Ok(n) = port.write(bytes) {
             bridge.transmit_written(n);

@@ -1,5 +1,5 @@
-//! Footprint of the driver: `footprint_base` plus a `Gimbal` (default queues, in a static)
-//! that a firmware drives with every kind of call: commands, a rate hold, text, vehicle data,
+//! Footprint of the CAN path: `footprint_base` plus a `Link` (default queues, in a static)
+//! and its `CanPort`, that a firmware drives with every kind of call: commands, a rate hold, text, vehicle data,
 //! polling, events and counters. See `src/footprint.rs` and
 //! `scripts/size-report.sh`.
 #![no_std]
@@ -12,16 +12,17 @@ mod footprint;
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use footprint::RegCan;
-    use idu_gimbal::{Config, Gimbal};
+    use idu_gimbal::{CanPort, Config, Link};
 
-    let Some(gimbal) =
-        cortex_m::singleton!(: Gimbal<RegCan> = Gimbal::new(RegCan, Config::default()))
-    else {
+    // Both in one static, as a firmware holds them for its lifetime.
+    let Some((link, port)) = cortex_m::singleton!(
+        : (Link, CanPort<RegCan>) = (Link::new(Config::default()), CanPort::new(RegCan))
+    ) else {
         cortex_m::asm::udf()
     };
     footprint::use_mem_builtins();
     loop {
         footprint::port_skeleton();
-        footprint::drive(gimbal);
+        footprint::drive(link, port);
     }
 }

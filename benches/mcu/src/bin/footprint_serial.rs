@@ -1,5 +1,5 @@
-//! Footprint of the serial driver: `footprint_base` plus a `SerialGimbal` (default queue, in
-//! a static) that a firmware drives with every kind of call the serial path offers:
+//! Footprint of the serial path: `footprint_base` plus a `SerialLink` (default queue) and its
+//! `SerialPort`, in statics, that a firmware drives with every kind of call the serial path offers:
 //! commands, a rate hold, vehicle data observed for point-at, polling, events and counters.
 //! See `src/footprint.rs` and `scripts/size-report.sh`.
 #![no_std]
@@ -12,11 +12,12 @@ mod footprint;
 #[cortex_m_rt::entry]
 fn main() -> ! {
     use footprint::{input, output, RegPort};
-    use idu_gimbal::{Config, Instant, SerialGimbal};
+    use idu_gimbal::{Config, Instant, Port, SerialLink, SerialPort};
 
-    let Some(gimbal) = cortex_m::singleton!(
-        : SerialGimbal<RegPort> = SerialGimbal::new(RegPort, Config::default())
-    ) else {
+    let Some(link) = cortex_m::singleton!(: SerialLink = SerialLink::new(Config::default())) else {
+        cortex_m::asm::udf()
+    };
+    let Some(port) = cortex_m::singleton!(: SerialPort<RegPort> = SerialPort::new(RegPort)) else {
         cortex_m::asm::udf()
     };
     footprint::use_mem_builtins();
@@ -24,9 +25,9 @@ fn main() -> ! {
         footprint::can_skeleton();
         let now = Instant::from_millis(input(4));
         // The serial path carries no text.
-        footprint::command_surface(gimbal, now, |_| false);
-        output(u32::from(gimbal.poll(now).is_ok()));
-        footprint::events(gimbal, now);
-        output(gimbal.stats().link.postbacks);
+        footprint::command_surface(link, now, |_| false);
+        output(u32::from(port.poll(link, now).is_ok()));
+        footprint::events(link, now);
+        output(link.stats().postbacks);
     }
 }

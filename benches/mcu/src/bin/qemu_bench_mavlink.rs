@@ -55,6 +55,42 @@ mod fw {
     use mavio::protocol::{Frame, V2};
     use mavio::Message;
 
+    /// The bridge and the link it drives, as a firmware holds them; in line, so that each
+    /// call measures the bridge's own.
+    struct Fw {
+        bridge: Bridge,
+        link: Link,
+    }
+
+    impl Fw {
+        fn new(config: BridgeConfig) -> Self {
+            Fw {
+                bridge: Bridge::new(config),
+                link: Link::new(Config::default()),
+            }
+        }
+        #[inline(always)]
+        fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
+            self.bridge.receive(&mut self.link, bytes, now)
+        }
+        #[inline(always)]
+        fn poll(&mut self, now: Instant) {
+            self.bridge.poll(&mut self.link, now)
+        }
+        #[inline(always)]
+        fn transmit_bytes(&self) -> &[u8] {
+            self.bridge.transmit_bytes()
+        }
+        #[inline(always)]
+        fn transmit_written(&mut self, n: usize) {
+            self.bridge.transmit_written(n)
+        }
+        #[inline(always)]
+        fn stats(&self) -> idu_gimbal_mavlink::BridgeStats {
+            self.bridge.stats()
+        }
+    }
+
     // Semihosting output and exit (its panic and HardFault handlers exit with status 1),
     // the instruction meter and the result table.
     use idu_firmware_support::meter::Meter;
@@ -308,9 +344,9 @@ mod fw {
         let mut table = Table::new();
         let bytes = traffic(TO_THE_GIMBAL);
         let elsewhere = traffic(ELSEWHERE);
-        let mut bridge = Bridge::new(Link::new(Config::default()), BridgeConfig::default());
-        let drain = |b: &mut Bridge<Link>| {
-            let link = b.gimbal_mut();
+        let mut bridge = Fw::new(BridgeConfig::default());
+        let drain = |b: &mut Fw| {
+            let link = &mut b.link;
             while link.next_transmit().is_some() {
                 link.transmit_done(None);
             }
@@ -424,7 +460,7 @@ mod fw {
         // Latency: the call that takes a SET_ATTITUDE's last byte (the vehicle's state fresh
         // from the second just fed, so that the earth-frame setpoints convert).
         let before_latency = bridge.stats();
-        let sent_before = bridge.gimbal().stats().frames_sent;
+        let sent_before = bridge.link.stats().frames_sent;
         let mut frame = heapless::Vec::<u8, SECOND>::new();
         let mut seq = 0;
         let mut total = 0.0;
@@ -453,7 +489,7 @@ mod fw {
         // Every setpoint was followed: taken as the aim, its heading and pitch commands
         // queued and sent, none refused.
         let after = bridge.stats();
-        let sent = bridge.gimbal().stats().frames_sent - sent_before;
+        let sent = bridge.link.stats().frames_sent - sent_before;
         if after.refused_setpoints != before_latency.refused_setpoints
             || after.angle_setpoints - before_latency.angle_setpoints != N
             || sent < 2 * N
@@ -486,8 +522,8 @@ mod fw {
             "",
         );
         table.add(
-            "size_of Bridge<Link> with the default queues (RAM, bytes)",
-            core::mem::size_of::<Bridge<Link>>() as f32,
+            "size_of Bridge (RAM, bytes)",
+            core::mem::size_of::<Bridge>() as f32,
             "B",
         );
 
@@ -531,8 +567,8 @@ mod fw {
     fn versus_c(
         m: &mut Meter,
         (bytes, elsewhere): (&[u8], &[u8]),
-        bridge: &mut Bridge<Link>,
-        drain: &dyn Fn(&mut Bridge<Link>),
+        bridge: &mut Fw,
+        drain: &dyn Fn(&mut Fw),
         (decoded_per_byte, bridge_per_byte): (f32, f32),
         bridge_status_poll: f32,
         mut ms: u32,

@@ -25,7 +25,7 @@ mod fw {
     use board_stm32f405::board::{self, now};
     use idu_firmware_support::app::{App, Report};
     use idu_firmware_support::vehicle::vehicle_stand_in;
-    use idu_gimbal::{Config, Gimbal};
+    use idu_gimbal::{CanPort, Config, Link};
 
     #[entry]
     fn main() -> ! {
@@ -37,19 +37,21 @@ mod fw {
         board::start_tick(cp.SYST, &rcc);
         let can = board::can1(dp.CAN1, dp.GPIOB, &mut rcc);
 
-        let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        let mut link: Link = Link::new(Config::default());
+        let mut port = CanPort::new(can);
         let mut app = App::new(now());
         // Busy polling: bxcan's receive FIFO holds 3 frames and a postback comes as 4
         // back-to-back frames (~0.5 ms at 1 Mbit/s), so do not sleep a whole tick here.
         loop {
             app.step(
-                &mut gimbal,
+                &mut link,
+                &mut port,
                 now(),
                 vehicle_stand_in,
                 |report| match report {
                     Report::Driver(e) => defmt::warn!("{}", e),
                     Report::Event(event, latest) => board::log_event(event, latest),
-                    Report::Stats(stats) => defmt::info!("stats: {}", stats),
+                    Report::Stats(link, port) => defmt::info!("stats: {} {}", link, port),
                 },
             );
         }

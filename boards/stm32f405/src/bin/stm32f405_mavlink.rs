@@ -26,9 +26,9 @@ mod fw {
 
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
-    use idu_gimbal::driver::{Nb, SerialPort};
+    use idu_gimbal::port::{Nb, Port, Uart};
     use idu_gimbal::video::{Camera, Family};
-    use idu_gimbal::{Config, Gimbal, GimbalControl};
+    use idu_gimbal::{CanPort, Config, Link};
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
 
@@ -51,7 +51,7 @@ mod fw {
         let can = board::can1(dp.CAN1, dp.GPIOB, &mut rcc);
 
         let tx = usart2_ring::open(dp.USART2, dp.GPIOA, MAVLINK_BAUD, &mut rcc);
-        // The same non-blocking port adapter the serial gimbal driver uses.
+        // The same non-blocking UART adapter the gimbal's serial port uses.
         let mut autopilot = Nb::new(RingRx, tx);
         defmt::info!(
             "USART2 up: MAVLink 2 at {=u32} baud, PA2 TX, PA3 RX",
@@ -61,31 +61,29 @@ mod fw {
         // The camera's streams, as QGroundControl will play them (set the family and the IP
         // of your camera here; `Family::DualLight` adds the thermal stream and settings).
         let camera = CameraConfig::with_streams_of(&Camera::new(Family::X3)).ok();
-        let gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
-        let mut bridge = Bridge::new(
-            gimbal,
-            BridgeConfig {
-                camera,
-                ..BridgeConfig::default()
-            },
-        );
+        let mut link: Link = Link::new(Config::default());
+        let mut port = CanPort::new(can);
+        let mut bridge = Bridge::new(BridgeConfig {
+            camera,
+            ..BridgeConfig::default()
+        });
         // What the bridge has not taken of the UART's bytes is held there, offered again
         // once what the bridge holds is sent.
         let mut input: SerialInput<64> = SerialInput::new();
         let mut was_up = false;
         loop {
             let now = now();
-            if let Err(e) = bridge.gimbal_mut().poll(now) {
+            if let Err(e) = port.poll(&mut link, now) {
                 defmt::warn!("{}", e);
             }
             // A line error is counted where it shows: the frame it broke fails its CRC.
             if input
-                .receive(&mut bridge, now, |buf| autopilot.read(buf))
+                .receive(&mut bridge, &mut link, now, |buf| autopilot.read(buf))
                 .is_err()
             {
                 defmt::warn!("autopilot UART: line error or overrun");
             }
-            bridge.poll(now);
+            bridge.poll(&mut link, now);
             loop {
                 let bytes = bridge.transmit_bytes();
                 if bytes.is_empty() {
@@ -96,7 +94,7 @@ mod fw {
                     Ok(n) => bridge.transmit_written(n),
                 }
             }
-            let up = bridge.gimbal().is_link_up();
+            let up = link.is_link_up();
             if up != was_up {
                 was_up = up;
                 defmt::info!("gimbal link {}", if up { "up" } else { "down" });

@@ -16,7 +16,7 @@
 //!
 //! The serial link carries control commands and postbacks only: no vehicle frames, so the
 //! gimbal references headings to the nose; the vehicle state below is observed for
-//! `point_at` only (see `idu_gimbal::driver::serial`). `point_at` links the WGS84 solver
+//! `point_at` only (see `idu_gimbal::port::serial`). `point_at` links the WGS84 solver
 //! (f64, soft-float on the M4F): about 19 KB of the image; without it the image is 11.8 KB.
 //!
 //! Build: `cargo build --release --bin stm32f405_uart` in `boards/stm32f405`. Flash and
@@ -33,12 +33,12 @@ mod fw {
 
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
-    use idu_gimbal::driver::{Nb, PortError};
     use idu_gimbal::geo::Position;
     use idu_gimbal::interface::UART_BAUD;
+    use idu_gimbal::port::{Nb, Port, PortError};
     use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Config, GimbalControl, SerialGimbal};
+    use idu_gimbal::{Config, SerialLink, SerialPort};
 
     /// USART2 receive into the ring.
     #[interrupt]
@@ -69,14 +69,15 @@ mod fw {
         let tx = usart2_ring::open(dp.USART2, dp.GPIOA, UART_BAUD, &mut rcc);
         defmt::info!("USART2 up: {=u32} baud 8N1, PA2 TX, PA3 RX", UART_BAUD);
 
-        let mut gimbal: SerialGimbal<_> = SerialGimbal::new(Nb::new(RingRx, tx), Config::default());
+        let mut link: SerialLink = SerialLink::new(Config::default());
+        let mut port = SerialPort::new(Nb::new(RingRx, tx));
         // An example target: look at a point on the ground 200 m north of the stand-in
         // position (nose-referenced over serial, from the observed vehicle heading).
         if let Ok(target) = Position::new(47.399_541, 8.545_594, 440.0) {
-            gimbal.point_at(target);
+            link.point_at(target);
         }
         if let Ok(pitch) = Pitch::new(-30.0) {
-            let _ = gimbal.send(GimbalCommand::Pitch(pitch));
+            let _ = link.send(GimbalCommand::Pitch(pitch));
         }
         let mut next_vehicle = now();
         let mut next_stats = now().add_millis(10_000);
@@ -86,13 +87,13 @@ mod fw {
             if now.is_at_or_after(next_vehicle) {
                 next_vehicle = now.add_millis(100);
                 if let Some((gps, altitude, attitude)) = vehicle_stand_in() {
-                    gimbal.set_gps(gps, now);
-                    gimbal.set_altitude(altitude, now);
-                    gimbal.set_attitude(attitude, now);
+                    link.set_gps(gps, now);
+                    link.set_altitude(altitude, now);
+                    link.set_attitude(attitude, now);
                 }
             }
 
-            match gimbal.poll(now) {
+            match port.poll(&mut link, now) {
                 Ok(()) => {}
                 Err(PortError::Read(e)) => {
                     defmt::warn!("UART receive: {}", defmt::Debug2Format(&e))
@@ -102,13 +103,13 @@ mod fw {
                 }
             }
 
-            while let Some(event) = gimbal.next_event() {
-                board::log_event(event, gimbal.latest_postback(now).map(|(p, _)| p));
+            while let Some(event) = link.next_event() {
+                board::log_event(event, link.latest_postback(now).map(|(p, _)| p));
             }
 
             if now.is_at_or_after(next_stats) {
                 next_stats = now.add_millis(10_000);
-                defmt::info!("stats: {}", gimbal.stats());
+                defmt::info!("stats: {} {}", link.stats(), port.stats());
             }
         }
     }

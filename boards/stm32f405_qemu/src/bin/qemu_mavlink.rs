@@ -3,8 +3,8 @@
 //!
 //! - The autopilot and the bridge talk MAVLink 2 over the crate's in-memory serial line
 //!   (`mock::serial::Pipe`), as they would over a UART.
-//! - The bridge owns the CAN driver (`Gimbal` over the in-memory CAN bus, `mock::Bus`); the
-//!   simulated gimbal (`sim::Simulator`) is on the other end of the bus.
+//! - The bridge drives the firmware's link, whose CAN port (`CanPort` over the in-memory CAN
+//!   bus, `mock::Bus`) reaches the simulated gimbal (`sim::Simulator`) on the other end.
 //! - The autopilot behaves as ArduPilot does: heartbeats at 1 Hz, its state at 50 Hz, the
 //!   gimbal's information asked for every second until it comes, setpoints at 20 Hz.
 //!
@@ -35,7 +35,7 @@ mod fw {
     use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::wire::control::Palette;
     use idu_gimbal::wire::postback::GimbalType;
-    use idu_gimbal::{Config, Gimbal, Instant};
+    use idu_gimbal::{CanPort, Config, Instant, Link, Port};
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::framing::{Check, FrameReader, MAX_FRAME_LEN};
@@ -227,7 +227,9 @@ mod fw {
 
     struct World<'a> {
         ap: Autopilot<'a>,
-        bridge: Bridge<Gimbal<Endpoint<'a, 2, 32>>>,
+        bridge: Bridge,
+        link: Link,
+        port: CanPort<Endpoint<'a, 2, 32>>,
         bridge_line: Line<'a>,
         sim: Simulator,
         sim_can: Endpoint<'a, 2, 32>,
@@ -246,9 +248,9 @@ mod fw {
             // The in-memory line has no errors to report.
             let _ = self
                 .input
-                .receive(&mut self.bridge, now, |buf| line.read(buf));
-            let _ = self.bridge.gimbal_mut().poll(now);
-            self.bridge.poll(now);
+                .receive(&mut self.bridge, &mut self.link, now, |buf| line.read(buf));
+            let _ = self.port.poll(&mut self.link, now);
+            self.bridge.poll(&mut self.link, now);
             loop {
                 let bytes = self.bridge.transmit_bytes();
                 if bytes.is_empty() {
@@ -322,13 +324,12 @@ mod fw {
                 seq: 0,
                 seen: Seen::default(),
             },
-            bridge: Bridge::new(
-                Gimbal::new(can, Config::default()),
-                BridgeConfig {
-                    camera,
-                    ..BridgeConfig::default()
-                },
-            ),
+            bridge: Bridge::new(BridgeConfig {
+                camera,
+                ..BridgeConfig::default()
+            }),
+            link: Link::new(Config::default()),
+            port: CanPort::new(can),
             bridge_line,
             sim: Simulator::new(sim_config, Instant::from_millis(0)),
             sim_can,

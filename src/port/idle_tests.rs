@@ -1,11 +1,12 @@
-//! The drivers' idle check ("nothing due and nothing waiting to be sent", one compare)
-//! against polls that never take it: two drivers get the same operations and are polled
+//! The ports' idle check ("nothing due and nothing waiting to be sent", one compare)
+//! against polls that never take it: two ports get the same operations and are polled
 //! every millisecond, one with the check and one without, and must put the same frames or
 //! bytes on the line, raise the same events, count the same and return the same.
 
 use super::*;
 use crate::geo::Position;
 use crate::link::{Config, Event};
+use crate::link::{Link, LinkStats, SerialLink};
 use crate::mock::serial::{Pipe, Rx, SerialFaults, Tx};
 use crate::mock::{Bus, Endpoint, MockFrame};
 use crate::time::Instant;
@@ -13,7 +14,6 @@ use crate::wire::control::{GimbalCommand, Pitch, Rate};
 use crate::wire::ids;
 use crate::wire::postback::Postback;
 use crate::wire::vehicle::{Altitude, Attitude, Gps};
-use crate::{GimbalControl, Transport};
 use core::fmt::Debug;
 use embedded_can::nb::Can as _;
 use embedded_can::{ExtendedId, Frame as _, Id};
@@ -131,14 +131,14 @@ macro_rules! apply_common {
     };
 }
 
-/// `Side::poll` for a side whose driver is `self.gimbal` (both drivers name the two polls
-/// alike).
-macro_rules! poll_through_gimbal {
+/// `Side::poll` for a side whose link is `self.link` and port `self.port` (both ports name
+/// the two polls alike).
+macro_rules! poll_through_port {
     () => {
         fn poll(&mut self, now: Instant, idle_check: bool) -> Self::Poll {
             match idle_check {
-                true => self.gimbal.poll(now),
-                false => self.gimbal.poll_without_idle_check(now),
+                true => self.port.poll(&mut self.link, now),
+                false => self.port.poll_without_idle_check(&mut self.link, now),
             }
         }
     };
@@ -164,12 +164,13 @@ fn check<S: Side>(fast: &mut S, full: &mut S, ops: &[Op], start: u32) -> Result<
 
 // ---- CAN ----
 
-type CanPort<'a> = Endpoint<'a, 2, 16>;
+type Driver<'a> = Endpoint<'a, 2, 16>;
 
 struct CanSide<'a> {
     bus: &'a Bus<2, 16>,
-    gimbal: Gimbal<CanPort<'a>>,
-    peer: CanPort<'a>,
+    link: Link,
+    port: CanPort<Driver<'a>>,
+    peer: Driver<'a>,
 }
 
 impl<'a> CanSide<'a> {
@@ -177,7 +178,8 @@ impl<'a> CanSide<'a> {
         assert!(bus.set_mailboxes(0, 1));
         CanSide {
             bus,
-            gimbal: Gimbal::new(bus.endpoint(0).unwrap(), Config::default()),
+            link: Link::new(Config::default()),
+            port: CanPort::new(bus.endpoint(0).unwrap()),
             peer: bus.endpoint(1).unwrap(),
         }
     }
@@ -201,24 +203,23 @@ impl<'a> CanSide<'a> {
 
 impl Side for CanSide<'_> {
     type Poll = Result<(), DriverError>;
-    type Observed = (Vec<(Id, Vec<u8>)>, Vec<Event>, GimbalStats);
+    type Observed = (Vec<(Id, Vec<u8>)>, Vec<Event>, LinkStats, CanPortStats);
 
     fn apply(&mut self, op: &Op, now: Instant) {
-        if apply_common!(self.gimbal, op, now) {
+        if apply_common!(self.link, op, now) {
             return;
         }
         let frames = Postback::default().to_can_frames();
         match *op {
             Op::Text => {
-                let _ = self.gimbal.send_text(b"HELLO");
+                let _ = self.link.send_text(b"HELLO");
             }
             Op::Vehicle { stamp_back } => {
                 let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
-                self.gimbal
+                self.link
                     .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                self.gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
-                self.gimbal
-                    .set_altitude(Altitude::new(500.0).unwrap(), stamp);
+                self.link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                self.link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
             }
             Op::Postback => frames.iter().for_each(|d| self.peer_sends(d)),
             Op::PostbackPart(i) => self.peer_sends(&frames[usize::from(i)]),
@@ -227,21 +228,21 @@ impl Side for CanSide<'_> {
         }
     }
 
-    poll_through_gimbal!();
+    poll_through_port!();
 
     fn observe(&mut self) -> Self::Observed {
         let frames = core::iter::from_fn(|| self.peer.receive().ok())
             .map(|f| (f.id(), f.data().to_vec()))
             .collect();
-        let events = core::iter::from_fn(|| self.gimbal.next_event()).collect();
-        (frames, events, self.gimbal.stats())
+        let events = core::iter::from_fn(|| self.link.next_event()).collect();
+        (frames, events, self.link.stats(), self.port.stats())
     }
 }
 
 // ---- serial ----
 
 const PIPE: usize = 256;
-type SerialPortOf<'a> = Io<Rx<'a, PIPE>, Tx<'a, PIPE>>;
+type UartOf<'a> = Io<Rx<'a, PIPE>, Tx<'a, PIPE>>;
 
 /// A slow writer that fails now and then: at most 5 bytes a write and one write in 20
 /// fails (PRNG draws per write call, so both sides draw alike as long as they write alike);
@@ -257,8 +258,9 @@ fn port_faults(stall: bool) -> SerialFaults {
 
 struct SerialSide<'a> {
     pipe: &'a Pipe<PIPE>,
-    gimbal: SerialGimbal<SerialPortOf<'a>>,
-    peer: SerialPortOf<'a>,
+    link: SerialLink,
+    port: SerialPort<UartOf<'a>>,
+    peer: UartOf<'a>,
     stalled: bool,
 }
 
@@ -269,7 +271,8 @@ impl<'a> SerialSide<'a> {
         let (peer_rx, peer_tx) = pipe.port(1).unwrap();
         SerialSide {
             pipe,
-            gimbal: SerialGimbal::new(Io::new(rx, tx), Config::default()),
+            link: SerialLink::new(Config::default()),
+            port: SerialPort::new(Io::new(rx, tx)),
             peer: Io::new(peer_rx, peer_tx),
             stalled: false,
         }
@@ -278,7 +281,7 @@ impl<'a> SerialSide<'a> {
     fn peer_writes(&mut self, bytes: &[u8]) {
         // With no faults for the peer's own write, then the gimbal's port's back.
         self.pipe.set_faults(SerialFaults::NONE);
-        let written = SerialPort::write(&mut self.peer, bytes);
+        let written = Uart::write(&mut self.peer, bytes);
         assert_eq!(written.ok(), Some(bytes.len()));
         self.pipe.set_faults(port_faults(self.stalled));
     }
@@ -289,10 +292,10 @@ impl Side for SerialSide<'_> {
         (),
         PortError<crate::mock::serial::MockSerialError, crate::mock::serial::MockSerialError>,
     >;
-    type Observed = (Vec<u8>, Vec<Event>, SerialGimbalStats);
+    type Observed = (Vec<u8>, Vec<Event>, LinkStats, SerialPortStats);
 
     fn apply(&mut self, op: &Op, now: Instant) {
-        if apply_common!(self.gimbal, op, now) {
+        if apply_common!(self.link, op, now) {
             return;
         }
         let bytes = Postback::default().to_stream_bytes();
@@ -300,11 +303,10 @@ impl Side for SerialSide<'_> {
             Op::Text => {}
             Op::Vehicle { stamp_back } => {
                 let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
-                self.gimbal
+                self.link
                     .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                self.gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
-                self.gimbal
-                    .set_altitude(Altitude::new(500.0).unwrap(), stamp);
+                self.link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                self.link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
             }
             Op::Postback => self.peer_writes(&bytes),
             Op::PostbackPart(i) => {
@@ -319,16 +321,16 @@ impl Side for SerialSide<'_> {
         }
     }
 
-    poll_through_gimbal!();
+    poll_through_port!();
 
     fn observe(&mut self) -> Self::Observed {
         let mut line = Vec::new();
         let mut buf = [0u8; 64];
-        while let Ok(n @ 1..) = SerialPort::read(&mut self.peer, &mut buf) {
+        while let Ok(n @ 1..) = Uart::read(&mut self.peer, &mut buf) {
             line.extend_from_slice(&buf[..n]);
         }
-        let events = core::iter::from_fn(|| self.gimbal.next_event()).collect();
-        (line, events, self.gimbal.stats())
+        let events = core::iter::from_fn(|| self.link.next_event()).collect();
+        (line, events, self.link.stats(), self.port.stats())
     }
 }
 
@@ -359,27 +361,24 @@ fn can_idle_check_holds_between_deadlines_and_ends_while_a_frame_waits() {
     let bus: Bus<2, 16> = Bus::new(1);
     let mut side = CanSide::new(&bus);
     let at = Instant::from_millis;
-    side.gimbal.poll(at(0)).unwrap();
-    assert!(side.gimbal.is_idle(at(1)));
-    assert!(!side.gimbal.is_idle(at(60_000)), "the longest interval");
-    side.gimbal.send(pitch()).unwrap();
-    assert!(!side.gimbal.is_idle(at(1)), "a frame waits");
-    side.gimbal.poll(at(1)).unwrap();
+    side.port.poll(&mut side.link, at(0)).unwrap();
+    assert!(side.link.is_idle(at(1)));
+    assert!(!side.link.is_idle(at(60_000)), "the longest interval");
+    side.link.send(pitch()).unwrap();
+    assert!(!side.link.is_idle(at(1)), "a frame waits");
+    side.port.poll(&mut side.link, at(1)).unwrap();
     assert_eq!(side.observe().0.len(), 1);
-    assert!(
-        !side.gimbal.is_idle(at(2)),
-        "released by the next poll only"
-    );
-    side.gimbal.poll(at(2)).unwrap();
-    assert!(side.gimbal.is_idle(at(3)));
+    assert!(!side.link.is_idle(at(2)), "released by the next poll only");
+    side.port.poll(&mut side.link, at(2)).unwrap();
+    assert!(side.link.is_idle(at(3)));
     // Delivery stops: with one mailbox the text frame is refused and queued again.
     bus.set_auto_deliver(false);
-    side.gimbal.send(pitch()).unwrap();
-    side.gimbal.send_text(b"HI").unwrap();
-    side.gimbal.poll(at(3)).unwrap();
-    side.gimbal.poll(at(4)).unwrap();
-    assert!(side.gimbal.link().has_transmit());
-    assert!(!side.gimbal.is_idle(at(5)));
+    side.link.send(pitch()).unwrap();
+    side.link.send_text(b"HI").unwrap();
+    side.port.poll(&mut side.link, at(3)).unwrap();
+    side.port.poll(&mut side.link, at(4)).unwrap();
+    assert!(side.link.has_transmit());
+    assert!(!side.link.is_idle(at(5)));
 }
 
 /// A frame part-written when the port stalls waits outside the link's queue: the idle
@@ -394,22 +393,22 @@ fn serial_a_part_written_frame_ends_the_idle_check() {
         ..SerialFaults::NONE
     };
     pipe.set_faults(slow);
-    side.gimbal.poll(at(0)).unwrap();
-    assert!(side.gimbal.is_idle(at(1)));
-    side.gimbal.send(pitch()).unwrap();
-    side.gimbal.poll(at(1)).unwrap(); // at most 5 of its 24 bytes a write, then more
+    side.port.poll(&mut side.link, at(0)).unwrap();
+    assert!(side.link.is_idle(at(1)));
+    side.link.send(pitch()).unwrap();
+    side.port.poll(&mut side.link, at(1)).unwrap(); // at most 5 of its 24 bytes a write, then more
     assert_eq!(side.observe().0.len(), 24);
     pipe.set_faults(SerialFaults {
         write_stall: 1.0,
         ..SerialFaults::NONE
     });
-    side.gimbal.send(pitch()).unwrap();
-    side.gimbal.poll(at(2)).unwrap();
-    assert!(side.gimbal.link().has_transmit());
-    assert!(!side.gimbal.is_idle(at(3)));
+    side.link.send(pitch()).unwrap();
+    side.port.poll(&mut side.link, at(2)).unwrap();
+    assert!(side.port.stream().has_transmit(&side.link));
+    assert!(!side.link.is_idle(at(3)));
     pipe.set_faults(slow);
-    side.gimbal.poll(at(3)).unwrap();
+    side.port.poll(&mut side.link, at(3)).unwrap();
     assert_eq!(side.observe().0.len(), 24);
-    side.gimbal.poll(at(4)).unwrap();
-    assert!(side.gimbal.is_idle(at(5)));
+    side.port.poll(&mut side.link, at(4)).unwrap();
+    assert!(side.link.is_idle(at(5)));
 }

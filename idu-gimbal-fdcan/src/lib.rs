@@ -1,10 +1,11 @@
-//! An `embedded_can::nb::Can` adapter for the STM32 FDCAN peripheral (feature `fdcan`).
+//! An `embedded_can::nb::Can` adapter for the STM32 FDCAN peripheral, so that
+//! `idu-gimbal`'s CAN port drives it.
 //!
 //! The [`fdcan`](https://docs.rs/fdcan/0.2) crate, which stm32h7xx-hal uses (feature `can`),
 //! implements no `embedded-can` trait. [`FdCan`] wraps its
 //! `fdcan::FdCan<I, NormalOperationMode>` and implements `embedded_can::nb::Can` for classic
-//! CAN (8-byte frames, standard or extended IDs), so that [`Gimbal`](super::Gimbal) drives
-//! it like any other controller:
+//! CAN (8-byte frames, standard or extended IDs), so that `idu_gimbal::port::CanPort`
+//! drives it like any other controller:
 //!
 //! - `transmit` puts the frame in a transmit buffer when none is pending, and answers
 //!   `WouldBlock` otherwise: one frame in flight. The fdcan crate runs the transmit buffers
@@ -21,7 +22,7 @@
 //!   came with it is delivered by the next `receive`), the controller going bus-off, and
 //!   frames the adapter cannot carry (both `Other`). See [`Error`].
 //!
-//! The fdcan crate's register layout is chosen by a feature of its own: `fdcan` turns on
+//! The fdcan crate's register layout is chosen by a feature of its own: this crate turns on
 //! `fdcan/fdcan_h7` (the STM32H7's FDCAN, as stm32h7xx-hal does). Not for the G0/G4/L5
 //! layout.
 //!
@@ -29,6 +30,23 @@
 //! initialisation until software restarts it): take the controller back with
 //! [`FdCan::release`], move it through `into_config_mode()` and `into_normal()`, and wrap
 //! it again.
+
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects
+    )
+)]
+
+#[cfg(feature = "std")]
+extern crate std;
 
 use core::convert::Infallible;
 use core::fmt;
@@ -394,8 +412,8 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
 /// ```ignore
 /// // stm32h7xx-hal (feature `can`): configure in ConfigMode (bit timing, a filter storing
 /// // the postback in FIFO 0), then wrap the controller in normal operation.
-/// let can = idu_gimbal::driver::fdcan::FdCan::new(fdcan_in_config_mode.into_normal());
-/// let mut gimbal: idu_gimbal::Gimbal<_> = idu_gimbal::Gimbal::new(can, Config::default());
+/// let can = idu_gimbal_fdcan::FdCan::new(fdcan_in_config_mode.into_normal());
+/// let mut port = idu_gimbal::port::CanPort::new(can);
 /// ```
 pub struct FdCan<I: fdcan::Instance>(Adapter<fdcan::FdCan<I, NormalOperationMode>>);
 
@@ -432,14 +450,13 @@ impl<I: fdcan::Instance> embedded_can::nb::Can for FdCan<I> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    #[cfg(feature = "mock")]
-    use crate::sim::{SimConfig, Simulator};
-    use crate::wire::control::{GimbalCommand, Pitch};
-    use crate::wire::ids;
-    use crate::{Config, Gimbal, Instant};
-    use crate::{GimbalControl, Transport};
     use embedded_can::nb::Can;
     use embedded_can::{Error as _, Frame as _};
+    use idu_gimbal::port::{CanPort, Port};
+    use idu_gimbal::sim::{SimConfig, Simulator};
+    use idu_gimbal::wire::control::{GimbalCommand, Pitch};
+    use idu_gimbal::wire::ids;
+    use idu_gimbal::{Config, Instant, Link};
     use std::cell::RefCell;
     use std::collections::VecDeque;
     use std::rc::Rc;
@@ -748,24 +765,24 @@ mod tests {
     }
 
     #[test]
-    #[cfg(feature = "mock")]
-    fn the_gimbal_driver_runs_over_the_adapter() {
+    fn the_can_port_runs_over_the_adapter() {
         let (can, chip) = adapter();
-        let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        let mut link: Link = Link::new(Config::default());
+        let mut port = CanPort::new(can);
         let mut sim = Simulator::new(SimConfig::default(), Instant::from_millis(0));
         // Six control commands at once: one goes out at a time, the rest wait their turn.
         let commands: Vec<GimbalCommand> = (0..6)
             .map(|i| GimbalCommand::Pitch(Pitch::from_deci(-100 * i).unwrap()))
             .collect();
         for &c in &commands {
-            gimbal.send(c).unwrap();
+            link.send(c).unwrap();
         }
         let mut busy = 0;
         for t in 0..1600u32 {
             let now = Instant::from_millis(t);
-            gimbal.poll(now).unwrap();
+            port.poll(&mut link, now).unwrap();
             // Frames left waiting: the adapter answered WouldBlock.
-            if gimbal.link().has_transmit() {
+            if link.has_transmit() {
                 busy += 1;
             }
             // One frame a millisecond leaves the controller; the simulator takes it and its
@@ -788,35 +805,34 @@ mod tests {
         let expected: Vec<Frame> = commands
             .iter()
             .map(|c| {
-                let f = crate::wire::control::Command::from(*c).to_frame();
+                let f = idu_gimbal::wire::control::Command::from(*c).to_frame();
                 data_frame(f.id, &f.data)
             })
             .collect();
         // Same ID: the controller keeps their order, nothing is displaced or lost.
         assert_eq!(sent, expected);
-        let stats = gimbal.stats();
-        assert_eq!(stats.driver_errors.total(), 0);
-        assert_eq!(stats.link.frames_sent, 6);
-        assert_eq!(stats.link.postbacks, 3);
-        assert_eq!(stats.link.frames_received, 12);
-        assert!(gimbal.is_link_up());
+        assert_eq!(port.stats().driver_errors.total(), 0);
+        let stats = link.stats();
+        assert_eq!(stats.frames_sent, 6);
+        assert_eq!(stats.postbacks, 3);
+        assert_eq!(stats.frames_received, 12);
+        assert!(link.is_link_up());
     }
 
     #[test]
     fn frames_of_one_id_keep_their_order() {
         let (can, chip) = adapter();
-        let mut gimbal: Gimbal<_> = Gimbal::new(can, Config::default());
+        let mut link: Link = Link::new(Config::default());
+        let mut port = CanPort::new(can);
         // Five text frames of one ID and two commands of another, queued at once.
         let text = b"0123456789abcdefghijklmnopqrstuvwxyz-+*/";
-        gimbal.send_text(text).unwrap();
-        gimbal
-            .send(GimbalCommand::Zoom(crate::wire::control::Zoom::In))
+        link.send_text(text).unwrap();
+        link.send(GimbalCommand::Zoom(idu_gimbal::wire::control::Zoom::In))
             .unwrap();
-        gimbal
-            .send(GimbalCommand::Zoom(crate::wire::control::Zoom::Stop))
+        link.send(GimbalCommand::Zoom(idu_gimbal::wire::control::Zoom::Stop))
             .unwrap();
         for t in 0..20 {
-            gimbal.poll(Instant::from_millis(t)).unwrap();
+            port.poll(&mut link, Instant::from_millis(t)).unwrap();
             chip.borrow_mut().send_one();
         }
         let sent: Vec<(u32, [u8; 8])> = chip
@@ -831,21 +847,21 @@ mod tests {
             })
             .collect();
         let zoom = |z| {
-            crate::wire::control::Command::from(GimbalCommand::Zoom(z))
+            idu_gimbal::wire::control::Command::from(GimbalCommand::Zoom(z))
                 .to_frame()
                 .data
         };
         let mut expected = std::vec![
-            (ids::CONTROL, zoom(crate::wire::control::Zoom::In)),
-            (ids::CONTROL, zoom(crate::wire::control::Zoom::Stop)),
+            (ids::CONTROL, zoom(idu_gimbal::wire::control::Zoom::In)),
+            (ids::CONTROL, zoom(idu_gimbal::wire::control::Zoom::Stop)),
         ];
         for (i, chunk) in text.chunks(8).enumerate() {
             let id = if i == 4 { ids::TEXT_END } else { ids::TEXT };
             expected.push((id, chunk.try_into().unwrap()));
         }
         assert_eq!(sent, expected);
-        assert_eq!(gimbal.stats().link.frames_sent, 7);
-        assert_eq!(gimbal.stats().driver_errors.total(), 0);
+        assert_eq!(link.stats().frames_sent, 7);
+        assert_eq!(port.stats().driver_errors.total(), 0);
     }
 
     #[test]

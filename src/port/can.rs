@@ -1,13 +1,14 @@
-//! The CAN transport: a [`Link`] over any `embedded-can` 0.4 driver.
+//! The CAN port: a [`Link`] over any `embedded-can` 0.4 driver.
 //!
-//! [`Gimbal`] is thin: it moves frames between the CAN driver and the link, converts them
+//! [`CanPort`] is thin: it moves frames between the CAN driver and the link, converts them
 //! to and from the driver's frame type, and counts what the driver reports.
 
 use core::fmt;
 
 use embedded_can::{nb::Can, ErrorKind, ExtendedId, Frame as _, Id};
 
-use crate::link::{Config, Link, LinkStats, TextQueueError};
+use super::Port;
+use crate::link::{Can as CanMedium, Link};
 use crate::time::Instant;
 use crate::wire::Frame;
 
@@ -76,18 +77,16 @@ impl DriverErrors {
     }
 }
 
-/// Everything [`Gimbal`] counts: its link's counters and the CAN driver's errors. (Every
-/// driver's `stats()` has this shape: `link`, what its link counts, then its own errors.)
+/// What a [`CanPort`] counts; the link counts the rest ([`Link::stats`]).
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct GimbalStats {
-    /// The link's counters.
-    pub link: LinkStats,
+pub struct CanPortStats {
     /// CAN driver errors by kind.
     pub driver_errors: DriverErrors,
 }
 
-/// A CAN driver error seen during [`Gimbal::poll`]. The poll still did all its work.
+/// A CAN driver error seen during [`CanPort::poll`](Port::poll). The poll still did all
+/// its work.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct DriverError(pub ErrorKind);
 
@@ -116,61 +115,50 @@ impl defmt::Format for DriverError {
 #[cfg(feature = "std")]
 impl std::error::Error for DriverError {}
 
-/// A gimbal on a CAN bus, driven through `C`.
-///
-/// `Q` is the number of queued control commands, `T` the number of queued text frames.
+/// The CAN port: a gimbal's [`Link`] on a CAN bus, driven through `C`.
 ///
 /// ```
 /// # #[cfg(feature = "mock")] {
 /// use idu_gimbal::mock::Bus;
+/// use idu_gimbal::port::{CanPort, Port};
 /// use idu_gimbal::wire::control::{GimbalCommand, Pitch};
-/// use idu_gimbal::{Config, Gimbal, GimbalControl, Instant};
+/// use idu_gimbal::{Config, Instant, Link};
 ///
 /// let bus: Bus<2, 16> = Bus::new(1);
-/// let mut gimbal: Gimbal<_> = Gimbal::new(bus.endpoint(0).unwrap(), Config::default());
-/// gimbal.send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap())).unwrap();
-/// gimbal.poll(Instant::from_millis(0)).unwrap();
-/// assert_eq!(gimbal.stats().link.frames_sent, 1);
+/// let mut link: Link = Link::new(Config::default());
+/// let mut port = CanPort::new(bus.endpoint(0).unwrap());
+/// link.send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap())).unwrap();
+/// port.poll(&mut link, Instant::from_millis(0)).unwrap();
+/// assert_eq!(link.stats().frames_sent, 1);
+/// assert_eq!(port.stats().driver_errors.total(), 0);
 /// # }
 /// ```
-pub struct Gimbal<C, const Q: usize = 8, const T: usize = 8> {
+pub struct CanPort<C> {
     can: C,
-    link: Link<Q, T>,
     errors: DriverErrors,
 }
 
-impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
-    /// A driver over `can` with the given timing.
-    pub fn new(can: C, config: Config) -> Self {
-        Gimbal {
+impl<C: Can> CanPort<C> {
+    /// A port over the CAN driver `can`.
+    pub fn new(can: C) -> Self {
+        CanPort {
             can,
-            link: Link::new(config),
             errors: DriverErrors::default(),
         }
     }
 
-    /// Receives pending frames (at most [`Config::max_rx_per_poll`]), runs the schedules, and
-    /// transmits queued frames until the CAN driver is busy.
-    ///
-    /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
-    /// first error seen is returned at the end.
-    pub fn poll(&mut self, now: Instant) -> Result<(), DriverError> {
-        let first_error = self.receive_all(now);
-        // Unless nothing is due and nothing waits to be sent (one compare for both).
-        if !self.link.is_idle(now) {
-            return self.poll_busy(now, first_error);
-        }
-        first_error.map_or(Ok(()), Err)
-    }
-
-    /// [`Gimbal::poll`]'s receive loop: every frame the CAN driver has, up to the bound;
+    /// [`Port::poll`]'s receive loop: every frame the CAN driver has, up to the bound;
     /// the first error it reported.
     #[inline(always)]
-    fn receive_all(&mut self, now: Instant) -> Option<DriverError> {
+    fn receive_all<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        now: Instant,
+    ) -> Option<DriverError> {
         let mut first_error = None;
         // At least one receive (the bound is not zero): no guard before the first. One
         // call site only, so that the CAN driver's `receive` can be inlined.
-        let mut left = u32::from(self.link.config().max_rx_per_poll.get());
+        let mut left = u32::from(link.config().max_rx_per_poll.get());
         loop {
             match self.can.receive() {
                 // The ID first: a foreign frame costs one compare and a count.
@@ -178,11 +166,11 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                     let data = frame.data();
                     match <&[u8; 8]>::try_from(data) {
                         // In registers: the frame need not be copied to the stack.
-                        Ok(d) => self.link.receive_postback_u64(now, u64::from_le_bytes(*d)),
-                        Err(_) => self.link.receive_malformed(),
+                        Ok(d) => link.receive_postback_u64(now, u64::from_le_bytes(*d)),
+                        Err(_) => link.receive_malformed(),
                     }
                 }
-                Ok(_) => self.link.receive_ignored(),
+                Ok(_) => link.receive_ignored(),
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(e)) => {
                     let kind = embedded_can::Error::kind(&e);
@@ -200,51 +188,33 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         first_error
     }
 
-    /// [`Gimbal::poll`] as if its idle check never held: what the check is tested against.
+    /// [`Port::poll`] as if its idle check never held: what the check is tested against.
     #[cfg(test)]
-    pub(super) fn poll_without_idle_check(&mut self, now: Instant) -> Result<(), DriverError> {
-        let first_error = self.receive_all(now);
-        self.poll_busy(now, first_error)
+    pub(super) fn poll_without_idle_check<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        now: Instant,
+    ) -> Result<(), DriverError> {
+        let first_error = self.receive_all(link, now);
+        self.poll_busy(link, now, first_error)
     }
 
-    /// Whether the idle check would skip the poll at `now`.
-    #[cfg(test)]
-    pub(super) fn is_idle(&self, now: Instant) -> bool {
-        self.link.is_idle(now)
-    }
-
-    /// [`Gimbal::poll`] past its receive loop when the idle check did not hold: the link's
+    /// [`Port::poll`] past its receive loop when the idle check did not hold: the link's
     /// schedules, then whatever waits to be sent.
     #[inline(always)]
-    fn poll_busy(
+    fn poll_busy<const Q: usize, const T: usize>(
         &mut self,
+        link: &mut Link<Q, T, CanMedium>,
         now: Instant,
         first_error: Option<DriverError>,
     ) -> Result<(), DriverError> {
-        self.link.poll(now);
-        if self.link.has_transmit() {
+        link.poll(now);
+        if link.has_transmit() {
             // A tail call: the result is `transmit`'s.
-            return self.transmit(first_error);
+            return self.transmit(link, first_error);
         }
-        self.link.release_idle();
+        link.release_idle();
         first_error.map_or(Ok(()), Err)
-    }
-
-    /// The instant by which [`Gimbal::poll`] must next be called if no frame is received
-    /// before then, as seen from `now`: the link's
-    /// [`next_deadline`](crate::link::Link::next_deadline), or `now` while frames wait for
-    /// transmission (the CAN driver had no room at the last poll; poll again when it has).
-    ///
-    /// A firmware that sleeps between polls sleeps until this instant or until a CAN
-    /// receive (or transmit-mailbox-empty) interrupt, whichever comes first. Every command
-    /// or vehicle value given to the driver can move the deadline earlier: ask again after
-    /// one. The result is at or after `now` and less than 2^31 ms ahead of it.
-    pub fn next_deadline(&self, now: Instant) -> Instant {
-        if self.link.has_transmit() {
-            now
-        } else {
-            self.link.next_deadline(now)
-        }
     }
 
     /// Transmits until the queue is empty or the CAN driver is busy; the poll's result
@@ -252,13 +222,17 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     /// here). Out of line: an idle poll then saves only the registers the receive loop
     /// needs.
     #[inline(never)]
-    fn transmit(&mut self, first_error: Option<DriverError>) -> Result<(), DriverError> {
+    fn transmit<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        first_error: Option<DriverError>,
+    ) -> Result<(), DriverError> {
         loop {
             // A control frame (what most polls that send send) with its ID known valid;
             // then the others, in the order of `Link::next_transmit`, with theirs checked.
-            let (id, data) = if let Some(data) = self.link.next_control() {
+            let (id, data) = if let Some(data) = link.next_control() {
                 (CONTROL_ID, data)
-            } else if let Some(frame) = self.link.next_transmit_after_control() {
+            } else if let Some(frame) = link.next_transmit_after_control() {
                 let Some(id) = ExtendedId::new(frame.id) else {
                     // Every queued frame has a valid 29-bit extended ID. Counted whatever
                     // the receive loop saw; its first error still wins.
@@ -269,7 +243,7 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
             } else {
                 return first_error.map_or(Ok(()), Err);
             };
-            if let Err(e) = self.transmit_frame(id, data) {
+            if let Err(e) = self.transmit_frame(link, id, data) {
                 return first_error.or(e).map_or(Ok(()), Err);
             }
         }
@@ -279,7 +253,12 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     /// link. `Err` ends the transmission: the CAN driver is busy (`None`; the frame is back
     /// in the queue) or failed.
     #[inline(always)]
-    fn transmit_frame(&mut self, id: ExtendedId, data: [u8; 8]) -> Result<(), Option<DriverError>> {
+    fn transmit_frame<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        id: ExtendedId,
+        data: [u8; 8],
+    ) -> Result<(), Option<DriverError>> {
         let Some(can_frame) = C::Frame::new(id, &data) else {
             // A CAN driver whose frame type refuses an extended frame of 8 bytes cannot
             // send it.
@@ -293,18 +272,23 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
                         .map(|data| Frame::new(id.as_raw(), data)),
                     Id::Standard(_) => None,
                 });
-                self.link.transmit_done(displaced);
+                link.transmit_done(displaced);
                 Ok(())
             }
-            Err(e) => Err(self.refused(Frame::new(id.as_raw(), data), e)),
+            Err(e) => Err(self.refused(link, Frame::new(id.as_raw(), data), e)),
         }
     }
 
     /// The CAN driver did not take `frame`: it goes back to the queue, and an error is
     /// counted. Out of line: rare.
     #[inline(never)]
-    fn refused(&mut self, frame: Frame, e: nb::Error<C::Error>) -> Option<DriverError> {
-        self.link.transmit_refused(frame);
+    fn refused<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        frame: Frame,
+        e: nb::Error<C::Error>,
+    ) -> Option<DriverError> {
+        link.transmit_refused(frame);
         match e {
             nb::Error::WouldBlock => None,
             nb::Error::Other(e) => {
@@ -322,18 +306,16 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
         DriverError(ErrorKind::Other)
     }
 
-    /// Queues a text message, all or nothing (see [`Link::send_text`]): CAN carries the
-    /// text stream, the UART does not.
-    pub fn send_text(&mut self, text: &[u8]) -> Result<(), TextQueueError> {
-        self.link.send_text(text)
-    }
-
-    /// All counters.
-    pub fn stats(&self) -> GimbalStats {
-        GimbalStats {
-            link: self.link.stats(),
+    /// What the port counts (the link counts the rest).
+    pub fn stats(&self) -> CanPortStats {
+        CanPortStats {
             driver_errors: self.errors,
         }
+    }
+
+    /// The CAN driver.
+    pub fn can(&self) -> &C {
+        &self.can
     }
 
     /// Gives back the CAN driver.
@@ -342,27 +324,46 @@ impl<C: Can, const Q: usize, const T: usize> Gimbal<C, Q, T> {
     }
 }
 
-/// The command surface ([`GimbalControl`](crate::GimbalControl)) is the link's.
-impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::Transport
-    for Gimbal<C, Q, T>
-{
-    type Link = Link<Q, T>;
+impl<C: Can> Port for CanPort<C> {
+    type Medium = CanMedium;
+    type Error = DriverError;
 
+    /// Receives pending frames (at most [`Config::max_rx_per_poll`](crate::Config)), runs
+    /// the link's schedules, and transmits queued frames until the CAN driver is busy.
+    ///
+    /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
+    /// first error seen is returned at the end.
     #[inline]
-    fn link(&self) -> &Link<Q, T> {
-        &self.link
+    fn poll<const Q: usize, const T: usize>(
+        &mut self,
+        link: &mut Link<Q, T, CanMedium>,
+        now: Instant,
+    ) -> Result<(), DriverError> {
+        let first_error = self.receive_all(link, now);
+        // Unless nothing is due and nothing waits to be sent (one compare for both).
+        if !link.is_idle(now) {
+            return self.poll_busy(link, now, first_error);
+        }
+        first_error.map_or(Ok(()), Err)
     }
 
-    #[inline]
-    fn link_mut(&mut self) -> &mut Link<Q, T> {
-        &mut self.link
+    fn next_deadline<const Q: usize, const T: usize>(
+        &self,
+        link: &Link<Q, T, CanMedium>,
+        now: Instant,
+    ) -> Instant {
+        if link.has_transmit() {
+            now
+        } else {
+            link.next_deadline(now)
+        }
     }
 }
 
 /// Makes an `embedded_can::blocking::Can` driver (e.g. `mcp2515`) usable as an
 /// `embedded_can::nb::Can` one.
 ///
-/// A blocking `receive` waits for a frame, which would stall [`Gimbal::poll`], so the
+/// A blocking `receive` waits for a frame, which would stall a [`CanPort`]'s poll, so the
 /// adapter asks `rx_ready` first (typically: the controller's interrupt pin is asserted)
 /// and answers `WouldBlock` when it says no.
 ///
@@ -370,7 +371,7 @@ impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::T
 /// answers `Error::NoMessage` from `receive` when nothing is waiting and `Error::TxBusy`
 /// from `transmit` when its three transmit buffers are full, and reports the
 /// [`ErrorKind`] of every error as `Other`. Without help the adapter would pass these on
-/// as errors: the driver would count "nothing received" and "try again later" as bus
+/// as errors: the port would count "nothing received" and "try again later" as bus
 /// faults and report them from every poll. A classifier ([`Blocking::with_classifier`], see [`Classify`])
 /// tells such "would block" errors apart from real faults: they become
 /// `nb::Error::WouldBlock`, so a refused frame goes back to the link's queue (it is
@@ -378,7 +379,7 @@ impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::T
 /// just "nothing waiting". Every other error stays `nb::Error::Other` and is counted.
 ///
 /// ```
-/// use idu_gimbal::{Blocking, Config, Gimbal};
+/// use idu_gimbal::port::{Blocking, CanPort};
 ///
 /// /// What the `mcp2515` crate's errors look like.
 /// #[derive(Debug)]
@@ -387,7 +388,7 @@ impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::T
 ///     fn kind(&self) -> embedded_can::ErrorKind { embedded_can::ErrorKind::Other }
 /// }
 ///
-/// fn gimbal<B>(mcp: B) -> Gimbal<impl embedded_can::nb::Can>
+/// fn port<B>(mcp: B) -> CanPort<impl embedded_can::nb::Can>
 /// where
 ///     B: embedded_can::blocking::Can<Error = McpError>,
 /// {
@@ -395,7 +396,7 @@ impl<C: embedded_can::nb::Can, const Q: usize, const T: usize> crate::control::T
 ///     let can = Blocking::with_classifier(mcp, |_: &mut B| true, |e: &McpError| {
 ///         matches!(e, McpError::NoMessage | McpError::TxBusy)
 ///     });
-///     Gimbal::new(can, Config::default())
+///     CanPort::new(can)
 /// }
 /// ```
 pub struct Blocking<B, R, W = AllFaults> {
