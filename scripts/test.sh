@@ -81,6 +81,7 @@ stage_fast() {
     cargo clippy -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --features signing -- -D warnings
     cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib
     cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --features roi
+    cargo build -p idu-gimbal-mavlink --target thumbv7em-none-eabihf --lib --features defmt
 
     step "docs, warnings denied"
     RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features

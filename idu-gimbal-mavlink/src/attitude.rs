@@ -26,6 +26,7 @@ use core::f32::consts::PI;
 
 /// A gimbal attitude as its two axis angles, radians.
 #[derive(Clone, Copy, PartialEq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct YawPitch {
     /// Yaw, in (−π, π].
     pub yaw_rad: f32,

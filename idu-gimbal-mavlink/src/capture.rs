@@ -34,6 +34,7 @@ pub const MAX_INTERVAL_MS: u32 = 3_600_000;
 
 /// Why a capture command was refused.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum CaptureError {
     /// param3 (count) is not a whole number in [0, 65535].
     Count,
@@ -160,6 +161,7 @@ impl Default for Capture {
 
 /// What a start command leads to.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Start {
     /// The first image is due now ([`Capture::due`] says so).
     Started,

@@ -30,6 +30,7 @@ pub struct Command {
 /// A command's x and y as its message carries them; read as a location only by the
 /// commands that take one, so that the others never pay for the conversion.
 #[derive(Clone, Copy, PartialEq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Xy {
     /// `COMMAND_LONG`'s param5 and param6 (a latitude and longitude in degrees).
     Float(f32, f32),

@@ -71,6 +71,7 @@ impl fmt::Debug for SigningConfig {
 
 /// What signing turned away, and what it let through, each wrapping at `u32::MAX`.
 #[derive(Clone, Copy, Default, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SigningStats {
     /// Frames with a good signature and a newer timestamp: acted on.
     pub accepted: u32,

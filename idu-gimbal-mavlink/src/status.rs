@@ -39,6 +39,7 @@ use crate::attitude::{wrap_pi, YawPitch};
 
 /// The pose last commanded.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Pose {
     /// Re-centred (a setpoint with `NEUTRAL`), nothing since.
     Neutral,
@@ -50,6 +51,7 @@ pub enum Pose {
 
 /// What the device holds, for the flags.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Held {
     /// The pose last commanded.
     pub pose: Pose,

@@ -32,7 +32,6 @@
 //! ```
 
 pub mod aim;
-mod command;
 mod event;
 pub mod medium;
 mod point;
@@ -43,6 +42,7 @@ mod rate;
 mod receive;
 mod ring;
 mod schedule;
+mod send;
 pub mod text;
 mod transmit;
 mod vehicle;

@@ -56,6 +56,7 @@ pub const AUTOPILOT_SILENCE_MS: u32 = 5_000;
 
 /// What [`Bridge::receive_datagram`] took of a datagram.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Taken {
     /// Bytes taken: the whole datagram, or those before a frame that waits for room in the
     /// outbox; offer the rest again once the outbox has drained.
@@ -109,6 +110,7 @@ impl Default for BridgeConfig {
 
 /// Counters of the bridge, each wrapping at `u32::MAX`.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BridgeStats {
     /// The frame reader's counters.
     pub reader: ReaderStats,

@@ -51,6 +51,7 @@ use super::CameraConfig;
 
 /// A field of view angle outside `(0, 180)` degrees.
 #[derive(Clone, Copy, PartialEq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AngleOutOfRange {
     /// Which angle: `"horizontal"` or `"vertical"`.
     pub which: &'static str,
@@ -70,6 +71,7 @@ impl fmt::Display for AngleOutOfRange {
 
 /// The main camera's field of view at 1× zoom.
 #[derive(Clone, Copy, PartialEq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FieldOfView {
     /// `tan(angle / 2)`, horizontal and vertical: what the zoom divides.
     half_tan: (f32, f32),

@@ -79,6 +79,7 @@ pub const FTP_SESSIONS: usize = 2;
 /// A stream URI longer than `VIDEO_STREAM_INFORMATION`'s field: a configuration error,
 /// never a truncation.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct UriTooLong {
     /// The URI's length, bytes.
     pub len: usize,
@@ -98,6 +99,7 @@ impl fmt::Display for UriTooLong {
 
 /// Why a camera's streams could not be configured.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StreamError {
     /// A stream's address could not be built (see [`VideoError`]).
     Video(VideoError),

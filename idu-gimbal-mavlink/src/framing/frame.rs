@@ -9,6 +9,7 @@ use super::{x25, HEADER_LEN, IFLAG_SIGNED};
 
 /// Why [`ReceivedFrame::decode`] gave no message.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DecodeError {
     /// The frame carries another message (its id is given).
     OtherMessage(u32),

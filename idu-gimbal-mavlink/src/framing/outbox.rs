@@ -15,6 +15,7 @@ use super::{x25, CHECKSUM_LEN, HEADER_LEN, IFLAG_SIGNED, STX_V2};
 
 /// Why a message was not queued for sending.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum OutboxError {
     /// `mavio` could not encode it (a message this bridge builds wrongly: a bug).
     Encode,

@@ -7,6 +7,7 @@ use super::{
 
 /// What the caller found when it checked a frame.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Check {
     /// A message it handles, CRC good.
     Handled,
@@ -22,6 +23,7 @@ pub enum Check {
 
 /// Counters of a [`FrameReader`], each wrapping at `u32::MAX`.
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReaderStats {
     /// Frames handed to the caller and consumed (handled or unhandled).
     pub frames: u32,

@@ -158,6 +158,7 @@ impl<'a> File<'a> {
 
 /// Counters of the FTP server, each wrapping at `u32::MAX`.
 #[derive(Clone, Copy, Default, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FtpStats {
     /// Packets passed to [`FtpServer::request`].
     pub requests: u32,
