@@ -26,7 +26,8 @@
 //! * [`vehicle_task`] sends vehicle data at 10 Hz through a channel (a stand-in autopilot).
 //! * [`gimbal_task`] runs the simulated gimbal: it takes the link's frames as they come and
 //!   steps every millisecond (its slew and its 500 ms postbacks).
-//! * [`session_task`] plays the script, checks each step's effect on the simulator's state
+//! * [`session_task`] plays the script (`idu_firmware_support::session::steps`, the one the
+//!   synchronous player plays), checks each step's effect on the simulator's state
 //!   and the postbacks, prints telemetry through semihosting, and exits QEMU through
 //!   semihosting `SYS_EXIT`: 0 only if every check passed, 1 otherwise (and on a panic or a
 //!   HardFault).
@@ -50,8 +51,8 @@ use embassy_sync::channel::Channel;
 use embassy_time::{Duration, Ticker, Timer};
 
 use idu_gimbal::link::{Config, Event, Link, LinkStats};
-use idu_gimbal::sim::{SimConfig, SimState, Simulator};
-use idu_gimbal::wire::control::{GimbalCommand, Heading, Photo, Pitch, Rate, Video, ZoomRatio};
+use idu_gimbal::sim::{SimConfig, Simulator};
+use idu_gimbal::wire::control::{GimbalCommand, Rate};
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::Frame;
@@ -64,7 +65,12 @@ use idu_firmware_support::embassy::{embassy_at, tick};
 // Semihosting output (`println!`), `exit`, and the panic and HardFault handlers (status 1):
 // the support the repository's other QEMU firmware uses.
 use idu_firmware_support::println;
-use idu_firmware_support::qemu::exit;
+use idu_firmware_support::qemu::{exit, Stdout};
+// The script and what a player says, shared with the synchronous player (`Script`).
+use idu_firmware_support::session::{
+    say_event, say_fail, say_ok, say_postback, say_verdict, steps, vehicle_frames_verdict, Check,
+    Step, RATE_HOLD, TEXT,
+};
 
 // ---- what the tasks exchange ----
 
@@ -300,22 +306,20 @@ async fn gimbal_task() {
 
 // ---- the session ----
 
-/// The session's view: the newest postback, its clock and its failures.
+/// The session's view: the newest postback, its clock and its failures. It plays the
+/// script of `idu_firmware_support::session` ([`steps`]), each step through the link task's
+/// channels, and says what it sees as the synchronous player does.
 struct Session {
     start: embassy_time::Instant,
+    out: Stdout,
     latest: Option<Postback>,
     stats: Option<(LinkStats, LinkTaskStats)>,
     failures: u32,
 }
 
-/// What a step waits for.
-type Check<'s> = &'s dyn Fn(&Postback, &SimState) -> bool;
-
 impl Session {
-    /// Seconds and milliseconds since the session started.
-    fn seconds(&self) -> (u64, u64) {
-        let ms = self.start.elapsed().as_millis();
-        (ms / 1000, ms % 1000)
+    fn elapsed_ms(&self) -> u64 {
+        self.start.elapsed().as_millis()
     }
 
     /// Takes one report; true for a new postback.
@@ -323,23 +327,11 @@ impl Session {
         match r {
             Report::Postback(p, up) => {
                 self.latest = Some(p);
-                let (s, ms) = self.seconds();
-                println!(
-                    "t={s:3}.{ms:03} s  pitch {:7.2}°  heading {:6.2}°  motor {:7.2}°  mode {:<14}  link {}",
-                    p.pitch_deg(),
-                    p.heading_deg(),
-                    p.motor_heading_deg(),
-                    p.mode.name().unwrap_or("unknown"),
-                    if up { "up" } else { "down" },
-                );
+                let elapsed = self.elapsed_ms();
+                say_postback(&mut self.out, elapsed, &p, up);
                 return true;
             }
-            Report::Event(Event::LinkUp) => println!("link up"),
-            Report::Event(Event::LinkDown) => println!("link down"),
-            Report::Event(Event::RateHoldExpired) => {
-                println!("rate hold released: dead-man sent zero rate")
-            }
-            Report::Event(_) => {}
+            Report::Event(event) => say_event(&mut self.out, event),
             Report::Refused => {
                 self.failures += 1;
                 println!("  FAIL queue full");
@@ -356,14 +348,14 @@ impl Session {
         }
     }
 
-    async fn run(&mut self, ms: u64) {
-        self.run_until(embassy_time::Instant::now() + Duration::from_millis(ms))
+    async fn run(&mut self, ms: u32) {
+        self.run_until(embassy_time::Instant::now() + Duration::from_millis(ms.into()))
             .await;
     }
 
     /// Waits until `check` holds on a postback received after this call, or `timeout_ms`.
-    async fn expect(&mut self, what: &str, timeout_ms: u64, check: Check<'_>) {
-        let end = embassy_time::Instant::now() + Duration::from_millis(timeout_ms);
+    async fn expect(&mut self, what: &str, timeout_ms: u32, check: Check) {
+        let end = embassy_time::Instant::now() + Duration::from_millis(timeout_ms.into());
         while let Either::First(r) = select(REPORTS.receive(), Timer::at(end)).await {
             if !self.handle(r) {
                 continue;
@@ -372,110 +364,67 @@ impl Session {
                 continue;
             };
             if with_sim(|sim| check(&p, sim.state())) == Some(true) {
-                let (s, ms) = self.seconds();
-                println!("  ok  {what} (t={s}.{ms:03} s)");
+                let elapsed = self.elapsed_ms();
+                say_ok(&mut self.out, what, elapsed);
                 return;
             }
         }
         self.failures += 1;
-        println!("  FAIL {what}: not seen within {timeout_ms} ms");
+        say_fail(&mut self.out, what, timeout_ms);
     }
 
     async fn request(&mut self, r: Request) {
         REQUESTS.send(r).await;
     }
 
-    async fn step(&mut self, what: &str, command: GimbalCommand) {
-        println!("> {what}");
-        self.request(Request::Command(command)).await;
+    async fn rate_hold(&mut self) {
+        let hold = RATE_HOLD;
+        hold.say_start(&mut self.out);
+        let before = self.latest.map_or(0, |p| p.motor_heading);
+        if let Ok(rate) = Rate::new(hold.yaw_dps, 0.0) {
+            let start = embassy_time::Instant::now();
+            for i in 1..=hold.refreshes {
+                self.request(Request::Rate(rate)).await;
+                let at = u64::from(hold.refresh_ms * i);
+                self.run_until(start + Duration::from_millis(at)).await;
+            }
+        }
+        self.run(hold.release_ms).await;
+        let after = with_sim(|s| s.state().motor_yaw_deg);
+        self.run(hold.settle_ms).await;
+        let later = with_sim(|s| s.state().motor_yaw_deg);
+        let stopped = with_sim(|s| s.state().rate == (0.0, 0.0)) == Some(true);
+        let turned = i32::from(self.latest.map_or(0, |p| p.motor_heading)) - i32::from(before);
+        let looks = after.zip(later);
+        if !hold.verdict(&mut self.out, turned, looks, stopped) {
+            self.failures += 1;
+        }
     }
 
-    /// Plays the script of `idu_firmware_support::session` (its CAN rig); returns the number of
-    /// checks that failed.
+    /// Plays the script; returns the number of checks that failed.
     async fn play(&mut self) -> u32 {
         println!(
             "idu-gimbal session: embassy link task <-> simulated gimbal over embassy-sync channels"
         );
-        self.expect("postbacks arrive, link up", 1500, &|_, _| true)
-            .await;
-
-        self.step("re-center", GimbalCommand::Recenter).await;
-        self.expect("pitch 0°, motor 0°", 3000, &|p, _| {
-            p.pitch == 0 && p.motor_heading == 0
-        })
-        .await;
-
-        if let Ok(pitch) = Pitch::new(-45.0) {
-            self.step("pitch -45°", GimbalCommand::Pitch(pitch)).await;
-        }
-        self.expect("pitch -45.00° reported", 3000, &|p, _| p.pitch == -4500)
-            .await;
-
-        if let Ok(heading) = Heading::new(90.0) {
-            self.step(
-                "heading 90° (north-referenced: attitude is pushed, vehicle heading 30°)",
-                GimbalCommand::Heading(heading),
-            )
-            .await;
-        }
-        self.expect("heading 90.00°, motor 60.00°", 3000, &|p, _| {
-            p.heading == 9000 && p.motor_heading == 6000
-        })
-        .await;
-
-        println!("> rate hold: yaw 20°/s, refreshed every 20 ms for 1 s, then released");
-        let before = self.latest.map_or(0, |p| p.motor_heading);
-        if let Ok(rate) = Rate::new(20.0, 0.0) {
-            let hold = embassy_time::Instant::now();
-            for i in 1..=50 {
-                self.request(Request::Rate(rate)).await;
-                self.run_until(hold + Duration::from_millis(20 * i)).await;
+        // The emulated bus carries vehicle frames: headings north-referenced.
+        for step in steps(true) {
+            match step {
+                Step::Command(what, command) => {
+                    println!("> {}", what);
+                    self.request(Request::Command(command)).await;
+                }
+                Step::Expect(what, timeout_ms, check) => self.expect(what, timeout_ms, check).await,
+                Step::RateHold => self.rate_hold().await,
+                Step::Text(timeout_ms) => {
+                    println!("> text message");
+                    self.request(Request::Text(TEXT)).await;
+                    self.expect("text received", timeout_ms, |_, s| {
+                        s.last_text.as_bytes() == TEXT
+                    })
+                    .await;
+                }
             }
         }
-        self.run(400).await;
-        let after = with_sim(|s| s.state().motor_yaw_deg);
-        self.run(1000).await;
-        let still = with_sim(|s| s.state().motor_yaw_deg);
-        let stopped = with_sim(|s| s.state().rate == (0.0, 0.0)) == Some(true);
-        let turned = self.latest.map_or(0, |p| p.motor_heading) - before;
-        println!("  turned {:.2}° during the hold", f32::from(turned) / 100.0);
-        if turned > 1500 && after.is_some() && after == still && stopped {
-            println!("  ok  gimbal turned, then stopped after the dead-man");
-        } else {
-            self.failures += 1;
-            println!(
-                "  FAIL rate hold: turned {turned} cdeg, stopped: {}",
-                after == still && stopped
-            );
-        }
-
-        if let Ok(zoom) = ZoomRatio::new(10.0) {
-            self.step("zoom to 10x", GimbalCommand::ZoomRatio(zoom))
-                .await;
-        }
-        self.expect("zoom 10x", 1500, &|_, s| s.zoom_ratio == 10.0)
-            .await;
-
-        self.step("photo", GimbalCommand::Photo(Photo::Single))
-            .await;
-        self.expect("one photo taken", 1500, &|_, s| s.photos == 1)
-            .await;
-
-        self.step("recording on", GimbalCommand::Video(Video::Start))
-            .await;
-        self.expect("recording", 1500, &|_, s| s.recording).await;
-        self.step("recording off", GimbalCommand::Video(Video::Stop))
-            .await;
-        self.expect("not recording", 1500, &|_, s| !s.recording)
-            .await;
-
-        println!("> text message");
-        self.request(Request::Text(b"HELLO FROM THE FLIGHT CONTROLLER"))
-            .await;
-        self.expect("text received", 1500, &|_, s| {
-            s.last_text.as_str() == "HELLO FROM THE FLIGHT CONTROLLER"
-        })
-        .await;
 
         // The link's counters, through the request channel like everything else.
         self.request(Request::Stats).await;
@@ -490,7 +439,7 @@ impl Session {
                 self.handle(r);
             }
         }
-        let elapsed_ms = self.start.elapsed().as_millis();
+        let elapsed_ms = self.elapsed_ms();
         match self.stats {
             Some((s, task)) => {
                 println!(
@@ -511,26 +460,12 @@ impl Session {
                 println!("  FAIL no stats from the link task");
             }
         }
-        let sim = with_sim(|s| s.stats());
-        let vehicle_frames = sim.map_or(0, |s| s.vehicle_frames);
-        println!(
-            "gimbal saw {} vehicle frames, {} commands",
-            vehicle_frames,
-            sim.map_or(0, |s| s.commands)
-        );
-        // Vehicle frames reach the gimbal: the emulated bus carries them.
-        if vehicle_frames == 0 {
-            self.failures += 1;
-            println!("  FAIL vehicle frames: none reached the gimbal");
+        match with_sim(|s| s.stats()) {
+            // Vehicle frames reach the gimbal: the emulated bus carries them.
+            Some(sim) if vehicle_frames_verdict(&mut self.out, &sim, true) => {}
+            _ => self.failures += 1,
         }
-        println!(
-            "{}",
-            if self.failures == 0 {
-                "session passed"
-            } else {
-                "session FAILED"
-            }
-        );
+        say_verdict(&mut self.out, self.failures);
         self.failures
     }
 }
@@ -540,6 +475,7 @@ impl Session {
 async fn session_task() {
     let mut session = Session {
         start: embassy_time::Instant::now(),
+        out: Stdout,
         latest: None,
         stats: None,
         failures: 0,

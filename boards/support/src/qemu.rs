@@ -34,6 +34,16 @@ pub fn print(args: core::fmt::Arguments<'_>) {
     }
 }
 
+/// The host's stdout as a `core::fmt::Write`, through [`print`].
+pub struct Stdout;
+
+impl core::fmt::Write for Stdout {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        print(format_args!("{s}"));
+        Ok(())
+    }
+}
+
 /// `println!` over semihosting.
 #[macro_export]
 macro_rules! println {

@@ -24,6 +24,226 @@ use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Event, Instant, Link};
 
+/// The text the script sends where the transport carries text.
+pub const TEXT: &[u8] = b"HELLO FROM THE FLIGHT CONTROLLER";
+
+/// What a step waits for: a postback received after the step began, with the simulated
+/// gimbal's state.
+pub type Check = fn(&Postback, &SimState) -> bool;
+
+/// One step of the scripted session. The script is [`steps`]; each player takes its steps
+/// in order: [`Script`] here (a millisecond at a time), and `boards/embassy_qemu`'s session
+/// (in embassy time, the link in a task of its own).
+#[derive(Clone, Copy)]
+pub enum Step {
+    /// Say `.0` and send the command.
+    Command(&'static str, GimbalCommand),
+    /// Wait, at most `.1` ms, for a postback that passes the check; `.0` says what.
+    Expect(&'static str, u32, Check),
+    /// The rate hold ([`RATE_HOLD`]), judged by [`RateHold::verdict`].
+    RateHold,
+    /// Send [`TEXT`] and wait, at most `.0` ms, for the gimbal to have it.
+    Text(u32),
+}
+
+/// The script, for a transport that carries the vehicle's attitude (`north`: headings are
+/// then north-referenced) or not. Text is sent where the player's transport carries it.
+pub fn steps(north: bool) -> heapless::Vec<Step, 20> {
+    let mut steps: heapless::Vec<Step, 20> = heapless::Vec::new();
+    let mut push = |step| {
+        // 16 steps: the capacity holds them all.
+        let _ = steps.push(step);
+    };
+    push(Step::Expect("postbacks arrive, link up", 1500, |_, _| true));
+    push(Step::Command("re-center", GimbalCommand::Recenter));
+    push(Step::Expect("pitch 0°, motor 0°", 3000, |p, _| {
+        p.pitch == 0 && p.motor_heading == 0
+    }));
+    if let Ok(pitch) = Pitch::new(-45.0) {
+        push(Step::Command("pitch -45°", GimbalCommand::Pitch(pitch)));
+    }
+    push(Step::Expect("pitch -45.00° reported", 3000, |p, _| {
+        p.pitch == -4500
+    }));
+    if let Ok(heading) = Heading::new(90.0) {
+        push(Step::Command(
+            if north {
+                "heading 90° (north-referenced: attitude is pushed, vehicle heading 30°)"
+            } else {
+                "heading 90° (nose-referenced: the serial link carries no attitude)"
+            },
+            GimbalCommand::Heading(heading),
+        ));
+    }
+    if north {
+        push(Step::Expect(
+            "heading 90.00°, motor 60.00°",
+            3000,
+            |p, _| p.heading == 9000 && p.motor_heading == 6000,
+        ));
+    } else {
+        push(Step::Expect(
+            "heading 90.00°, motor 90.00°",
+            3000,
+            |p, _| p.heading == 9000 && p.motor_heading == 9000,
+        ));
+    }
+    push(Step::RateHold);
+    if let Ok(zoom) = ZoomRatio::new(10.0) {
+        push(Step::Command("zoom to 10x", GimbalCommand::ZoomRatio(zoom)));
+    }
+    push(Step::Expect("zoom 10x", 1500, |_, s| s.zoom_ratio == 10.0));
+    push(Step::Command("photo", GimbalCommand::Photo(Photo::Single)));
+    push(Step::Expect("one photo taken", 1500, |_, s| s.photos == 1));
+    push(Step::Command(
+        "recording on",
+        GimbalCommand::Video(Video::Start),
+    ));
+    push(Step::Expect("recording", 1500, |_, s| s.recording));
+    push(Step::Command(
+        "recording off",
+        GimbalCommand::Video(Video::Stop),
+    ));
+    push(Step::Expect("not recording", 1500, |_, s| !s.recording));
+    push(Step::Text(1500));
+    steps
+}
+
+/// The rate hold's timing: a yaw rate refreshed every `refresh_ms`, `refreshes` times, then
+/// left to the link's dead-man; the gimbal looked at `release_ms` after the last refresh
+/// and again `settle_ms` later.
+pub struct RateHold {
+    /// The yaw rate, °/s.
+    pub yaw_dps: f32,
+    /// Between two refreshes, ms.
+    pub refresh_ms: u32,
+    /// How many refreshes.
+    pub refreshes: u32,
+    /// From the last refresh to the first look, ms (beyond the dead-man's 250).
+    pub release_ms: u32,
+    /// From the first look to the second, ms.
+    pub settle_ms: u32,
+}
+
+/// The script's rate hold: 20°/s for a second.
+pub const RATE_HOLD: RateHold = RateHold {
+    yaw_dps: 20.0,
+    refresh_ms: 20,
+    refreshes: 50,
+    release_ms: 400,
+    settle_ms: 1000,
+};
+
+impl RateHold {
+    /// What the player says as the hold begins.
+    pub fn say_start(&self, out: &mut dyn Write) {
+        let _ = writeln!(
+            out,
+            "> rate hold: yaw {}°/s, refreshed every {} ms for {} s, then released",
+            self.yaw_dps,
+            self.refresh_ms,
+            self.refresh_ms * self.refreshes / 1000
+        );
+    }
+
+    /// Whether the gimbal turned during the hold (`turned_cdeg`, from the postbacks) and
+    /// stopped after it (the motor's yaw at both looks the same, its rate zero), said.
+    pub fn verdict(
+        &self,
+        out: &mut dyn Write,
+        turned_cdeg: i32,
+        looks: Option<(f32, f32)>,
+        stopped: bool,
+    ) -> bool {
+        let _ = writeln!(
+            out,
+            "  turned {:.2}° during the hold",
+            turned_cdeg as f32 / 100.0
+        );
+        let still = looks.is_some_and(|(after, later)| after == later) && stopped;
+        if turned_cdeg > 1500 && still {
+            let _ = writeln!(out, "  ok  gimbal turned, then stopped after the dead-man");
+            true
+        } else {
+            let _ = writeln!(
+                out,
+                "  FAIL rate hold: turned {turned_cdeg} cdeg, stopped: {still}"
+            );
+            false
+        }
+    }
+}
+
+/// The telemetry line of a postback, `elapsed_ms` into the session.
+pub fn say_postback(out: &mut dyn Write, elapsed_ms: u64, p: &Postback, link_up: bool) {
+    let (s, ms) = (elapsed_ms / 1000, elapsed_ms % 1000);
+    let _ = writeln!(
+        out,
+        "t={s:3}.{ms:03} s  pitch {:7.2}°  heading {:6.2}°  motor {:7.2}°  mode {:<14}  link {}",
+        p.pitch_deg(),
+        p.heading_deg(),
+        p.motor_heading_deg(),
+        p.mode.name().unwrap_or("unknown"),
+        if link_up { "up" } else { "down" },
+    );
+}
+
+/// The line of an event other than a postback (some have none).
+pub fn say_event(out: &mut dyn Write, event: Event) {
+    let line = match event {
+        Event::LinkUp => "link up",
+        Event::LinkDown => "link down",
+        Event::RateHoldExpired => "rate hold released: dead-man sent zero rate",
+        Event::AimNotReached => "aim not reached",
+        Event::Postback | Event::TargetUnreachable { .. } => return,
+    };
+    let _ = writeln!(out, "{line}");
+}
+
+/// An expected effect seen, `elapsed_ms` into the session.
+pub fn say_ok(out: &mut dyn Write, what: &str, elapsed_ms: u64) {
+    let (s, ms) = (elapsed_ms / 1000, elapsed_ms % 1000);
+    let _ = writeln!(out, "  ok  {what} (t={s}.{ms:03} s)");
+}
+
+/// An expected effect not seen in time.
+pub fn say_fail(out: &mut dyn Write, what: &str, timeout_ms: u32) {
+    let _ = writeln!(out, "  FAIL {what}: not seen within {timeout_ms} ms");
+}
+
+/// Whether vehicle frames reached the gimbal exactly when the transport carries them
+/// (`carried`), said with the gimbal's counts.
+pub fn vehicle_frames_verdict(out: &mut dyn Write, sim: &SimStats, carried: bool) -> bool {
+    let _ = writeln!(
+        out,
+        "gimbal saw {} vehicle frames, {} commands",
+        sim.vehicle_frames, sim.commands
+    );
+    if (sim.vehicle_frames > 0) == carried {
+        true
+    } else {
+        let _ = writeln!(
+            out,
+            "  FAIL vehicle frames: {} reached the gimbal",
+            sim.vehicle_frames
+        );
+        false
+    }
+}
+
+/// The session's last line.
+pub fn say_verdict(out: &mut dyn Write, failures: u32) {
+    let _ = writeln!(
+        out,
+        "{}",
+        if failures == 0 {
+            "session passed"
+        } else {
+            "session FAILED"
+        }
+    );
+}
+
 /// Endpoints and receive FIFO depth of the in-memory bus.
 pub type DemoBus = Bus<2, 32>;
 /// The in-memory serial line: 256 bytes of receive buffer each way.
@@ -176,9 +396,6 @@ pub struct Script<R: Rig, W: Write> {
     failures: u32,
 }
 
-/// What a step waits for.
-type Check<'s> = &'s dyn Fn(&Postback, &SimState) -> bool;
-
 impl<R: Rig, W: Write> Script<R, W> {
     /// A session over `rig`, its clock starting at `start` ms (the rig's too).
     pub fn new(rig: R, out: W, start: u32) -> Self {
@@ -191,11 +408,6 @@ impl<R: Rig, W: Write> Script<R, W> {
             latest: None,
             failures: 0,
         }
-    }
-
-    fn seconds(&self) -> (u32, u32) {
-        let ms = self.now.wrapping_sub(self.start);
-        (ms / 1000, ms % 1000)
     }
 
     /// One millisecond: vehicle data at 10 Hz from a stand-in flight controller, the
@@ -218,36 +430,14 @@ impl<R: Rig, W: Write> Script<R, W> {
         // A port error is counted in the port's stats; the session goes on.
         let _ = self.rig.port().poll(&mut self.link, now);
         while let Some(event) = self.link.next_event() {
-            match event {
-                Event::Postback => {
-                    let Some(p) = self.link.latest_postback(now).map(|(p, _age)| p) else {
-                        continue;
-                    };
+            if event == Event::Postback {
+                if let Some((p, _age)) = self.link.latest_postback(now) {
                     self.latest = Some(p);
-                    let (s, ms) = self.seconds();
-                    let _ = writeln!(
-                        self.out,
-                        "t={s:3}.{ms:03} s  pitch {:7.2}°  heading {:6.2}°  motor {:7.2}°  mode {:<14}  link {}",
-                        p.pitch_deg(),
-                        p.heading_deg(),
-                        p.motor_heading_deg(),
-                        p.mode.name().unwrap_or("unknown"),
-                        if self.link.is_link_up() { "up" } else { "down" },
-                    );
+                    let elapsed = u64::from(self.now.wrapping_sub(self.start));
+                    say_postback(&mut self.out, elapsed, &p, self.link.is_link_up());
                 }
-                Event::LinkUp => {
-                    let _ = writeln!(self.out, "link up");
-                }
-                Event::LinkDown => {
-                    let _ = writeln!(self.out, "link down");
-                }
-                Event::RateHoldExpired => {
-                    let _ = writeln!(self.out, "rate hold released: dead-man sent zero rate");
-                }
-                Event::TargetUnreachable { .. } => {}
-                Event::AimNotReached => {
-                    let _ = writeln!(self.out, "aim not reached");
-                }
+            } else {
+                say_event(&mut self.out, event);
             }
         }
         self.rig.run_gimbal(now);
@@ -261,7 +451,7 @@ impl<R: Rig, W: Write> Script<R, W> {
     }
 
     /// Runs until `check` holds on a postback received after this call, or `timeout_ms`.
-    fn expect(&mut self, what: &str, timeout_ms: u32, check: Check<'_>) {
+    fn expect(&mut self, what: &str, timeout_ms: u32, check: Check) {
         let mut seen = self.link.stats().postbacks;
         for _ in 0..timeout_ms {
             self.tick();
@@ -270,18 +460,18 @@ impl<R: Rig, W: Write> Script<R, W> {
                 seen = count;
                 if let Some(p) = self.latest {
                     if check(&p, self.rig.sim_state()) {
-                        let (s, ms) = self.seconds();
-                        let _ = writeln!(self.out, "  ok  {what} (t={s}.{ms:03} s)");
+                        let elapsed = u64::from(self.now.wrapping_sub(self.start));
+                        say_ok(&mut self.out, what, elapsed);
                         return;
                     }
                 }
             }
         }
         self.failures += 1;
-        let _ = writeln!(self.out, "  FAIL {what}: not seen within {timeout_ms} ms");
+        say_fail(&mut self.out, what, timeout_ms);
     }
 
-    fn step(&mut self, what: &str, command: GimbalCommand) {
+    fn command(&mut self, what: &str, command: GimbalCommand) {
         let _ = writeln!(self.out, "> {what}");
         if self.link.send(command).is_err() {
             self.failures += 1;
@@ -289,134 +479,70 @@ impl<R: Rig, W: Write> Script<R, W> {
         }
     }
 
-    /// Plays the script; returns the number of steps whose effect was not seen.
-    pub fn play(mut self) -> u32 {
-        let _ = writeln!(
-            self.out,
-            "idu-gimbal session: link and port <-> simulated gimbal over {}",
-            R::WIRE
-        );
-        self.expect("postbacks arrive, link up", 1500, &|_, _| true);
-
-        self.step("re-center", GimbalCommand::Recenter);
-        self.expect("pitch 0°, motor 0°", 3000, &|p, _| {
-            p.pitch == 0 && p.motor_heading == 0
-        });
-
-        if let Ok(pitch) = Pitch::new(-45.0) {
-            self.step("pitch -45°", GimbalCommand::Pitch(pitch));
-        }
-        self.expect("pitch -45.00° reported", 3000, &|p, _| p.pitch == -4500);
-
-        if let Ok(heading) = Heading::new(90.0) {
-            self.step(
-                if R::Medium::VEHICLE_FRAMES {
-                    "heading 90° (north-referenced: attitude is pushed, vehicle heading 30°)"
-                } else {
-                    "heading 90° (nose-referenced: the serial link carries no attitude)"
-                },
-                GimbalCommand::Heading(heading),
-            );
-        }
-        if R::Medium::VEHICLE_FRAMES {
-            self.expect("heading 90.00°, motor 60.00°", 3000, &|p, _| {
-                p.heading == 9000 && p.motor_heading == 6000
-            });
-        } else {
-            self.expect("heading 90.00°, motor 90.00°", 3000, &|p, _| {
-                p.heading == 9000 && p.motor_heading == 9000
-            });
-        }
-
-        let _ = writeln!(
-            self.out,
-            "> rate hold: yaw 20°/s, refreshed for 1 s, then released"
-        );
+    fn rate_hold(&mut self) {
+        let hold = RATE_HOLD;
+        hold.say_start(&mut self.out);
         let before = self.latest.map_or(0, |p| p.motor_heading);
-        if let Ok(rate) = Rate::new(20.0, 0.0) {
-            for _ in 0..50 {
+        if let Ok(rate) = Rate::new(hold.yaw_dps, 0.0) {
+            for _ in 0..hold.refreshes {
                 let now = Instant::from_millis(self.now);
                 let _ = self.link.set_rate(rate, now);
-                self.run(20);
+                self.run(hold.refresh_ms);
             }
         }
-        self.run(400);
+        self.run(hold.release_ms);
         let after = self.rig.sim_state().motor_yaw_deg;
-        self.run(1000);
-        let still = self.rig.sim_state().motor_yaw_deg;
-        let turned = self.latest.map_or(0, |p| p.motor_heading) - before;
-        let _ = writeln!(
-            self.out,
-            "  turned {:.2}° during the hold",
-            f32::from(turned) / 100.0
-        );
-        if turned > 1500 && after == still && self.rig.sim_state().rate == (0.0, 0.0) {
-            let _ = writeln!(
-                self.out,
-                "  ok  gimbal turned, then stopped after the dead-man"
-            );
-        } else {
+        self.run(hold.settle_ms);
+        let later = self.rig.sim_state().motor_yaw_deg;
+        let turned = i32::from(self.latest.map_or(0, |p| p.motor_heading)) - i32::from(before);
+        let stopped = self.rig.sim_state().rate == (0.0, 0.0);
+        if !hold.verdict(&mut self.out, turned, Some((after, later)), stopped) {
             self.failures += 1;
-            let _ = writeln!(
-                self.out,
-                "  FAIL rate hold: turned {turned} cdeg, stopped: {}",
-                after == still
-            );
         }
+    }
 
-        if let Ok(zoom) = ZoomRatio::new(10.0) {
-            self.step("zoom to 10x", GimbalCommand::ZoomRatio(zoom));
-        }
-        self.expect("zoom 10x", 1500, &|_, s| s.zoom_ratio == 10.0);
-
-        self.step("photo", GimbalCommand::Photo(Photo::Single));
-        self.expect("one photo taken", 1500, &|_, s| s.photos == 1);
-
-        self.step("recording on", GimbalCommand::Video(Video::Start));
-        self.expect("recording", 1500, &|_, s| s.recording);
-        self.step("recording off", GimbalCommand::Video(Video::Stop));
-        self.expect("not recording", 1500, &|_, s| !s.recording);
-
-        match R::send_text(&mut self.link, b"HELLO FROM THE FLIGHT CONTROLLER") {
+    fn text(&mut self, timeout_ms: u32) {
+        match R::send_text(&mut self.link, TEXT) {
             Some(queued) => {
                 let _ = writeln!(self.out, "> text message");
                 if !queued {
                     self.failures += 1;
                 }
-                self.expect("text received", 1500, &|_, s| {
-                    s.last_text.as_str() == "HELLO FROM THE FLIGHT CONTROLLER"
+                self.expect("text received", timeout_ms, |_, s| {
+                    s.last_text.as_bytes() == TEXT
                 });
             }
             None => {
                 let _ = writeln!(self.out, "> text message: not carried by this transport");
             }
         }
+    }
 
-        self.rig.summary(&self.link.stats(), &mut self.out);
-        let sim = self.rig.sim_stats();
+    /// Plays the script ([`steps`]); returns the number of steps whose effect was not
+    /// seen.
+    pub fn play(mut self) -> u32 {
         let _ = writeln!(
             self.out,
-            "gimbal saw {} vehicle frames, {} commands",
-            sim.vehicle_frames, sim.commands
+            "idu-gimbal session: link and port <-> simulated gimbal over {}",
+            R::WIRE
         );
-        // Vehicle frames reach the gimbal exactly when the transport carries them.
-        if (sim.vehicle_frames > 0) != R::Medium::VEHICLE_FRAMES {
-            self.failures += 1;
-            let _ = writeln!(
-                self.out,
-                "  FAIL vehicle frames: {} reached the gimbal",
-                sim.vehicle_frames
-            );
-        }
-        let _ = writeln!(
-            self.out,
-            "{}",
-            if self.failures == 0 {
-                "session passed"
-            } else {
-                "session FAILED"
+        for step in steps(R::Medium::VEHICLE_FRAMES) {
+            match step {
+                Step::Command(what, command) => self.command(what, command),
+                Step::Expect(what, timeout_ms, check) => self.expect(what, timeout_ms, check),
+                Step::RateHold => self.rate_hold(),
+                Step::Text(timeout_ms) => self.text(timeout_ms),
             }
-        );
+        }
+        self.rig.summary(&self.link.stats(), &mut self.out);
+        if !vehicle_frames_verdict(
+            &mut self.out,
+            &self.rig.sim_stats(),
+            R::Medium::VEHICLE_FRAMES,
+        ) {
+            self.failures += 1;
+        }
+        say_verdict(&mut self.out, self.failures);
         self.failures
     }
 }

@@ -4,8 +4,7 @@
 use idu_gimbal::wire::postback::GimbalType;
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::{
-    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavAutopilot, MavModeFlag, MavSeverity, MavState,
-    MavType,
+    GimbalDeviceCapFlags, GimbalDeviceErrorFlags, MavSeverity, MavType,
 };
 use mavio::dialects::common::messages::{
     GimbalDeviceAttitudeStatus, GimbalDeviceInformation, Heartbeat, Statustext,
@@ -91,22 +90,12 @@ impl State {
         // The camera's identity is its gimbal type's: asked only when a heartbeat is due.
         let camera_known = gimbal.gimbal_type().is_some();
         self.next_heartbeat = Some(now.add_millis(self.config.heartbeat_ms.max(1)));
-        let hb = Heartbeat {
-            type_: MavType::Gimbal,
-            autopilot: MavAutopilot::Invalid,
-            base_mode: MavModeFlag::empty(),
-            custom_mode: 0,
-            system_status: MavState::Active,
-            mavlink_version: 3,
-        };
+        let hb = codec::heartbeat::of_component(MavType::Gimbal);
         self.send_encoded::<Heartbeat>(self.config.gimbal_component, codec::heartbeat::LEN, |p| {
             codec::heartbeat::encode(&hb, p)
         });
         if let (Some(camera), true) = (self.camera_component(), camera_known) {
-            let hb = Heartbeat {
-                type_: MavType::Camera,
-                ..hb
-            };
+            let hb = codec::heartbeat::of_component(MavType::Camera);
             self.send_encoded::<Heartbeat>(camera, codec::heartbeat::LEN, |p| {
                 codec::heartbeat::encode(&hb, p)
             });

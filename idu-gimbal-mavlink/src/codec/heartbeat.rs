@@ -1,5 +1,6 @@
 //! `HEARTBEAT` (0), sent: 9 bytes.
 
+use mavio::dialects::common::enums::{MavAutopilot, MavModeFlag, MavState, MavType};
 use mavio::dialects::common::messages::Heartbeat;
 
 use super::put;
@@ -14,6 +15,19 @@ mod field {
     pub const BASE_MODE: usize = 6;
     pub const SYSTEM_STATUS: usize = 7;
     pub const MAVLINK_VERSION: usize = 8;
+}
+
+/// The heartbeat a component of the bridge sends, of type `kind` (`MAV_TYPE_GIMBAL` for the
+/// gimbal device, `MAV_TYPE_CAMERA` for the camera): not an autopilot, active, MAVLink 2.
+pub const fn of_component(kind: MavType) -> Heartbeat {
+    Heartbeat {
+        type_: kind,
+        autopilot: MavAutopilot::Invalid,
+        base_mode: MavModeFlag::empty(),
+        custom_mode: 0,
+        system_status: MavState::Active,
+        mavlink_version: 3,
+    }
 }
 
 /// Writes the message's payload into `p`, zeroed, its full length ([`LEN`]; nothing is

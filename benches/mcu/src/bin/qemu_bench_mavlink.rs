@@ -796,14 +796,8 @@ mod fw {
             1.0,
         );
 
-        let hb = Heartbeat {
-            type_: MavType::Gimbal,
-            autopilot: MavAutopilot::Invalid,
-            base_mode: MavModeFlag::empty(),
-            custom_mode: 0,
-            system_status: MavState::Active,
-            mavlink_version: 3,
-        };
+        // The gimbal device's, as the bridge builds it.
+        let hb = codec::heartbeat::of_component(MavType::Gimbal);
         let hb_id = (Heartbeat::message_id(), Heartbeat::crc_extra());
         out.written(usize::MAX);
         let n = c::send_heartbeat(&mut c_frame, 0, MavType::Gimbal as u8);
