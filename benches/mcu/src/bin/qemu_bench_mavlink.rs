@@ -36,10 +36,14 @@
 // The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
 use stm32f4xx_hal as _;
 
+// A module of each bench that measures the bridge, not a library: see its header.
+#[path = "../firmware.rs"]
+mod firmware;
+
 mod fw {
+    use crate::firmware::Fw;
     use core::hint::black_box;
 
-    use idu_gimbal::link::{Config, Link};
     use idu_gimbal::Instant;
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::framing::{Check, MAX_FRAME_LEN};
@@ -54,42 +58,6 @@ mod fw {
     use mavio::mavspec::rust::spec::MessageSpecStatic;
     use mavio::protocol::{Frame, V2};
     use mavio::Message;
-
-    /// The bridge and the link it drives, as a firmware holds them; in line, so that each
-    /// call measures the bridge's own.
-    struct Fw {
-        bridge: Bridge,
-        link: Link,
-    }
-
-    impl Fw {
-        fn new(config: BridgeConfig) -> Self {
-            Fw {
-                bridge: Bridge::new(config),
-                link: Link::new(Config::default()),
-            }
-        }
-        #[inline(always)]
-        fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
-            self.bridge.receive(&mut self.link, bytes, now)
-        }
-        #[inline(always)]
-        fn poll(&mut self, now: Instant) {
-            self.bridge.poll(&mut self.link, now)
-        }
-        #[inline(always)]
-        fn transmit_bytes(&self) -> &[u8] {
-            self.bridge.transmit_bytes()
-        }
-        #[inline(always)]
-        fn transmit_written(&mut self, n: usize) {
-            self.bridge.transmit_written(n)
-        }
-        #[inline(always)]
-        fn stats(&self) -> idu_gimbal_mavlink::BridgeStats {
-            self.bridge.stats()
-        }
-    }
 
     // Semihosting output and exit (its panic and HardFault handlers exit with status 1),
     // the instruction meter and the result table.

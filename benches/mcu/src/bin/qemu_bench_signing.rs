@@ -20,45 +20,17 @@
 // The STM32F405's interrupt vector table (cortex-m-rt's `device` feature requires one).
 use stm32f4xx_hal as _;
 
+// A module of each bench that measures the bridge, not a library: see its header.
+#[path = "../firmware.rs"]
+mod firmware;
+
 mod fw {
+    use crate::firmware::Fw;
     use core::hint::black_box;
 
-    use idu_gimbal::link::{Config, Link};
     use idu_gimbal::Instant;
     use idu_gimbal_mavlink::signing::SigningConfig;
-    use idu_gimbal_mavlink::{Bridge, BridgeConfig};
-
-    /// The bridge and the link it drives, as a firmware holds them; in line, so that each
-    /// call measures the bridge's own.
-    struct Fw {
-        bridge: Bridge,
-        link: Link,
-    }
-
-    impl Fw {
-        fn new(config: BridgeConfig) -> Self {
-            Fw {
-                bridge: Bridge::new(config),
-                link: Link::new(Config::default()),
-            }
-        }
-        #[inline(always)]
-        fn receive(&mut self, bytes: &[u8], now: Instant) -> usize {
-            self.bridge.receive(&mut self.link, bytes, now)
-        }
-        #[inline(always)]
-        fn poll(&mut self, now: Instant) {
-            self.bridge.poll(&mut self.link, now)
-        }
-        #[inline(always)]
-        fn transmit_bytes(&self) -> &[u8] {
-            self.bridge.transmit_bytes()
-        }
-        #[inline(always)]
-        fn transmit_written(&mut self, n: usize) {
-            self.bridge.transmit_written(n)
-        }
-    }
+    use idu_gimbal_mavlink::BridgeConfig;
 
     use idu_firmware_support::meter::Meter;
     use idu_firmware_support::report::Table;
