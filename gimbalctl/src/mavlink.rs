@@ -36,9 +36,9 @@
 //! on a real CAN bus), of the `--camera` family's gimbal type, holding in lock what
 //! `--sim-lock-holds` says (its north heading, or its motor angle), restarted by a `reboot`
 //! line on stdin, and what its camera does (tracking, focus, palette, calibration) goes to
-//! stderr ([`sim_watch`]); with `--can` it is the library's `Gimbal<C>` on the bus, and the
+//! stderr ([`sim_watch`]); with `--can` it is the library's link and `CanPort<C>` on the bus, and the
 //! autopilot's attitude, GPS and altitude are pushed to the gimbal as the firmware does; with
-//! `--tcp` or `--serial` it is the library's `SerialGimbal` (nose-referenced: the serial link
+//! `--tcp` or `--serial` it is the library's `SerialLink` and `SerialPort` (nose-referenced: the serial link
 //! carries no vehicle frames).
 
 use std::io::Write;

@@ -1,9 +1,9 @@
 //! `--can IFACE` through the binary: the errors a user meets opening an interface (run on
 //! any Linux machine), and `send` and `monitor` on a real SocketCAN interface when `vcan0`
 //! exists and is up (said and skipped otherwise: a kernel without the vcan module, as in
-//! some containers). The CAN session itself (the library's `Gimbal<C>` under `send`,
+//! some containers). The CAN transport itself (the library's `CanPort<C>` under `send`,
 //! `monitor` and `mavlink`) is tested on the core's mock bus by the unit tests
-//! (`net::tests`, `mavlink::tests`); only the socket's opening is SocketCAN's.
+//! (`send_monitor::tests`, `mavlink::tests`); only the socket's opening is SocketCAN's.
 
 #![cfg(target_os = "linux")]
 

@@ -302,7 +302,7 @@ fn control_without_a_server_is_a_runtime_failure() {
 }
 
 /// The panel on the gimbal's UART (`--serial`, the simulated gimbal on a pty): the same
-/// keys, the same rate hold and dead-man, through the library's `SerialGimbal`.
+/// keys, the same rate hold and dead-man, through the library's `SerialLink` and `SerialPort`.
 #[test]
 fn control_drives_the_gimbal_over_its_uart() {
     let (_sim, path, log) = start_pty_sim();

@@ -109,7 +109,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     }
 
     /// Counts a received frame that cannot be for this node (a standard ID or a remote
-    /// frame); the driver calls it for what it does not pass to [`Link::receive`].
+    /// frame); the port calls it for what it does not pass to [`Link::receive`].
     pub(crate) fn receive_ignored(&mut self) {
         self.stats.ignored_frames = self.stats.ignored_frames.wrapping_add(1);
     }

@@ -26,7 +26,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
 
     /// Whether [`Link::poll`] at `now` would have nothing to do and no frame waits to be
     /// sent: a driver's idle fast path, one compare for both. (Frames queued outside a
-    /// poll end it; the driver ends a poll that found nothing waiting with
+    /// poll end it; the port ends a poll that found nothing waiting with
     /// [`Link::release_idle`].)
     #[inline(always)]
     pub(crate) fn is_idle(&self, now: Instant) -> bool {
@@ -41,7 +41,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     }
 
     /// Something waits to be sent outside the queue (a serial frame part-written): ends
-    /// the idle check until the driver finds nothing waiting.
+    /// the idle check until the port finds nothing waiting.
     #[inline]
     pub(crate) fn hold_idle(&mut self) {
         self.quiet.hold_idle();

@@ -12,7 +12,7 @@ use crate::link::{Can as CanMedium, Link};
 use crate::time::Instant;
 use crate::wire::Frame;
 
-/// The one ID the driver takes frames on; every other frame is counted as ignored.
+/// The one ID the port takes frames on; every other frame is counted as ignored.
 const POSTBACK_ID: Id = match ExtendedId::new(crate::wire::ids::POSTBACK) {
     Some(id) => Id::Extended(id),
     // Evaluated at compile time: an ID beyond 29 bits would not build.

@@ -58,7 +58,7 @@ pub mod vehicle;
 
 /// A CAN frame as the protocol uses it: a 29-bit extended identifier and 8 data bytes.
 ///
-/// The link works on these so that it needs no CAN crate types; the driver converts them
+/// The link works on these so that it needs no CAN crate types; the port converts them
 /// to and from its CAN driver's frame type.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -4,7 +4,7 @@
 //! differs).
 //!
 //! The tap passes every call through unchanged and notes, for the session: each frame
-//! received (for `monitor`, which shows the frames the driver does not take: control,
+//! received (for `monitor`, which shows the frames the port does not take: control,
 //! vehicle, text, foreign IDs), each driver error by what it says (CAN error frames: bus-off,
 //! error-passive, no ACK, ...), and an error that means the interface is gone.
 
