@@ -181,7 +181,7 @@ stage_e2e() {
     step "MAVLink 2 signing: pymavlink's own signing against gimbalctl mavlink --signing-passphrase and --signing-key-file"
     python3 gimbalctl/tests/mavlink_signing.py target/debug/gimbalctl
 
-    step "host_sim: the driver against the simulated gimbal, scripted"
+    step "host_sim: the link and its port against the simulated gimbal, scripted"
     cargo run --quiet --example host_sim --features mock,std
 }
 
