@@ -46,6 +46,7 @@
 //!
 //! [`link::medium`]: crate::link::medium
 
+mod blocking;
 pub mod can;
 pub mod serial;
 
@@ -55,7 +56,8 @@ mod idle_tests;
 use crate::link::{Link, Medium};
 use crate::time::Instant;
 
-pub use can::{AllFaults, Blocking, CanPort, CanPortStats, Classify, DriverError, DriverErrors};
+pub use blocking::{AllFaults, Blocking, Classify};
+pub use can::{CanPort, CanPortStats, DriverError, DriverErrors};
 pub use serial::{
     Io, Nb, PortError, PortErrors, SerialPort, SerialPortStats, SerialStream, SerialStreamStats,
     Uart,
