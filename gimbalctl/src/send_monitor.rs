@@ -449,6 +449,14 @@ mod tests {
     use idu_gimbal::sim::{SimConfig, Simulator};
     use idu_gimbal::wire::text;
 
+    /// A session on endpoint 0 of the core's mock bus, named `mock0`.
+    fn mock_session<const N: usize>(
+        bus: &Bus<2, N>,
+        mode: Mode,
+    ) -> Session<CanTransport<idu_gimbal::mock::Endpoint<'_, 2, N>>> {
+        Session::new(CanTransport::new(bus.endpoint(0).unwrap(), "mock0", mode))
+    }
+
     fn spec(args: &[&str]) -> Spec {
         use clap::Parser;
         #[derive(Parser)]
@@ -465,10 +473,7 @@ mod tests {
     fn sent_on_can(args: &[&str], repeat: Option<(u64, u64)>) -> Vec<String> {
         let bus: Bus<2, 64> = Bus::new(1);
         let mut gimbal = bus.endpoint(1).unwrap();
-        let session = Session::new(
-            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive),
-            Mode::Drive,
-        );
+        let session = mock_session(&bus, Mode::Drive);
         let s = spec(args);
         let job = SendJob {
             message: s.build().unwrap(),
@@ -561,10 +566,7 @@ mod tests {
     #[test]
     fn monitor_on_can_shows_postbacks_and_every_other_frame() {
         let bus: Bus<2, 64> = Bus::new(2);
-        let session = Session::new(
-            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor),
-            Mode::Monitor,
-        );
+        let session = mock_session(&bus, Mode::Monitor);
         let _other = traffic(&bus);
         let mut out = Vec::new();
         watch(
@@ -597,10 +599,7 @@ mod tests {
     #[test]
     fn monitor_on_can_writes_json_as_decode_does() {
         let bus: Bus<2, 64> = Bus::new(3);
-        let session = Session::new(
-            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Monitor),
-            Mode::Monitor,
-        );
+        let session = mock_session(&bus, Mode::Monitor);
         let _other = traffic(&bus);
         let mut out = Vec::new();
         watch(
@@ -636,10 +635,7 @@ mod tests {
     #[test]
     fn bus_errors_are_counted_and_told_once() {
         let bus: Bus<2, 64> = Bus::new(4);
-        let mut s = Session::new(
-            CanTransport::new(bus.endpoint(0).unwrap(), "mock0", Mode::Drive),
-            Mode::Drive,
-        );
+        let mut s = mock_session(&bus, Mode::Drive);
         let _other = traffic(&bus);
         bus.inject_error(0, embedded_can::ErrorKind::Acknowledge);
         let t = idu_gimbal::Instant::from_millis(0);

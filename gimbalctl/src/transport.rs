@@ -153,8 +153,8 @@ impl Target {
     /// Opens the transport and runs `job` over it.
     pub fn run<J: Job>(&self, mode: Mode, job: J) -> Result<J::Out, Failure> {
         match self {
-            Target::Tcp(t) => job.run(Session::new(StreamTransport::tcp(t, mode)?, mode)),
-            Target::Serial(s) => job.run(Session::new(StreamTransport::serial(s, mode)?, mode)),
+            Target::Tcp(t) => job.run(Session::new(StreamTransport::tcp(t, mode)?)),
+            Target::Serial(s) => job.run(Session::new(StreamTransport::serial(s, mode)?)),
             Target::Can(iface) => can::run_socketcan(iface, mode, job),
         }
     }
@@ -201,8 +201,9 @@ pub trait Transport {
     /// How messages name the transport: `127.0.0.1:2000`, `/dev/ttyUSB0`, `can0`.
     fn name(&self) -> &str;
 
-    /// The receive bound of one poll in `mode` (the link's `max_rx_per_poll`).
-    fn per_poll(mode: Mode) -> u16;
+    /// The link's timing for the mode the transport was opened in (its receive bound,
+    /// `max_rx_per_poll`, is the transport's).
+    fn config(&self) -> Config;
 
     /// One poll of the library's port over `link`: a bounded receive, the link's
     /// schedules, what the port or bus takes now. `Err`: the connection, port or interface
@@ -241,10 +242,10 @@ pub struct Session<T: Transport> {
 }
 
 impl<T: Transport> Session<T> {
-    /// A session over `transport` with the link's timing for `mode`.
-    pub fn new(transport: T, mode: Mode) -> Self {
+    /// A session over `transport`, the link timed as the transport says.
+    pub fn new(transport: T) -> Self {
         Session {
-            link: Link::new(mode.config(T::per_poll(mode))),
+            link: Link::new(transport.config()),
             transport,
         }
     }

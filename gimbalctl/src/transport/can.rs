@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::rc::Rc;
 
 use embedded_can::{nb::Can, Frame as _, Id};
-use idu_gimbal::link::{Can as CanMedium, Link, LinkStats};
+use idu_gimbal::link::{Can as CanMedium, Config, Link, LinkStats};
 use idu_gimbal::port::{CanPort, Port};
 use idu_gimbal::Instant;
 
@@ -156,10 +156,11 @@ pub struct CanTransport<C> {
     port: CanPort<Tap<C>>,
     log: Rc<RefCell<TapLog>>,
     name: String,
+    /// The link's timing for the mode opened in.
+    config: Config,
     /// Frames and errors counted at the start of the last poll, and after it.
     before: u64,
     after: u64,
-    per_poll: u64,
 }
 
 /// Frames one poll receives in [`Mode::Monitor`]: a postback is four frames, so one poll
@@ -181,9 +182,9 @@ where
             port: CanPort::new(Tap::new(can, log.clone())),
             log,
             name: name.to_owned(),
+            config: mode.config(MONITOR_FRAMES),
             before: 0,
             after: 0,
-            per_poll: u64::from(mode.config(Self::per_poll(mode)).max_rx_per_poll.get()),
         }
     }
 
@@ -205,8 +206,8 @@ where
         &self.name
     }
 
-    fn per_poll(_mode: Mode) -> u16 {
-        MONITOR_FRAMES
+    fn config(&self) -> Config {
+        self.config
     }
 
     fn poll(&mut self, link: &mut Link, now: Instant) -> Result<(), Failure> {
@@ -221,7 +222,7 @@ where
     }
 
     fn drained(&self) -> bool {
-        self.after.wrapping_sub(self.before) < self.per_poll
+        self.after.wrapping_sub(self.before) < u64::from(self.config.max_rx_per_poll.get())
     }
 
     fn has_transmit(&self, link: &Link) -> bool {
@@ -302,10 +303,7 @@ pub fn check_name(iface: &str) -> Result<(), Failure> {
 #[cfg(target_os = "linux")]
 pub fn run_socketcan<J: super::Job>(iface: &str, mode: Mode, job: J) -> Result<J::Out, Failure> {
     let socket = socketcan_open::open(iface)?;
-    job.run(super::Session::new(
-        CanTransport::new(socket, iface, mode),
-        mode,
-    ))
+    job.run(super::Session::new(CanTransport::new(socket, iface, mode)))
 }
 
 /// SocketCAN is Linux only ([`check_name`] already said so).

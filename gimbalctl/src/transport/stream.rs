@@ -5,7 +5,7 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
-use idu_gimbal::link::{LinkStats, Serial};
+use idu_gimbal::link::{Config, LinkStats, Serial};
 use idu_gimbal::port::{Port, PortError, SerialPort, Uart};
 use idu_gimbal::wire::serial::StreamStats;
 use idu_gimbal::{Instant, Link};
@@ -224,6 +224,8 @@ pub struct StreamTransport {
     baud: Option<u32>,
     /// Stream counters at the last note.
     noted: StreamStats,
+    /// The link's timing for the mode opened in.
+    config: Config,
     /// Bytes received at the start of the last poll, and the most one poll reads.
     before: u32,
     per_poll: u32,
@@ -255,13 +257,16 @@ impl StreamTransport {
             }
         };
         let name = port.name.clone();
+        // In `monitor`, one read a poll: at most one postback.
+        let config = mode.config(1);
         StreamTransport {
             port: SerialPort::new(port),
             name,
             baud,
             noted: StreamStats::default(),
+            config,
             before: 0,
-            per_poll: u32::from(Self::per_poll(mode)) * chunk,
+            per_poll: u32::from(config.max_rx_per_poll.get()) * chunk,
         }
     }
 
@@ -292,11 +297,8 @@ impl Transport for StreamTransport {
         &self.name
     }
 
-    fn per_poll(mode: Mode) -> u16 {
-        match mode {
-            Mode::Drive => 32,
-            Mode::Monitor => 1,
-        }
+    fn config(&self) -> Config {
+        self.config
     }
 
     fn poll(&mut self, link: &mut Link<8, 8, Serial>, now: Instant) -> Result<(), Failure> {
