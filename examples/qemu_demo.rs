@@ -46,47 +46,16 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod fw {
-    use core::fmt::{self, Write};
-
     // The scripted session; semihosting output and exit (its panic and HardFault handlers
     // exit with status 1).
     use idu_firmware_support::session::{CanRig, DemoBus, DemoPipe, Script, SerialRig};
     use idu_firmware_support::{println, qemu};
     use idu_gimbal::Instant;
 
-    /// Line-buffered semihosting output: one host call per line rather than per fragment.
-    struct Semihosting {
-        line: heapless::String<256>,
-    }
-
-    impl Semihosting {
-        fn flush(&mut self) {
-            qemu::print(format_args!("{}", self.line));
-            self.line.clear();
-        }
-    }
-
-    impl Write for Semihosting {
-        fn write_str(&mut self, s: &str) -> fmt::Result {
-            for c in s.chars() {
-                if self.line.push(c).is_err() {
-                    self.flush();
-                    let _ = self.line.push(c);
-                }
-                if c == '\n' {
-                    self.flush();
-                }
-            }
-            Ok(())
-        }
-    }
-
     #[cortex_m_rt::entry]
     fn main() -> ! {
         println!("qemu_demo: STM32F405 (QEMU netduinoplus2), link, port and simulated gimbal on an in-memory CAN bus");
-        let out = || Semihosting {
-            line: heapless::String::new(),
-        };
+        let out = qemu::Stdout::default;
         let bus = DemoBus::new(42);
         let Some(can) = CanRig::new(&bus, Instant::from_millis(0)) else {
             println!("qemu_demo: could not set up the bus");

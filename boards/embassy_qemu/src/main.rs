@@ -475,7 +475,7 @@ impl Session {
 async fn session_task() {
     let mut session = Session {
         start: embassy_time::Instant::now(),
-        out: Stdout,
+        out: Stdout::default(),
         latest: None,
         stats: None,
         failures: 0,

@@ -34,12 +34,31 @@ pub fn print(args: core::fmt::Arguments<'_>) {
     }
 }
 
-/// The host's stdout as a `core::fmt::Write`, through [`print`].
-pub struct Stdout;
+/// The host's stdout as a `core::fmt::Write`, line-buffered: one host call per line rather
+/// than per fragment.
+#[derive(Default)]
+pub struct Stdout {
+    line: heapless::String<256>,
+}
+
+impl Stdout {
+    fn flush(&mut self) {
+        print(format_args!("{}", self.line));
+        self.line.clear();
+    }
+}
 
 impl core::fmt::Write for Stdout {
     fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        print(format_args!("{s}"));
+        for c in s.chars() {
+            if self.line.push(c).is_err() {
+                self.flush();
+                let _ = self.line.push(c);
+            }
+            if c == '\n' {
+                self.flush();
+            }
+        }
         Ok(())
     }
 }
