@@ -51,7 +51,7 @@ pub enum Step {
 pub fn steps(north: bool) -> heapless::Vec<Step, 20> {
     let mut steps: heapless::Vec<Step, 20> = heapless::Vec::new();
     let mut push = |step| {
-        // 16 steps: the capacity holds them all.
+        // At most 17 steps: the capacity holds them all.
         let _ = steps.push(step);
     };
     push(Step::Expect("postbacks arrive, link up", 1500, |_, _| true));

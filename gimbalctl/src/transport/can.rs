@@ -158,9 +158,8 @@ pub struct CanTransport<C> {
     name: String,
     /// The link's timing for the mode opened in.
     config: Config,
-    /// Frames and errors counted at the start of the last poll, and after it.
-    before: u64,
-    after: u64,
+    /// Whether the last poll consumed fewer frames and errors than its bound.
+    drained: bool,
 }
 
 /// Frames one poll receives in [`Mode::Monitor`]: a postback is four frames, so one poll
@@ -183,8 +182,7 @@ where
             log,
             name: name.to_owned(),
             config: mode.config(MONITOR_FRAMES),
-            before: 0,
-            after: 0,
+            drained: true,
         }
     }
 
@@ -211,10 +209,11 @@ where
     }
 
     fn poll(&mut self, link: &mut Link, now: Instant) -> Result<(), Failure> {
-        self.before = self.consumed(link);
+        let before = self.consumed(link);
         // A driver error is counted by the port and noted by the tap; the poll went on.
         let _ = self.port.poll(link, now);
-        self.after = self.consumed(link);
+        let consumed = self.consumed(link).wrapping_sub(before);
+        self.drained = consumed < u64::from(self.config.max_rx_per_poll.get());
         match &self.log.borrow().fatal {
             Some(why) => Err(Failure::Runtime(format!("{}: {why}", self.name))),
             None => Ok(()),
@@ -222,7 +221,7 @@ where
     }
 
     fn drained(&self) -> bool {
-        self.after.wrapping_sub(self.before) < u64::from(self.config.max_rx_per_poll.get())
+        self.drained
     }
 
     fn has_transmit(&self, link: &Link) -> bool {
