@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::Host;
+
 use embedded_can::{nb::Can, Frame as _};
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, Endpoint, Faults, MockFrame};
@@ -22,8 +24,7 @@ type TestBus = Bus<E, RXQ>;
 /// Driver on endpoint 0, simulator on endpoint 1, a sniffer on endpoint 2 that sees every
 /// frame either side sends.
 struct Bench<'a> {
-    link: Link,
-    port: CanPort<Endpoint<'a, E, RXQ>>,
+    host: Host<CanPort<Endpoint<'a, E, RXQ>>, 8, 4>,
     sim: Simulator,
     sim_can: Endpoint<'a, E, RXQ>,
     sniffer: Endpoint<'a, E, RXQ>,
@@ -31,51 +32,38 @@ struct Bench<'a> {
     seen: Vec<(u32, u32, Vec<u8>)>,
     /// Postbacks the simulator emitted, and those the driver delivered.
     sent_postbacks: Vec<Postback>,
-    delivered: Vec<Postback>,
-    events: Vec<(u32, Event)>,
     sim_pending: Vec<Frame>,
     sim_received: u32,
     sniffed: u32,
     /// Driver errors on the simulator's and the sniffer's endpoints.
     sim_errors: u32,
-    now: u32,
 }
 
 impl<'a> Bench<'a> {
     fn new(bus: &'a TestBus, config: Config, sim_config: SimConfig, start: u32) -> Self {
         let now = Instant::from_millis(start);
         Bench {
-            link: Link::new(config),
-            port: CanPort::new(bus.endpoint(0).unwrap()),
+            host: Host::new(
+                Link::new(config),
+                CanPort::new(bus.endpoint(0).unwrap()),
+                start,
+            ),
             sim: Simulator::new(sim_config, now),
             sim_can: bus.endpoint(1).unwrap(),
             sniffer: bus.endpoint(2).unwrap(),
             seen: Vec::new(),
             sent_postbacks: Vec::new(),
-            delivered: Vec::new(),
-            events: Vec::new(),
             sim_pending: Vec::new(),
             sim_received: 0,
             sniffed: 0,
             sim_errors: 0,
-            now: start,
         }
-    }
-
-    fn instant(&self) -> Instant {
-        Instant::from_millis(self.now)
     }
 
     /// One millisecond of both sides.
     fn tick(&mut self) {
-        let now = self.instant();
-        let _ = self.port.poll(&mut self.link, now);
-        common::take_events(
-            &mut self.link,
-            self.now,
-            &mut self.delivered,
-            &mut self.events,
-        );
+        self.host.poll();
+        let now = self.host.instant();
         loop {
             match Can::receive(&mut self.sim_can) {
                 Ok(f) => {
@@ -111,20 +99,21 @@ impl<'a> Bench<'a> {
             match Can::receive(&mut self.sniffer) {
                 Ok(f) => {
                     self.sniffed += 1;
-                    self.seen.push((self.now, f.raw_id(), f.data().to_vec()));
+                    self.seen
+                        .push((self.host.now, f.raw_id(), f.data().to_vec()));
                 }
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(_)) => self.sim_errors += 1,
             }
         }
-        self.now = self.now.wrapping_add(1);
+        self.host.now = self.host.now.wrapping_add(1);
     }
 
     /// Empties every receive FIFO without letting the simulator send more: the driver
     /// polls once more, then the simulator and the sniffer take what reached them.
     fn settle(&mut self) {
-        let now = self.instant();
-        let _ = self.port.poll(&mut self.link, now);
+        let now = self.host.instant();
+        let _ = self.host.port.poll(&mut self.host.link, now);
         while let Ok(f) = Can::receive(&mut self.sim_can) {
             self.sim_received += 1;
             let _ = self.sim.receive(f.raw_id(), f.data(), now);
@@ -141,10 +130,7 @@ impl<'a> Bench<'a> {
     }
 
     fn latest(&self) -> Postback {
-        self.link
-            .latest_postback(self.instant())
-            .expect("a postback")
-            .0
+        self.host.latest()
     }
 
     fn count(&self, id: u32, from: u32, to: u32) -> usize {
@@ -156,11 +142,12 @@ impl<'a> Bench<'a> {
 }
 
 fn push_vehicle(b: &mut Bench) {
-    let now = b.instant();
-    b.link
+    let now = b.host.instant();
+    b.host
+        .link
         .set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
-    b.link.set_gps(Gps::new(47.0, 8.0).unwrap(), now);
-    b.link.set_altitude(Altitude::new(450.0).unwrap(), now);
+    b.host.link.set_gps(Gps::new(47.0, 8.0).unwrap(), now);
+    b.host.link.set_altitude(Altitude::new(450.0).unwrap(), now);
 }
 
 #[test]
@@ -168,22 +155,19 @@ fn angle_commands_reach_the_gimbal_and_postbacks_report_them() {
     let bus = TestBus::new(1);
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 10_000);
     b.run(600);
-    assert!(b.link.is_link_up());
-    b.link
-        .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()))
-        .unwrap();
-    b.link
-        .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()))
-        .unwrap();
-    b.link
-        .send(GimbalCommand::ZoomRatio(ZoomRatio::new(10.0).unwrap()))
-        .unwrap();
+    assert!(b.host.link.is_link_up());
+    b.host
+        .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()));
+    b.host
+        .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()));
+    b.host
+        .send(GimbalCommand::ZoomRatio(ZoomRatio::new(10.0).unwrap()));
     // 90° at 60°/s takes 1.5 s; the next postback after that reports it.
     b.run(2100);
     let p = b.latest();
     assert_eq!((p.pitch, p.heading), (-4500, 9000), "{p:?}");
     assert_eq!(b.sim.state().zoom_ratio, 10.0);
-    assert_eq!(b.events.first().map(|e| e.1), Some(Event::LinkUp));
+    assert_eq!(b.host.events.first().map(|e| e.1), Some(Event::LinkUp));
 }
 
 #[test]
@@ -194,15 +178,15 @@ fn rate_hold_turns_the_gimbal_and_the_dead_man_stops_it() {
     let rate = Rate::new(20.0, 0.0).unwrap();
     // The application refreshes the hold every 30 ms for one second, then stops.
     for _ in 0..34 {
-        let now = b.instant();
-        b.link.set_rate(rate, now).unwrap();
+        let now = b.host.instant();
+        b.host.link.set_rate(rate, now).unwrap();
         b.run(30);
     }
-    let last_refresh = b.now - 30;
+    let last_refresh = b.host.now - 30;
     let yaw_turned = b.sim.state().motor_yaw_deg;
     assert!(yaw_turned > 15.0, "turned {yaw_turned}° in 1 s at 20°/s");
     // Dead-man 250 ms + one repeat period 50 ms.
-    b.run(last_refresh + 300 - b.now);
+    b.run(last_refresh + 300 - b.host.now);
     let stopped_at = b.sim.state().motor_yaw_deg;
     assert_eq!(b.sim.state().rate, (0.0, 0.0));
     b.run(1000);
@@ -211,7 +195,11 @@ fn rate_hold_turns_the_gimbal_and_the_dead_man_stops_it() {
         stopped_at,
         "no motion after the dead-man"
     );
-    assert!(b.events.iter().any(|(_, e)| *e == Event::RateHoldExpired));
+    assert!(b
+        .host
+        .events
+        .iter()
+        .any(|(_, e)| *e == Event::RateHoldExpired));
     // The last rate frame on the bus is the zero one.
     let last_rate = b
         .seen
@@ -254,11 +242,12 @@ fn link_lost_and_restored() {
     let bus = TestBus::new(4);
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 0);
     b.run(1000);
-    assert!(b.link.is_link_up());
+    assert!(b.host.link.is_link_up());
     b.sim.set_silent(true);
-    let silent_from = b.now;
+    let silent_from = b.host.now;
     b.run(2100);
     let down = b
+        .host
         .events
         .iter()
         .find(|(_, e)| *e == Event::LinkDown)
@@ -271,8 +260,9 @@ fn link_lost_and_restored() {
     );
     b.sim.set_silent(false);
     b.run(600);
-    assert!(b.link.is_link_up());
+    assert!(b.host.link.is_link_up());
     let ups: Vec<_> = b
+        .host
         .events
         .iter()
         .filter(|(_, e)| *e == Event::LinkUp)
@@ -286,21 +276,23 @@ fn full_mailboxes_lose_no_command_and_keep_priority() {
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), 0);
     bus.set_auto_deliver(false);
     push_vehicle(&mut b);
-    b.link.send_text(b"MAILBOX PRESSURE TEST").unwrap(); // 3 frames
-                                                         // Text and vehicle frames fill the three mailboxes first.
-    let now = b.instant();
-    b.port.poll(&mut b.link, now).unwrap();
+    b.host.link.send_text(b"MAILBOX PRESSURE TEST").unwrap(); // 3 frames
+                                                              // Text and vehicle frames fill the three mailboxes first.
+    let now = b.host.instant();
+    b.host.port.poll(&mut b.host.link, now).unwrap();
     assert_eq!(bus.pending(), 3);
     // Control commands now displace the lower-priority frames from the mailboxes.
     let pitches = [-10.0, -20.0, -30.0, -40.0, -50.0];
     for p in pitches {
-        b.link
-            .send(GimbalCommand::Pitch(Pitch::new(p).unwrap()))
-            .unwrap();
+        b.host.send(GimbalCommand::Pitch(Pitch::new(p).unwrap()));
     }
-    let now = b.instant();
-    b.port.poll(&mut b.link, now).unwrap();
-    assert!(b.link.stats().requeued >= 3, "{:?}", b.link.stats());
+    let now = b.host.instant();
+    b.host.port.poll(&mut b.host.link, now).unwrap();
+    assert!(
+        b.host.link.stats().requeued >= 3,
+        "{:?}",
+        b.host.link.stats()
+    );
     // Drain one frame per millisecond, as a busy bus would.
     for _ in 0..40 {
         bus.deliver_one();
@@ -367,16 +359,19 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
             } else {
                 -30.0
             };
-            let now = b.instant();
-            b.link.set_rate(Rate::new(yaw, 0.0).unwrap(), now).unwrap();
+            let now = b.host.instant();
+            b.host
+                .link
+                .set_rate(Rate::new(yaw, 0.0).unwrap(), now)
+                .unwrap();
         }
         b.tick();
-        b.events.clear();
+        b.host.events.clear();
         b.seen.clear();
         step += 1;
     }
     b.settle();
-    let delivered = core::mem::take(&mut b.delivered);
+    let delivered = core::mem::take(&mut b.host.delivered);
     // Every delivered postback is one the simulator sent, in order.
     let mut sent = b.sent_postbacks.iter();
     for p in &delivered {
@@ -385,8 +380,8 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
             "delivered a postback the simulator never sent: {p:?}"
         );
     }
-    let s = b.link.stats();
-    let a = b.link.assembler().stats();
+    let s = b.host.link.stats();
+    let a = b.host.link.assembler().stats();
     let bs = bus.stats();
     assert!(
         delivered.len() as f64 > 0.7 * b.sent_postbacks.len() as f64,
@@ -398,7 +393,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
     // Every postback frame the driver received ended in a message, was discarded, or waits.
     assert_eq!(
         a.frames,
-        4 * a.messages + a.discarded_frames + b.link.assembler().pending() as u32
+        4 * a.messages + a.discarded_frames + b.host.link.assembler().pending() as u32
     );
     // Every frame the bus delivered reached the driver, the simulator or the sniffer.
     assert_eq!(bs.delivered, s.frames_received + b.sim_received + b.sniffed);
@@ -411,7 +406,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
         (bs.sent - bs.lost + bs.duplicated) * (E as u32 - 1)
     );
     assert_eq!(bs.overruns, 0);
-    assert_eq!(b.port.stats().driver_errors.total(), 0);
+    assert_eq!(b.host.port.stats().driver_errors.total(), 0);
     println!(
         "bus {bs:?}\nlink {s:?}\ndelivered {} of {} postbacks",
         delivered.len(),
@@ -426,10 +421,9 @@ fn the_tick_wraps_mid_run_without_a_hiccup() {
     let mut b = Bench::new(&bus, Config::default(), SimConfig::default(), start);
     for _ in 0..250 {
         push_vehicle(&mut b);
-        if b.now == start.wrapping_add(1000) {
-            b.link
-                .send(GimbalCommand::Pitch(Pitch::new(-60.0).unwrap()))
-                .unwrap();
+        if b.host.now == start.wrapping_add(1000) {
+            b.host
+                .send(GimbalCommand::Pitch(Pitch::new(-60.0).unwrap()));
         }
         b.run(20);
     }
@@ -437,8 +431,8 @@ fn the_tick_wraps_mid_run_without_a_hiccup() {
     assert_eq!(b.count(ids::ATTITUDE, start, start.wrapping_add(5000)), 50);
     assert_eq!(b.count(ids::GPS, start, start.wrapping_add(5000)), 25);
     assert_eq!(b.latest().pitch, -6000);
-    assert!(!b.events.iter().any(|(_, e)| *e == Event::LinkDown));
-    assert_eq!(b.link.stats().dropped_partials, 0);
+    assert!(!b.host.events.iter().any(|(_, e)| *e == Event::LinkDown));
+    assert_eq!(b.host.link.stats().dropped_partials, 0);
 }
 
 #[test]
@@ -498,14 +492,13 @@ fn driver_errors_are_counted_and_never_stop_the_driver() {
         tx_error: 0.2,
         ..Faults::default()
     });
-    b.link
-        .send(GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()))
-        .unwrap();
+    b.host
+        .send(GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()));
     for _ in 0..100 {
         push_vehicle(&mut b);
         b.run(20);
     }
-    let errors = b.port.stats().driver_errors;
+    let errors = b.host.port.stats().driver_errors;
     assert!(errors.total() > 100, "{errors:?}");
     assert_eq!(
         errors.total(),
@@ -513,7 +506,7 @@ fn driver_errors_are_counted_and_never_stop_the_driver() {
     );
     // Despite a fifth of all calls failing, the command got through and postbacks flow.
     assert_eq!(b.latest().pitch, -3000);
-    assert!(b.link.is_link_up());
+    assert!(b.host.link.is_link_up());
 }
 
 /// Errors the simulator side's endpoint saw (the bench ignores them).

@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::Host;
+
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::serial::{Pipe, PipeStats, Rx, SerialFaults, Tx};
@@ -24,8 +26,7 @@ const N: usize = 256;
 /// also goes through a parser of the test's own, so the test sees each command that
 /// arrived.
 struct Bench<'p, P: Uart> {
-    link: SerialLink,
-    port: SerialPort<P>,
+    host: Host<SerialPort<P>, 8, 0>,
     sim: SerialSimulator<512>,
     sim_port: Io<Rx<'p, N>, Tx<'p, N>>,
     sniffer: StreamParser,
@@ -33,11 +34,8 @@ struct Bench<'p, P: Uart> {
     arrived: Vec<[u8; 8]>,
     /// Postbacks the gimbal sent, and those the driver delivered.
     sent_postbacks: Vec<Postback>,
-    delivered: Vec<Postback>,
-    events: Vec<(u32, Event)>,
     /// Errors the gimbal's side of the pipe returned.
     sim_errors: u32,
-    now: u32,
 }
 
 fn io_port(pipe: &Pipe<N>, index: usize) -> Io<Rx<'_, N>, Tx<'_, N>> {
@@ -53,34 +51,24 @@ fn nb_port(pipe: &Pipe<N>, index: usize) -> Nb<Rx<'_, N>, Tx<'_, N>> {
 impl<'p, P: Uart> Bench<'p, P> {
     fn new(pipe: &'p Pipe<N>, port: P, sim_config: SimConfig, start: u32) -> Self {
         Bench {
-            link: SerialLink::new(Config::default()),
-            port: SerialPort::new(port),
+            host: Host::new(
+                SerialLink::new(Config::default()),
+                SerialPort::new(port),
+                start,
+            ),
             sim: SerialSimulator::new(sim_config, Instant::from_millis(start)),
             sim_port: io_port(pipe, 1),
             sniffer: StreamParser::new(),
             arrived: Vec::new(),
             sent_postbacks: Vec::new(),
-            delivered: Vec::new(),
-            events: Vec::new(),
             sim_errors: 0,
-            now: start,
         }
-    }
-
-    fn instant(&self) -> Instant {
-        Instant::from_millis(self.now)
     }
 
     /// One millisecond of both sides.
     fn tick(&mut self) {
-        let now = self.instant();
-        let _ = self.port.poll(&mut self.link, now);
-        common::take_events(
-            &mut self.link,
-            self.now,
-            &mut self.delivered,
-            &mut self.events,
-        );
+        self.host.poll();
+        let now = self.host.instant();
         // The gimbal's side, by hand so that the sniffer sees what arrives.
         let mut buf = [0u8; 64];
         loop {
@@ -115,7 +103,7 @@ impl<'p, P: Uart> Bench<'p, P> {
                 }
             }
         }
-        self.now = self.now.wrapping_add(1);
+        self.host.now = self.host.now.wrapping_add(1);
     }
 
     fn run(&mut self, ms: u32) {
@@ -125,7 +113,7 @@ impl<'p, P: Uart> Bench<'p, P> {
     }
 
     fn latest(&self) -> Postback {
-        self.link.latest_postback(self.instant()).unwrap().0
+        self.host.latest()
     }
 }
 
@@ -141,12 +129,10 @@ fn is_subsequence<T: PartialEq>(got: &[T], sent: &[T]) -> bool {
 
 fn round_trip<P: Uart>(pipe: &Pipe<N>, port: P) {
     let mut b = Bench::new(pipe, port, SimConfig::default(), 0);
-    b.link
-        .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()))
-        .unwrap();
-    b.link
-        .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()))
-        .unwrap();
+    b.host
+        .send(GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()));
+    b.host
+        .send(GimbalCommand::Heading(Heading::new(90.0).unwrap()));
     b.run(2_000);
     // Both commands arrived, whole and in order; the gimbal slewed there (60°/s).
     assert_eq!(
@@ -160,12 +146,12 @@ fn round_trip<P: Uart>(pipe: &Pipe<N>, port: P) {
     assert_eq!((p.pitch, p.motor_heading), (-4500, 9000));
     // Nose-referenced: no vehicle attitude on the serial link, so heading = motor.
     assert_eq!(p.heading, 9000);
-    assert!(b.link.is_link_up());
-    assert_eq!(b.delivered, b.sent_postbacks);
+    assert!(b.host.link.is_link_up());
+    assert_eq!(b.host.delivered, b.sent_postbacks);
     // Due at 500, 1000 and 1500 ms within the 2 s run (0 to 1999 ms).
     assert_eq!(b.sent_postbacks.len(), 3);
-    assert_eq!(b.events.first().map(|e| e.1), Some(Event::LinkUp));
-    let (l, s) = (b.link.stats(), b.port.stats());
+    assert_eq!(b.host.events.first().map(|e| e.1), Some(Event::LinkUp));
+    let (l, s) = (b.host.link.stats(), b.host.port.stats());
     assert_eq!((l.frames_sent, s.bytes_sent), (2, 48));
     assert_eq!(l.postbacks, 3);
     assert_eq!(s.bytes_received, 3 * MESSAGE_LEN as u32);
@@ -224,11 +210,11 @@ fn slow_writers_never_interleave_or_lose_a_frame() {
         let arrived = if nb {
             let mut b = Bench::new(&pipe, nb_port(&pipe, 0), SimConfig::default(), 0);
             send_all(&mut b, &commands);
-            (b.arrived, b.sniffer.stats(), b.port.stats())
+            (b.arrived, b.sniffer.stats(), b.host.port.stats())
         } else {
             let mut b = Bench::new(&pipe, io_port(&pipe, 0), SimConfig::default(), 0);
             send_all(&mut b, &commands);
-            (b.arrived, b.sniffer.stats(), b.port.stats())
+            (b.arrived, b.sniffer.stats(), b.host.port.stats())
         };
         let expected: Vec<[u8; 8]> = commands.iter().map(|&c| encode(c)).collect();
         assert_eq!(arrived.0, expected, "{faults:?}");
@@ -248,7 +234,7 @@ fn slow_writers_never_interleave_or_lose_a_frame() {
 /// Sends every command, waiting for room in the queue, then runs until all went out.
 fn send_all<P: Uart>(b: &mut Bench<P>, commands: &[GimbalCommand]) {
     for &c in commands {
-        while b.link.send(c).is_err() {
+        while b.host.link.send(c).is_err() {
             b.tick();
         }
         b.tick();
@@ -263,7 +249,7 @@ fn the_dead_man_stops_the_gimbal_over_serial() {
     let rate = Rate::new(20.0, 0.0).unwrap();
     // Refreshed every 20 ms from 0 to 980 ms, then released.
     for _ in 0..50 {
-        b.link.set_rate(rate, b.instant()).unwrap();
+        b.host.link.set_rate(rate, b.host.instant()).unwrap();
         b.run(20);
     }
     let last_refresh = 980;
@@ -282,6 +268,7 @@ fn the_dead_man_stops_the_gimbal_over_serial() {
         .count();
     assert_eq!(repeats, 25);
     let expired: Vec<u32> = b
+        .host
         .events
         .iter()
         .filter(|e| e.1 == Event::RateHoldExpired)
@@ -324,14 +311,17 @@ fn headings_are_nose_referenced_and_point_at_aims_from_the_vehicle_heading() {
     )
     .unwrap();
     let observe = |b: &mut Bench<_>| {
-        let now = b.instant();
-        b.link
+        let now = b.host.instant();
+        b.host
+            .link
             .set_attitude(Attitude::new(0.0, 0.0, 30.0).unwrap(), now);
-        b.link.set_gps(Gps::new(here.0, here.1).unwrap(), now);
-        b.link.set_altitude(Altitude::new(here.2).unwrap(), now);
+        b.host.link.set_gps(Gps::new(here.0, here.1).unwrap(), now);
+        b.host
+            .link
+            .set_altitude(Altitude::new(here.2).unwrap(), now);
     };
     observe(&mut b);
-    b.link.point_at(east);
+    b.host.link.point_at(east);
     for _ in 0..10 {
         observe(&mut b);
         b.run(100);
@@ -374,7 +364,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     let mut i = 0u32;
     while pipe.stats(0).written + pipe.stats(1).written < 1_000_000 {
         let c = GimbalCommand::Pitch(Pitch::new(-((i % 10_000) as f32) / 100.0).unwrap());
-        if b.link.send(c).is_ok() {
+        if b.host.link.send(c).is_ok() {
             sent.push(encode(c));
             i += 1;
         }
@@ -389,7 +379,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         "a command that was never sent arrived"
     );
     assert!(
-        is_subsequence(&b.delivered, &b.sent_postbacks),
+        is_subsequence(&b.host.delivered, &b.sent_postbacks),
         "a wrong postback was delivered"
     );
     // Most got through: loss and corruption hit about 0.2 % of bytes, so about 5 % of frames.
@@ -399,14 +389,14 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         b.arrived.len(),
         sent.len()
     );
-    let received = b.link.stats().postbacks as usize;
+    let received = b.host.link.stats().postbacks as usize;
     assert!(
         received * 10 > b.sent_postbacks.len() * 8,
         "{received} of {}",
         b.sent_postbacks.len()
     );
     // Each poll shows the newest postback only: two arriving in one poll show as one.
-    assert!(b.delivered.len() <= received && b.delivered.len() * 2 > received);
+    assert!(b.host.delivered.len() <= received && b.host.delivered.len() * 2 > received);
     // Every byte is accounted for, on the wire and in each parser.
     let accounted = |s: PipeStats, pending: usize| {
         assert_eq!(
@@ -417,7 +407,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     };
     accounted(to_gimbal, pipe.pending(1));
     accounted(to_fc, pipe.pending(0));
-    let g = b.port.stats();
+    let g = b.host.port.stats();
     assert_eq!(g.bytes_sent, to_gimbal.written);
     assert_eq!(g.bytes_received, to_fc.delivered);
     assert_eq!(
@@ -425,7 +415,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         g.stream.postbacks * MESSAGE_LEN as u32
             + g.stream.control_frames * FRAME_LEN as u32
             + g.stream.skipped_bytes
-            + b.port.stream().parser().pending() as u32
+            + b.host.port.stream().parser().pending() as u32
     );
     let p = b.sim.parser().stats();
     assert_eq!(
@@ -437,7 +427,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     );
     assert_eq!(p.control_frames as usize, b.arrived.len());
     // Each read or write error the pipe injected was counted by the driver.
-    let e = b.port.stats().port_errors;
+    let e = b.host.port.stats().port_errors;
     assert!(e.read > 0 && e.write > 0);
     assert_eq!(
         e.read + e.write + b.sim_errors,
