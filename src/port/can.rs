@@ -173,9 +173,8 @@ impl<C: Can> CanPort<C> {
                 Ok(_) => link.receive_ignored(),
                 Err(nb::Error::WouldBlock) => break,
                 Err(nb::Error::Other(e)) => {
-                    let kind = embedded_can::Error::kind(&e);
-                    self.errors.count(kind);
-                    first_error.get_or_insert(DriverError(kind));
+                    let e = self.driver_error(&e);
+                    first_error.get_or_insert(e);
                 }
             }
             // At least 1 here (the bound is not zero, and the loop ends at 0): never wraps,
@@ -297,6 +296,16 @@ impl<C: Can> CanPort<C> {
                 Some(DriverError(kind))
             }
         }
+    }
+
+    /// A CAN driver error: counted. Out of line, so that the receive loop keeps no
+    /// counter in a register.
+    #[cold]
+    #[inline(never)]
+    fn driver_error(&mut self, e: &C::Error) -> DriverError {
+        let kind = embedded_can::Error::kind(e);
+        self.errors.count(kind);
+        DriverError(kind)
     }
 
     /// A frame the CAN driver's frame type cannot represent: counted, never silent.
