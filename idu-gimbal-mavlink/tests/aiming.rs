@@ -20,7 +20,7 @@ use mavio::dialects::common::enums::{GimbalDeviceErrorFlags, MavSeverity};
 use mavio::dialects::common::enums::{GimbalDeviceFlags, MavCmd};
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CameraImageCaptured, GimbalDeviceAttitudeStatus,
-    GimbalDeviceSetAttitude, GlobalPositionInt, Statustext,
+    GlobalPositionInt, Statustext,
 };
 
 const BOTH: [LockHolds; 2] = [LockHolds::North, LockHolds::Motor];
@@ -53,22 +53,6 @@ fn state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
         .to_quaternion(),
         angular_velocity_z: 0.0,
         ..Default::default()
-    }
-}
-
-fn setpoint(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
-    GimbalDeviceSetAttitude {
-        target_system: AP.0,
-        target_component: 154,
-        flags,
-        q: YawPitch {
-            yaw_rad: yaw_deg.to_radians(),
-            pitch_rad: pitch_deg.to_radians(),
-        }
-        .to_quaternion(),
-        angular_velocity_x: f32::NAN,
-        angular_velocity_y: f32::NAN,
-        angular_velocity_z: f32::NAN,
     }
 }
 
@@ -127,7 +111,7 @@ impl Rig {
         if self.now.is_multiple_of(20) {
             self.send(&state(self.vehicle_deg));
             if let Some((flags, yaw, pitch)) = self.setpoint {
-                self.send(&setpoint(flags, yaw, pitch));
+                self.send(&set_attitude(flags, yaw, pitch));
             }
         }
         if let (Some(p), true) = (self.position.clone(), self.now.is_multiple_of(200)) {
@@ -285,7 +269,7 @@ fn both_streams_starting_in_one_datagram_leave_the_camera_where_the_setpoint_say
         datagram.extend(frame(
             AP,
             2,
-            &setpoint(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 40.0, 0.0),
+            &set_attitude(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 40.0, 0.0),
         ));
         let taken = rig.bridge.receive_datagram(&datagram, t(0));
         assert_eq!(taken.bytes, datagram.len());

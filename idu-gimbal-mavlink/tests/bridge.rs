@@ -19,22 +19,6 @@ use mavio::dialects::common::messages::{
     GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 
-fn set_attitude(flags: GimbalDeviceFlags, yaw_deg: f32, pitch_deg: f32) -> GimbalDeviceSetAttitude {
-    GimbalDeviceSetAttitude {
-        target_system: AP.0,
-        target_component: 154,
-        flags,
-        q: YawPitch {
-            yaw_rad: yaw_deg.to_radians(),
-            pitch_rad: pitch_deg.to_radians(),
-        }
-        .to_quaternion(),
-        angular_velocity_x: f32::NAN,
-        angular_velocity_y: f32::NAN,
-        angular_velocity_z: f32::NAN,
-    }
-}
-
 fn fresh() -> Firmware {
     Firmware::new(Link::new(Config::default()), BridgeConfig::default())
 }

@@ -10,9 +10,12 @@ use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
-use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavModeFlag, MavState, MavType};
+use mavio::dialects::common::enums::{
+    GimbalDeviceFlags, MavAutopilot, MavCmd, MavModeFlag, MavState, MavType,
+};
 use mavio::dialects::common::messages::{
-    AutopilotStateForGimbalDevice, CommandLong, GlobalPositionInt, Heartbeat,
+    AutopilotStateForGimbalDevice, CommandLong, GimbalDeviceSetAttitude, GlobalPositionInt,
+    Heartbeat,
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 use mavio::protocol::{Frame, V2};
@@ -222,6 +225,28 @@ pub fn queued_all<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<
         }
     }
     out
+}
+
+/// The autopilot's `GIMBAL_DEVICE_SET_ATTITUDE` to the gimbal device (component 154): yaw
+/// and pitch in degrees, the rates unset (NaN).
+pub fn set_attitude(
+    flags: GimbalDeviceFlags,
+    yaw_deg: f32,
+    pitch_deg: f32,
+) -> GimbalDeviceSetAttitude {
+    GimbalDeviceSetAttitude {
+        target_system: AP.0,
+        target_component: 154,
+        flags,
+        q: YawPitch {
+            yaw_rad: yaw_deg.to_radians(),
+            pitch_rad: pitch_deg.to_radians(),
+        }
+        .to_quaternion(),
+        angular_velocity_x: f32::NAN,
+        angular_velocity_y: f32::NAN,
+        angular_velocity_z: f32::NAN,
+    }
 }
 
 /// The autopilot's state for the gimbal device: the vehicle level, heading `yaw_deg`.
