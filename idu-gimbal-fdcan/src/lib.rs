@@ -160,7 +160,8 @@ pub enum Error {
     BusOff,
     /// A frame the controller cannot carry as asked (`ErrorKind::Other`): a data frame of no
     /// bytes or a remote frame with a DLC other than 0 (the fdcan crate sends a frame of
-    /// length 0 as a remote frame and has no other way to ask for one).
+    /// length 0 as a remote frame and has no other way to ask for one). Also an ID that one
+    /// crate's ID types cannot hold, sent or received (both are 11 and 29 bits: never seen).
     Unsupported,
     /// A CAN FD frame was received (`ErrorKind::Other`); the adapter carries classic frames
     /// only. It is dropped.
@@ -214,34 +215,21 @@ fn lec_error(lec: LastErrorCode) -> Option<Error> {
     }
 }
 
-fn to_fdcan_id(id: Id) -> fdcan::id::Id {
-    match id {
-        Id::Standard(id) => match fdcan::id::StandardId::new(id.as_raw()) {
-            Some(id) => id.into(),
-            // Not taken: both are 11 bits.
-            None => fdcan::id::StandardId::ZERO.into(),
-        },
-        Id::Extended(id) => match fdcan::id::ExtendedId::new(id.as_raw()) {
-            Some(id) => id.into(),
-            // Not taken: both are 29 bits.
-            None => fdcan::id::ExtendedId::ZERO.into(),
-        },
-    }
+/// The fdcan crate's form of `id`. Both crates' IDs are 11 or 29 bits, so `None` would take
+/// an ID one of them cannot hold: its callers report it as [`Error::Unsupported`].
+fn to_fdcan_id(id: Id) -> Option<fdcan::id::Id> {
+    Some(match id {
+        Id::Standard(id) => fdcan::id::StandardId::new(id.as_raw())?.into(),
+        Id::Extended(id) => fdcan::id::ExtendedId::new(id.as_raw())?.into(),
+    })
 }
 
-fn from_fdcan_id(id: fdcan::id::Id) -> Id {
-    match id {
-        fdcan::id::Id::Standard(id) => match StandardId::new(id.as_raw()) {
-            Some(id) => Id::Standard(id),
-            // Not taken: both are 11 bits.
-            None => Id::Standard(StandardId::ZERO),
-        },
-        fdcan::id::Id::Extended(id) => match ExtendedId::new(id.as_raw()) {
-            Some(id) => Id::Extended(id),
-            // Not taken: both are 29 bits.
-            None => Id::Extended(ExtendedId::ZERO),
-        },
-    }
+/// `embedded-can`'s form of the fdcan crate's `id` (`None` as for [`to_fdcan_id`]).
+fn from_fdcan_id(id: fdcan::id::Id) -> Option<Id> {
+    Some(match id {
+        fdcan::id::Id::Standard(id) => Id::Standard(StandardId::new(id.as_raw())?),
+        fdcan::id::Id::Extended(id) => Id::Extended(ExtendedId::new(id.as_raw())?),
+    })
 }
 
 /// The transmit header for a frame: classic format, no bit-rate switching. The fdcan crate
@@ -254,7 +242,7 @@ fn tx_header(frame: &Frame) -> Result<TxFrameHeader, Error> {
     Ok(TxFrameHeader {
         len,
         frame_format: FrameFormat::Standard,
-        id: to_fdcan_id(frame.id),
+        id: to_fdcan_id(frame.id).ok_or(Error::Unsupported)?,
         bit_rate_switching: false,
         marker: None,
     })
@@ -263,7 +251,7 @@ fn tx_header(frame: &Frame) -> Result<TxFrameHeader, Error> {
 /// The frame a transmit buffer held, from its header and data words (as the fdcan crate
 /// wrote them: the bytes in memory order).
 fn displaced_frame(header: TxFrameHeader, words: &[u32]) -> Option<Frame> {
-    let id = from_fdcan_id(header.id);
+    let id = from_fdcan_id(header.id)?;
     if header.len == 0 {
         return <Frame as embedded_can::Frame>::new_remote(id, 0);
     }
@@ -280,7 +268,7 @@ fn rx_frame(info: &RxFrameInfo, data: &[u8]) -> Result<Frame, Error> {
     if info.frame_format != FrameFormat::Standard || info.len > 8 {
         return Err(Error::NotClassic);
     }
-    let id = from_fdcan_id(info.id);
+    let id = from_fdcan_id(info.id).ok_or(Error::Unsupported)?;
     let frame = if info.rtr {
         <Frame as embedded_can::Frame>::new_remote(id, usize::from(info.len))
     } else {
@@ -539,7 +527,7 @@ mod tests {
             let mut data = [0u8; 64];
             data[..frame.dlc()].copy_from_slice(frame.data());
             let info = rx_info(
-                to_fdcan_id(frame.id()),
+                to_fdcan_id(frame.id()).unwrap(),
                 frame.dlc() as u8,
                 FrameFormat::Standard,
                 frame.is_remote_frame(),
@@ -601,6 +589,36 @@ mod tests {
                 }
             }
             Err(nb::Error::WouldBlock)
+        }
+    }
+
+    #[test]
+    fn ids_convert_both_ways_unchanged_at_every_width() {
+        // The extremes of each width and the protocol's two IDs.
+        let ids = [
+            Id::Standard(StandardId::ZERO),
+            Id::Standard(StandardId::MAX),
+            ext(0),
+            ext(ids::CONTROL),
+            ext(ids::POSTBACK),
+            Id::Extended(ExtendedId::MAX),
+        ];
+        for id in ids {
+            let theirs = to_fdcan_id(id).unwrap();
+            let raw = match theirs {
+                fdcan::id::Id::Standard(s) => u32::from(s.as_raw()),
+                fdcan::id::Id::Extended(e) => e.as_raw(),
+            };
+            let ours = match id {
+                Id::Standard(s) => u32::from(s.as_raw()),
+                Id::Extended(e) => e.as_raw(),
+            };
+            assert_eq!(raw, ours, "{id:?}");
+            assert_eq!(
+                matches!(theirs, fdcan::id::Id::Extended(_)),
+                matches!(id, Id::Extended(_))
+            );
+            assert_eq!(from_fdcan_id(theirs), Some(id));
         }
     }
 
