@@ -84,11 +84,8 @@ pub fn validate(text: &[u8]) -> Result<(), TextError> {
     if text.is_empty() {
         return Err(TextError::Empty);
     }
-    match text.iter().position(|&b| !is_valid_byte(b)) {
-        Some(index) => Err(TextError::InvalidByte {
-            index,
-            byte: text.get(index).copied().unwrap_or(0),
-        }),
+    match text.iter().enumerate().find(|&(_, &b)| !is_valid_byte(b)) {
+        Some((index, &byte)) => Err(TextError::InvalidByte { index, byte }),
         None => Ok(()),
     }
 }
