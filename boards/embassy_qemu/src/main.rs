@@ -306,10 +306,10 @@ async fn gimbal_task() {
 
 // ---- the session ----
 
-/// The session's view: the newest postback, its clock and its failures. It plays the
-/// script of `idu_firmware_support::session` ([`steps`]), each step through the link task's
-/// channels, and says what it sees as the synchronous player does.
-struct Session {
+/// The script's player over the link task's channels: the newest postback, its clock and
+/// its failures. It plays `idu_firmware_support::session`'s steps ([`steps`]) and says what
+/// it sees as the synchronous player (`Script`) does.
+struct Player {
     start: embassy_time::Instant,
     out: Stdout,
     latest: Option<Postback>,
@@ -317,7 +317,7 @@ struct Session {
     failures: u32,
 }
 
-impl Session {
+impl Player {
     fn elapsed_ms(&self) -> u64 {
         self.start.elapsed().as_millis()
     }
@@ -473,14 +473,14 @@ impl Session {
 /// Plays the session, then ends the emulation with its result.
 #[embassy_executor::task]
 async fn session_task() {
-    let mut session = Session {
+    let mut player = Player {
         start: embassy_time::Instant::now(),
         out: Stdout::default(),
         latest: None,
         stats: None,
         failures: 0,
     };
-    let failures = session.play().await;
+    let failures = player.play().await;
     exit(failures == 0)
 }
 
