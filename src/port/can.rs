@@ -290,16 +290,12 @@ impl<C: Can> CanPort<C> {
         link.transmit_refused(frame);
         match e {
             nb::Error::WouldBlock => None,
-            nb::Error::Other(e) => {
-                let kind = embedded_can::Error::kind(&e);
-                self.errors.count(kind);
-                Some(DriverError(kind))
-            }
+            nb::Error::Other(e) => Some(self.driver_error(&e)),
         }
     }
 
-    /// A CAN driver error: counted. Out of line, so that the receive loop keeps no
-    /// counter in a register.
+    /// A CAN driver error, from a receive or a transmit: counted. Out of line, so that the
+    /// receive loop keeps no counter in a register.
     #[cold]
     #[inline(never)]
     fn driver_error(&mut self, e: &C::Error) -> DriverError {
