@@ -595,7 +595,7 @@ mod tests {
     #[test]
     fn ids_convert_both_ways_unchanged_at_every_width() {
         // The extremes of each width and the protocol's two IDs.
-        let ids = [
+        let cases = [
             Id::Standard(StandardId::ZERO),
             Id::Standard(StandardId::MAX),
             ext(0),
@@ -603,7 +603,7 @@ mod tests {
             ext(ids::POSTBACK),
             Id::Extended(ExtendedId::MAX),
         ];
-        for id in ids {
+        for id in cases {
             let theirs = to_fdcan_id(id).unwrap();
             let raw = match theirs {
                 fdcan::id::Id::Standard(s) => u32::from(s.as_raw()),
