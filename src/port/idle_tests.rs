@@ -97,6 +97,13 @@ macro_rules! apply_common {
                 $gimbal.stop_rate();
                 true
             }
+            Op::Vehicle { stamp_back } => {
+                let stamp = Instant::from_millis($now.as_millis().wrapping_sub(stamp_back));
+                $gimbal.set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
+                $gimbal.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
+                $gimbal.set_altitude(Altitude::new(500.0).unwrap(), stamp);
+                true
+            }
             Op::PointAt => {
                 $gimbal.point_at(Position::new(47.001, 8.001, 400.0).unwrap());
                 true
@@ -214,13 +221,6 @@ impl Side for CanSide<'_> {
             Op::Text => {
                 let _ = self.link.send_text(b"HELLO");
             }
-            Op::Vehicle { stamp_back } => {
-                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
-                self.link
-                    .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                self.link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
-                self.link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
-            }
             Op::Postback => frames.iter().for_each(|d| self.peer_sends(d)),
             Op::PostbackPart(i) => self.peer_sends(&frames[usize::from(i)]),
             Op::Stall(on) => self.bus.set_auto_deliver(!on),
@@ -301,13 +301,6 @@ impl Side for SerialSide<'_> {
         let bytes = Postback::default().to_stream_bytes();
         match *op {
             Op::Text => {}
-            Op::Vehicle { stamp_back } => {
-                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
-                self.link
-                    .set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                self.link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
-                self.link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
-            }
             Op::Postback => self.peer_writes(&bytes),
             Op::PostbackPart(i) => {
                 let from = usize::from(i) * 7;
