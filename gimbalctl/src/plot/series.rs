@@ -1,0 +1,151 @@
+//! A series in bounded memory: at most [`BUCKETS`] time buckets, each keeping its first,
+//! minimum, maximum and last point; neighbouring buckets merge in pairs when more are
+//! needed.
+
+use super::BUCKETS;
+
+#[derive(Clone, Copy, Debug)]
+struct Bucket {
+    key: i64,
+    first: (f64, f64),
+    min: (f64, f64),
+    max: (f64, f64),
+    last: (f64, f64),
+}
+
+/// A time series in at most [`BUCKETS`] min/max buckets (see the module docs).
+#[derive(Debug)]
+pub struct Series {
+    width: f64,
+    buckets: Vec<Bucket>,
+    /// Points taken (before decimation).
+    pub count: u64,
+}
+
+impl Default for Series {
+    fn default() -> Self {
+        Series {
+            width: 0.05,
+            buckets: Vec::new(),
+            count: 0,
+        }
+    }
+}
+
+impl Series {
+    /// Adds a point; times must not go backwards (a later point at an earlier time goes
+    /// into the last bucket).
+    pub fn push(&mut self, t: f64, v: f64) {
+        if !t.is_finite() || !v.is_finite() {
+            return;
+        }
+        self.count += 1;
+        loop {
+            let key = (t / self.width).floor() as i64;
+            let len = self.buckets.len();
+            match self.buckets.last_mut() {
+                Some(b) if key <= b.key => {
+                    if v < b.min.1 {
+                        b.min = (t, v);
+                    }
+                    if v > b.max.1 {
+                        b.max = (t, v);
+                    }
+                    b.last = (t, v);
+                    return;
+                }
+                _ if len < BUCKETS => {
+                    self.buckets.push(Bucket {
+                        key,
+                        first: (t, v),
+                        min: (t, v),
+                        max: (t, v),
+                        last: (t, v),
+                    });
+                    return;
+                }
+                _ => self.halve(),
+            }
+        }
+    }
+
+    /// Doubles the bucket width, merging buckets that fall together.
+    fn halve(&mut self) {
+        self.width *= 2.0;
+        let mut merged: Vec<Bucket> = Vec::with_capacity(BUCKETS);
+        for b in self.buckets.drain(..) {
+            let key = b.key.div_euclid(2);
+            match merged.last_mut() {
+                Some(m) if m.key == key => {
+                    if b.min.1 < m.min.1 {
+                        m.min = b.min;
+                    }
+                    if b.max.1 > m.max.1 {
+                        m.max = b.max;
+                    }
+                    m.last = b.last;
+                }
+                _ => merged.push(Bucket { key, ..b }),
+            }
+        }
+        self.buckets = merged;
+    }
+
+    /// The points to draw, in time order: each bucket's first point, its min and max, and
+    /// its last point (so steps keep their shape and spikes survive).
+    pub fn points(&self) -> Vec<(f64, f64)> {
+        let mut out: Vec<(f64, f64)> = Vec::with_capacity(self.buckets.len() * 4);
+        for b in &self.buckets {
+            let (lo, hi) = if b.min.0 <= b.max.0 {
+                (b.min, b.max)
+            } else {
+                (b.max, b.min)
+            };
+            for p in [b.first, lo, hi, b.last] {
+                if out.last() != Some(&p) {
+                    out.push(p);
+                }
+            }
+        }
+        out
+    }
+
+    /// Each bucket's time, for markers (one per bucket).
+    pub fn times(&self) -> Vec<f64> {
+        self.buckets.iter().map(|b| b.first.0).collect()
+    }
+
+    pub(super) fn range(&self) -> Option<(f64, f64)> {
+        let lo = self.buckets.iter().map(|b| b.min.1).reduce(f64::min)?;
+        let hi = self.buckets.iter().map(|b| b.max.1).reduce(f64::max)?;
+        Some((lo, hi))
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.buckets.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn series_is_bounded_and_keeps_extremes() {
+        let mut s = Series::default();
+        for i in 0..1_000_000u32 {
+            let t = f64::from(i) * 0.01;
+            let v = if i == 777_777 { 500.0 } else { (t * 0.1).sin() };
+            s.push(t, v);
+        }
+        assert!(s.buckets.len() <= BUCKETS);
+        assert!(s.buckets.len() > BUCKETS / 2);
+        let pts = s.points();
+        assert!(pts.len() <= 4 * BUCKETS);
+        assert!(pts.windows(2).all(|w| w[0].0 <= w[1].0));
+        assert!(pts
+            .iter()
+            .any(|&(t, v)| v == 500.0 && (t - 7777.77).abs() < 1e-6));
+        assert_eq!(s.count, 1_000_000);
+    }
+}

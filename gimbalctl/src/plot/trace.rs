@@ -1,0 +1,243 @@
+//! What the log says: the series, faults and link gaps gathered from `decode`'s records
+//! in one pass (the trace is one more [`Sink`]).
+
+use idu_gimbal::wire::control::{Command, GimbalCommand};
+use idu_gimbal::wire::postback::Postback;
+use idu_gimbal::wire::vehicle::VehicleFrame;
+
+use super::{Series, GAP_S, MAX_GAPS, UNTIMED_PERIOD_S};
+use crate::decode::{Record, Sink};
+use crate::error::Failure;
+
+/// Everything drawn, gathered in one pass.
+#[derive(Default, Debug)]
+pub struct Trace {
+    pub pitch: Series,
+    pub heading: Series,
+    pub motor: Series,
+    pub vehicle_heading: Series,
+    pub cmd_pitch: Series,
+    pub cmd_heading: Series,
+    pub cmd_yaw_rate: Series,
+    pub cmd_pitch_rate: Series,
+    pub yaw_rate: Series,
+    pub pitch_rate: Series,
+    pub mode: Series,
+    pub tracking: Series,
+    pub crc: Series,
+    pub lost: Series,
+    /// Link gaps, (start, end) in seconds.
+    pub gaps: Vec<(f64, f64)>,
+    /// Whether times are the log's (else estimated).
+    pub timed: bool,
+    /// The last time seen.
+    pub end: f64,
+    /// The first timestamp, absolute.
+    t0: Option<f64>,
+    last_postback: Option<(f64, Postback)>,
+    /// Postbacks seen (the clock of an untimed log).
+    pub postbacks: u64,
+    /// Commands seen.
+    pub commands: u64,
+    /// The rate commanded last (yaw, pitch), to draw steps.
+    last_rate: Option<(f64, f64)>,
+    /// When the last rate command came (a rate not repeated within 250 ms has stopped).
+    last_rate_t: f64,
+    /// Lines whose timestamp was not a finite time (kept at the time before them).
+    pub bad_timestamps: u64,
+}
+
+impl Trace {
+    /// The time of a line: its timestamp from the first, else the current time. `frame`:
+    /// the line's own frame record (a line's messages read the same time again), which
+    /// counts a bad timestamp.
+    fn clock(&mut self, ts: Option<&[u8]>, frame: bool) -> f64 {
+        let abs = ts
+            .and_then(|t| std::str::from_utf8(t).ok())
+            .and_then(|t| t.parse::<f64>().ok());
+        // Only a finite time from the first: "inf", "nan", 309 digits or a span beyond
+        // f64 would put the time axis at infinity, whose tick search never ends. Such a
+        // line keeps the time where it was, and is counted.
+        let since_first = abs.and_then(|abs| {
+            let t = abs - *self.t0.get_or_insert(abs);
+            (abs.is_finite() && t.is_finite()).then_some(t)
+        });
+        if abs.is_some() && since_first.is_none() {
+            self.bad_timestamps += u64::from(frame);
+            if self.t0.is_some_and(|t0| !t0.is_finite()) {
+                self.t0 = None;
+            }
+        }
+        if let Some(t) = since_first {
+            self.timed = true;
+            // A timestamp going backwards keeps the time where it was.
+            self.end = self.end.max(t);
+        } else if !self.timed {
+            self.end = self.postbacks as f64 * UNTIMED_PERIOD_S;
+        }
+        self.end
+    }
+
+    fn add_gap(&mut self, from: f64, to: f64) {
+        if self.gaps.len() == MAX_GAPS {
+            // Merge the two neighbours with the smallest space between them.
+            let i = (0..self.gaps.len() - 1)
+                .min_by(|&a, &b| {
+                    let da = self.gaps[a + 1].0 - self.gaps[a].1;
+                    let db = self.gaps[b + 1].0 - self.gaps[b].1;
+                    da.total_cmp(&db)
+                })
+                .unwrap_or(0);
+            let next = self.gaps.remove(i + 1);
+            self.gaps[i].1 = next.1;
+        }
+        self.gaps.push((from, to));
+    }
+
+    fn postback(&mut self, t: f64, pb: &Postback) {
+        let pitch = f64::from(pb.pitch) / 100.0;
+        let heading = f64::from(pb.heading) / 100.0;
+        self.pitch.push(t, pitch);
+        self.heading.push(t, heading);
+        self.motor.push(t, f64::from(pb.motor_heading) / 100.0);
+        self.mode.push(t, f64::from(pb.mode.code()));
+        self.tracking.push(t, if pb.tracking { 1.0 } else { 0.0 });
+        match self.last_postback {
+            Some((t_prev, prev)) => {
+                let dt = t - t_prev;
+                if self.timed && dt > GAP_S {
+                    self.add_gap(t_prev, t);
+                }
+                if dt > 0.0 {
+                    let dp = (pitch - f64::from(prev.pitch) / 100.0) / dt;
+                    // The heading change the short way round.
+                    let dh = (heading - f64::from(prev.heading) / 100.0 + 540.0).rem_euclid(360.0)
+                        - 180.0;
+                    self.pitch_rate.push(t, dp);
+                    self.yaw_rate.push(t, dh / dt);
+                }
+            }
+            None => {
+                if self.timed && t > GAP_S {
+                    self.add_gap(0.0, t);
+                }
+            }
+        }
+        self.last_postback = Some((t, *pb));
+        self.postbacks += 1;
+    }
+
+    fn command(&mut self, t: f64, cmd: &Command) {
+        self.commands += 1;
+        self.rate_expiry(t);
+        let Command::Gimbal(g) = cmd else {
+            return;
+        };
+        match g {
+            GimbalCommand::Pitch(p) => self.cmd_pitch.push(t, f64::from(p.degrees())),
+            GimbalCommand::Heading(h) => self.cmd_heading.push(t, f64::from(h.degrees())),
+            GimbalCommand::LookDown => self.cmd_pitch.push(t, -90.0),
+            GimbalCommand::Recenter => self.cmd_pitch.push(t, 0.0),
+            GimbalCommand::Rate(r) => {
+                let (y, p) = (f64::from(r.yaw_dps()), f64::from(r.pitch_dps()));
+                self.set_rate(t, y, p);
+                self.last_rate_t = t;
+            }
+            _ => {}
+        }
+    }
+
+    /// Draws a step of the commanded rate at `t`.
+    fn set_rate(&mut self, t: f64, yaw: f64, pitch: f64) {
+        if self.last_rate != Some((yaw, pitch)) {
+            if let Some((py, pp)) = self.last_rate {
+                self.cmd_yaw_rate.push(t, py);
+                self.cmd_pitch_rate.push(t, pp);
+            }
+            self.cmd_yaw_rate.push(t, yaw);
+            self.cmd_pitch_rate.push(t, pitch);
+            self.last_rate = Some((yaw, pitch));
+        }
+    }
+
+    /// A rate not repeated within the gimbal's 250 ms dead-man is back to zero.
+    fn rate_expiry(&mut self, now: f64) {
+        if let Some((y, p)) = self.last_rate {
+            if (y, p) != (0.0, 0.0) && now - self.last_rate_t > 0.25 {
+                self.set_rate(self.last_rate_t + 0.25, 0.0, 0.0);
+            }
+        }
+    }
+
+    pub(super) fn finish(&mut self) {
+        if !self.timed {
+            // One period after the last postback.
+            self.end = self.postbacks as f64 * UNTIMED_PERIOD_S;
+        }
+        let end = self.end;
+        self.rate_expiry(end);
+        if let Some((y, p)) = self.last_rate {
+            self.cmd_yaw_rate.push(end, y);
+            self.cmd_pitch_rate.push(end, p);
+        }
+        if self.timed {
+            if let Some((t, _)) = self.last_postback {
+                if end - t > GAP_S {
+                    self.add_gap(t, end);
+                }
+            }
+        }
+    }
+}
+
+/// The plot's side of the decoding: each record drawn at its time.
+impl Sink for Trace {
+    fn record(&mut self, record: Record<'_>) -> Result<(), Failure> {
+        match record {
+            // Every frame moves the clock, whether or not it completes a message.
+            Record::Frame(at) => {
+                self.clock(at.ts, true);
+            }
+            Record::Postback(at, pb) => {
+                let t = self.clock(at.ts, false);
+                self.postback(t, &pb);
+            }
+            Record::Command(at, cmd) => {
+                let t = self.clock(at.ts, false);
+                self.command(t, &cmd);
+            }
+            Record::Vehicle(at, VehicleFrame::Attitude(a)) => {
+                let t = self.clock(at.ts, false);
+                self.vehicle_heading
+                    .push(t, f64::from(a.heading_deg()).rem_euclid(360.0));
+            }
+            Record::Vehicle(..) | Record::Text(..) => {}
+            Record::CrcError(at) => {
+                let t = self.clock(at.ts, false);
+                self.crc.push(t, 1.0);
+            }
+            Record::Lost(at) => {
+                let t = self.clock(at.ts, false);
+                self.lost.push(t, 1.0);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_are_bounded() {
+        let mut t = Trace::default();
+        for i in 0..10_000 {
+            t.add_gap(f64::from(i) * 10.0, f64::from(i) * 10.0 + 2.0);
+        }
+        assert_eq!(t.gaps.len(), MAX_GAPS);
+        assert_eq!(t.gaps[0].0, 0.0);
+        assert_eq!(t.gaps.last().map(|g| g.1), Some(99_992.0));
+        assert!(t.gaps.windows(2).all(|w| w[0].1 <= w[1].0));
+    }
+}
