@@ -19,8 +19,9 @@
 //! - Errors, each counted by the driver under its [`ErrorKind`]: the controller's last
 //!   error code (read, and so cleared, once per `receive`: stuff, form, acknowledge, bit 0/1
 //!   and CRC errors as their kinds), a receive FIFO overrun (`Overrun`; the frame that
-//!   came with it is delivered by the next `receive`), the controller going bus-off, and
-//!   frames the adapter cannot carry (both `Other`). See [`Error`].
+//!   came with it, or why the adapter cannot carry it, is delivered by the next
+//!   `receive`), the controller going bus-off, and frames the adapter cannot carry (both
+//!   `Other`). See [`Error`].
 //!
 //! The fdcan crate's register layout is chosen by a feature of its own: this crate turns on
 //! `fdcan/fdcan_h7` (the STM32H7's FDCAN, as stm32h7xx-hal does). Not for the G0/G4/L5
@@ -326,8 +327,9 @@ impl<I: fdcan::Instance> Controller for fdcan::FdCan<I, NormalOperationMode> {
 /// The adapter over any [`Controller`]: the fdcan crate's, or a test's stand-in.
 struct Adapter<C> {
     can: C,
-    /// A frame that came with an overrun: delivered by the next `receive`.
-    held: Option<Frame>,
+    /// What came with an overrun, delivered by the next `receive`: the frame, or why the
+    /// adapter cannot carry it (never dropped unreported).
+    held: Option<Result<Frame, Error>>,
     /// Whether the controller was bus-off at the last look.
     bus_off: bool,
 }
@@ -367,8 +369,8 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
     }
 
     fn receive(&mut self) -> nb::Result<Frame, Error> {
-        if let Some(frame) = self.held.take() {
-            return Ok(frame);
+        if let Some(held) = self.held.take() {
+            return held.map_err(nb::Error::Other);
         }
         let (bus_off, lec) = self.can.status();
         let went_off = bus_off && !self.bus_off;
@@ -383,8 +385,9 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
         match self.can.receive0(&mut data) {
             Ok(ReceiveOverrun::NoOverrun(info)) => rx_frame(&info, &data).map_err(nb::Error::Other),
             Ok(ReceiveOverrun::Overrun(info)) => {
-                // This frame is good; frames before it were lost. The loss is reported first.
-                self.held = rx_frame(&info, &data).ok();
+                // Frames before this one were lost: the loss is reported first, then this
+                // frame (or why it cannot be one).
+                self.held = Some(rx_frame(&info, &data));
                 Err(nb::Error::Other(Error::Overrun))
             }
             Err(nb::Error::WouldBlock) => Err(nb::Error::WouldBlock),
@@ -416,7 +419,8 @@ impl<I: fdcan::Instance> FdCan<I> {
         &mut self.0.can
     }
 
-    /// Gives back the controller (a frame held back by an overrun is dropped).
+    /// Gives back the controller (what an overrun held back and no `receive` took yet is
+    /// dropped).
     pub fn release(self) -> fdcan::FdCan<I, NormalOperationMode> {
         self.0.can
     }
@@ -533,6 +537,12 @@ mod tests {
                 frame.is_remote_frame(),
             );
             self.fifo.push_back((info, data, overrun));
+        }
+
+        /// A frame the adapter cannot carry (CAN FD), received with or without an overrun.
+        fn push_rx_fd(&mut self, overrun: bool) {
+            let info = rx_info(fd_ext(7), 12, FrameFormat::Fdcan, false);
+            self.fifo.push_back((info, [0u8; 64], overrun));
         }
     }
 
@@ -720,6 +730,11 @@ mod tests {
         chip.borrow_mut().push_rx(&g, true);
         assert_eq!(can.receive(), Err(nb::Error::Other(Error::Overrun)));
         assert_eq!(can.receive(), Ok(g));
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        // An overrun with a frame the adapter cannot carry: the loss, then that error.
+        chip.borrow_mut().push_rx_fd(true);
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::Overrun)));
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::NotClassic)));
         assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
         // Bus-off is reported once, when it happens, and again after a recovery.
         chip.borrow_mut().bus_off = true;
