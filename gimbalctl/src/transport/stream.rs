@@ -226,9 +226,10 @@ pub struct StreamTransport {
     noted: StreamStats,
     /// The link's timing for the mode opened in.
     config: Config,
-    /// Bytes received at the start of the last poll, and the most one poll reads.
-    before: u32,
+    /// The most bytes one poll reads.
     per_poll: u32,
+    /// Whether the last poll read fewer bytes than its bound.
+    drained: bool,
 }
 
 impl StreamTransport {
@@ -265,8 +266,8 @@ impl StreamTransport {
             baud,
             noted: StreamStats::default(),
             config,
-            before: 0,
             per_poll: u32::from(config.max_rx_per_poll.get()) * chunk,
+            drained: true,
         }
     }
 
@@ -302,8 +303,11 @@ impl Transport for StreamTransport {
     }
 
     fn poll(&mut self, link: &mut Link<8, 8, Serial>, now: Instant) -> Result<(), Failure> {
-        self.before = self.port.stats().bytes_received;
-        match self.port.poll(link, now) {
+        let before = self.port.stats().bytes_received;
+        let polled = self.port.poll(link, now);
+        let read = self.port.stats().bytes_received.wrapping_sub(before);
+        self.drained = read < self.per_poll;
+        match polled {
             Ok(()) => Ok(()),
             Err(PortError::Read(Ended(why)) | PortError::Write(Ended(why))) => {
                 Err(Failure::Runtime(why))
@@ -312,7 +316,7 @@ impl Transport for StreamTransport {
     }
 
     fn drained(&self) -> bool {
-        self.port.stats().bytes_received.wrapping_sub(self.before) < self.per_poll
+        self.drained
     }
 
     fn has_transmit(&self, link: &Link<8, 8, Serial>) -> bool {
