@@ -110,10 +110,11 @@ impl<'a> Bench<'a> {
     }
 
     /// Empties every receive FIFO without letting the simulator send more: the driver
-    /// polls once more, then the simulator and the sniffer take what reached them.
+    /// polls once more (its events taken as every poll's are), then the simulator and the
+    /// sniffer take what reached them.
     fn settle(&mut self) {
+        self.host.poll();
         let now = self.host.instant();
-        let _ = self.host.port.poll(&mut self.host.link, now);
         while let Ok(f) = Can::receive(&mut self.sim_can) {
             self.sim_received += 1;
             let _ = self.sim.receive(f.raw_id(), f.data(), now);
