@@ -318,65 +318,37 @@ fn a_live_ground_station_keeps_its_slot_in_a_crowd() {
     );
 }
 
-/// A tiny deterministic generator (xorshift64*): the flood is the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-
-    fn bytes(&mut self, n: usize) -> Vec<u8> {
-        (0..n).map(|_| self.next() as u8).collect()
-    }
-}
-
 /// One datagram of garbage, never a frame the bridge would take: random bytes; a MAVLink 2
 /// start (0xFD, a length, a header) cut short of that length; a real frame cut short; a
 /// real frame with a damaged CRC.
-fn garbage(rng: &mut Rng, seq: u8) -> Vec<u8> {
-    let real = |rng: &mut Rng| {
-        if rng.below(2) == 0 {
+fn garbage(rng: &mut fastrand::Rng, seq: u8) -> Vec<u8> {
+    let real = |rng: &mut fastrand::Rng| {
+        if rng.bool() {
             frame(GCS, seq, &gcs_heartbeat())
         } else {
             frame(GCS, seq, &request_information(0))
         }
     };
-    match rng.below(4) {
+    match rng.u8(..4) {
         0 => {
-            let n = 1 + rng.below(300);
-            rng.bytes(n)
+            let n = rng.usize(1..=300);
+            std::iter::repeat_with(|| rng.u8(..)).take(n).collect()
         }
         1 => {
-            let len = 20 + rng.below(236);
+            let len = rng.usize(20..256);
             // Message ids the bridge handles among others: HEARTBEAT, COMMAND_LONG,
             // GIMBAL_DEVICE_SET_ATTITUDE, AUTOPILOT_STATE_FOR_GIMBAL_DEVICE, random.
-            let id = [0u32, 76, 284, 286, rng.next() as u32 & 0xFF_FFFF][rng.below(5)];
-            let mut d = vec![
-                0xFD,
-                len as u8,
-                0,
-                0,
-                seq,
-                rng.next() as u8,
-                rng.next() as u8,
-            ];
+            let id = [0u32, 76, 284, 286, rng.u32(..=0xFF_FFFF)][rng.usize(..5)];
+            let mut d = vec![0xFD, len as u8, 0, 0, seq, rng.u8(..), rng.u8(..)];
             d.extend_from_slice(&id.to_le_bytes()[..3]);
             // At most the payload: the CRC and some payload are always missing.
-            let have = rng.below(len);
-            d.extend(rng.bytes(have));
+            let have = rng.usize(..len);
+            d.extend(std::iter::repeat_with(|| rng.u8(..)).take(have));
             d
         }
         2 => {
             let mut f = real(rng);
-            let cut = 1 + rng.below(f.len() - 1);
+            let cut = rng.usize(1..f.len());
             f.truncate(cut);
             f
         }
@@ -414,7 +386,8 @@ fn garbage_floods_never_become_peers_nor_hide_a_good_client() {
     let (started_tx, started) = mpsc::channel();
     let (at_answer, flood_total, answers, waited) = thread::scope(|s| {
         let flood = s.spawn(|| {
-            let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+            // Seeded: the same flood every run.
+            let mut rng = fastrand::Rng::with_seed(0x9E37_79B9_7F4A_7C15);
             let begin = Instant::now();
             let mut n = 0usize;
             while n < FLOOD_MAX && begin.elapsed() < FLOOD_TIME {
