@@ -77,11 +77,7 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
     let mut clients: Vec<Client> = Vec::new();
     let mut buf = [0u8; 4096];
     loop {
-        if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
-            eprintln!(
-                "gimbalctl sim: exiting after {} ms",
-                exit_after_ms.unwrap_or(0)
-            );
+        if time_is_up(start, exit_after_ms) {
             return Ok(());
         }
         // New clients.
@@ -170,6 +166,18 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
     }
 }
 
+/// Whether the `--exit-after` time since `start` is up; said on stderr when it is.
+fn time_is_up(start: StdInstant, exit_after_ms: Option<u64>) -> bool {
+    let Some(ms) = exit_after_ms else {
+        return false;
+    };
+    let up = start.elapsed() >= Duration::from_millis(ms);
+    if up {
+        eprintln!("gimbalctl sim: exiting after {ms} ms");
+    }
+    up
+}
+
 /// `gimbalctl sim --pty [--exit-after-ms MS]`.
 #[cfg(unix)]
 pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
@@ -196,11 +204,7 @@ pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
     // is seen (and logged) as it arrives.
     let mut buf = [0u8; 24];
     loop {
-        if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
-            eprintln!(
-                "gimbalctl sim: exiting after {} ms",
-                exit_after_ms.unwrap_or(0)
-            );
+        if time_is_up(start, exit_after_ms) {
             return Ok(());
         }
         let was_open = port.open;

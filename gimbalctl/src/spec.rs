@@ -22,34 +22,15 @@ use crate::json;
 #[command(rename_all = "kebab-case")]
 pub enum Spec {
     /// Pointing zoom: bring the image point X Y (offsets from the centre, each -10000..=10000) to the centre and zoom in (0F 01)
-    PointZoom {
-        #[arg(allow_negative_numbers = true)]
-        x: i64,
-        #[arg(allow_negative_numbers = true)]
-        y: i64,
-    },
+    PointZoom(XyArgs),
     /// Follow the vehicle's nose (0F 02)
     Follow,
     /// Back to centre (0F 03)
     Center,
     /// Rate control: YAW and PITCH in deg/s, each -100..=100 (repeat about every 50 ms to keep moving) (0F 04)
-    Rate {
-        #[arg(allow_negative_numbers = true)]
-        yaw: f64,
-        #[arg(allow_negative_numbers = true)]
-        pitch: f64,
-    },
+    Rate(RateArgs),
     /// Start tracking the box centred on X Y (0..=8191) of W x H image units (0..=4080, sent as /16) (0F 05)
-    Track {
-        #[arg(allow_negative_numbers = true)]
-        x: i64,
-        #[arg(allow_negative_numbers = true)]
-        y: i64,
-        #[arg(allow_negative_numbers = true)]
-        w: f64,
-        #[arg(allow_negative_numbers = true)]
-        h: f64,
-    },
+    Track(BoxArgs),
     /// Stop tracking (0F 06)
     TrackStop,
     /// One-click down 90 degrees (0F 07)
@@ -79,39 +60,15 @@ pub enum Spec {
     /// Focus: plus, minus, stop, auto (0F 13)
     Focus { action: FocusAction },
     /// Focus on the image point X Y, each 0..=8191 (0F 14)
-    FocusAt {
-        #[arg(allow_negative_numbers = true)]
-        x: i64,
-        #[arg(allow_negative_numbers = true)]
-        y: i64,
-    },
+    FocusAt(XyArgs),
     /// Fast calibration (0F F0)
     Calibrate,
     /// Dual-light camera pointing zoom, X Y each -10000..=10000 (1F 01)
-    IrPointZoom {
-        #[arg(allow_negative_numbers = true)]
-        x: i64,
-        #[arg(allow_negative_numbers = true)]
-        y: i64,
-    },
+    IrPointZoom(XyArgs),
     /// Dual-light camera rate control, YAW PITCH in deg/s, each -100..=100 (1F 04)
-    IrRate {
-        #[arg(allow_negative_numbers = true)]
-        yaw: f64,
-        #[arg(allow_negative_numbers = true)]
-        pitch: f64,
-    },
+    IrRate(RateArgs),
     /// Dual-light camera tracking: centre X Y (0..=8191), box W H (0..=4080) (1F 05)
-    IrTrack {
-        #[arg(allow_negative_numbers = true)]
-        x: i64,
-        #[arg(allow_negative_numbers = true)]
-        y: i64,
-        #[arg(allow_negative_numbers = true)]
-        w: f64,
-        #[arg(allow_negative_numbers = true)]
-        h: f64,
-    },
+    IrTrack(BoxArgs),
     /// Dual-light camera: stop tracking (1F 07)
     IrTrackStop,
     /// Dual-light camera electronic zoom: in, out, stop (1F 12)
@@ -332,30 +289,65 @@ fn u32_arg<T>(value: i64, make: impl Fn(u32) -> Result<T, RangeError>) -> Result
     })
 }
 
-fn offset(x: i64, y: i64) -> Result<ImageOffset, RangeError> {
-    // Check each axis on its own so the error names the right one.
-    i32_arg(x, |x| ImageOffset::new(x, 0))?;
-    i32_arg(y, |y| ImageOffset::new(0, y))?;
-    ImageOffset::new(x as i32, y as i32)
+/// X Y as typed: an image offset or point, checked by the command's constructor.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct XyArgs {
+    #[arg(allow_negative_numbers = true)]
+    x: i64,
+    #[arg(allow_negative_numbers = true)]
+    y: i64,
 }
 
-fn point(x: i64, y: i64) -> Result<ImagePoint, RangeError> {
-    i32_arg(x, |x| ImagePoint::new(x, 0))?;
-    i32_arg(y, |y| ImagePoint::new(0, y))?;
-    ImagePoint::new(x as i32, y as i32)
+impl XyArgs {
+    fn offset(self) -> Result<ImageOffset, RangeError> {
+        // Check each axis on its own so the error names the right one.
+        i32_arg(self.x, |x| ImageOffset::new(x, 0))?;
+        i32_arg(self.y, |y| ImageOffset::new(0, y))?;
+        ImageOffset::new(self.x as i32, self.y as i32)
+    }
+
+    fn point(self) -> Result<ImagePoint, RangeError> {
+        i32_arg(self.x, |x| ImagePoint::new(x, 0))?;
+        i32_arg(self.y, |y| ImagePoint::new(0, y))?;
+        ImagePoint::new(self.x as i32, self.y as i32)
+    }
 }
 
-fn rate(yaw: f64, pitch: f64) -> Result<Rate, RangeError> {
-    f32_arg(yaw, |y| Rate::new(y, 0.0))?;
-    f32_arg(pitch, |p| Rate::new(0.0, p))?;
-    Rate::new(yaw as f32, pitch as f32)
+/// YAW PITCH in deg/s as typed.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct RateArgs {
+    #[arg(allow_negative_numbers = true)]
+    yaw: f64,
+    #[arg(allow_negative_numbers = true)]
+    pitch: f64,
 }
 
-fn tracking_box(x: i64, y: i64, w: f64, h: f64) -> Result<TrackingBox, RangeError> {
-    let centre = point(x, y)?;
-    f32_arg(w, |w| TrackingBox::new(centre, w, 0.0))?;
-    f32_arg(h, |h| TrackingBox::new(centre, 0.0, h))?;
-    TrackingBox::new(centre, w as f32, h as f32)
+impl RateArgs {
+    fn rate(self) -> Result<Rate, RangeError> {
+        f32_arg(self.yaw, |y| Rate::new(y, 0.0))?;
+        f32_arg(self.pitch, |p| Rate::new(0.0, p))?;
+        Rate::new(self.yaw as f32, self.pitch as f32)
+    }
+}
+
+/// X Y W H as typed: a tracking box's centre (an image point) and size.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct BoxArgs {
+    #[command(flatten)]
+    centre: XyArgs,
+    #[arg(allow_negative_numbers = true)]
+    w: f64,
+    #[arg(allow_negative_numbers = true)]
+    h: f64,
+}
+
+impl BoxArgs {
+    fn tracking_box(self) -> Result<TrackingBox, RangeError> {
+        let centre = self.centre.point()?;
+        f32_arg(self.w, |w| TrackingBox::new(centre, w, 0.0))?;
+        f32_arg(self.h, |h| TrackingBox::new(centre, 0.0, h))?;
+        TrackingBox::new(centre, self.w as f32, self.h as f32)
+    }
 }
 
 /// The pitch range a look-at target must be within, degrees.
@@ -396,11 +388,11 @@ impl Spec {
     /// The COMMAND name as typed.
     pub fn name(&self) -> &'static str {
         match self {
-            Spec::PointZoom { .. } => "point-zoom",
+            Spec::PointZoom(_) => "point-zoom",
             Spec::Follow => "follow",
             Spec::Center => "center",
-            Spec::Rate { .. } => "rate",
-            Spec::Track { .. } => "track",
+            Spec::Rate(_) => "rate",
+            Spec::Track(_) => "track",
             Spec::TrackStop => "track-stop",
             Spec::LookDown => "look-down",
             Spec::Heading { .. } => "heading",
@@ -410,11 +402,11 @@ impl Spec {
             Spec::Record { .. } => "record",
             Spec::Zoom { .. } => "zoom",
             Spec::Focus { .. } => "focus",
-            Spec::FocusAt { .. } => "focus-at",
+            Spec::FocusAt(_) => "focus-at",
             Spec::Calibrate => "calibrate",
-            Spec::IrPointZoom { .. } => "ir-point-zoom",
-            Spec::IrRate { .. } => "ir-rate",
-            Spec::IrTrack { .. } => "ir-track",
+            Spec::IrPointZoom(_) => "ir-point-zoom",
+            Spec::IrRate(_) => "ir-rate",
+            Spec::IrTrack(_) => "ir-track",
             Spec::IrTrackStop => "ir-track-stop",
             Spec::IrZoom { .. } => "ir-zoom",
             Spec::Palette { .. } => "palette",
@@ -435,11 +427,11 @@ impl Spec {
         let g = |c: G| Ok(Message::Control(vec![c.into()]));
         let d = |c: D| Ok(Message::Control(vec![c.into()]));
         match *self {
-            Spec::PointZoom { x, y } => g(G::PointingZoom(offset(x, y).map_err(r)?)),
+            Spec::PointZoom(a) => g(G::PointingZoom(a.offset().map_err(r)?)),
             Spec::Follow => g(G::NoseFollowing),
             Spec::Center => g(G::Recenter),
-            Spec::Rate { yaw, pitch } => g(G::Rate(rate(yaw, pitch).map_err(r)?)),
-            Spec::Track { x, y, w, h } => g(G::StartTracking(tracking_box(x, y, w, h).map_err(r)?)),
+            Spec::Rate(a) => g(G::Rate(a.rate().map_err(r)?)),
+            Spec::Track(a) => g(G::StartTracking(a.tracking_box().map_err(r)?)),
             Spec::TrackStop => g(G::StopTracking),
             Spec::LookDown => g(G::LookDown),
             Spec::Heading { deg } => g(G::Heading(f32_arg(deg, Heading::new).map_err(r)?)),
@@ -470,13 +462,11 @@ impl Spec {
                 FocusAction::Stop => Focus::Stop,
                 FocusAction::Auto => Focus::Auto,
             })),
-            Spec::FocusAt { x, y } => g(G::PointingFocus(point(x, y).map_err(r)?)),
+            Spec::FocusAt(a) => g(G::PointingFocus(a.point().map_err(r)?)),
             Spec::Calibrate => g(G::FastCalibration),
-            Spec::IrPointZoom { x, y } => d(D::PointingZoom(offset(x, y).map_err(r)?)),
-            Spec::IrRate { yaw, pitch } => d(D::Rate(rate(yaw, pitch).map_err(r)?)),
-            Spec::IrTrack { x, y, w, h } => {
-                d(D::StartTracking(tracking_box(x, y, w, h).map_err(r)?))
-            }
+            Spec::IrPointZoom(a) => d(D::PointingZoom(a.offset().map_err(r)?)),
+            Spec::IrRate(a) => d(D::Rate(a.rate().map_err(r)?)),
+            Spec::IrTrack(a) => d(D::StartTracking(a.tracking_box().map_err(r)?)),
             Spec::IrTrackStop => d(D::StopTracking),
             Spec::IrZoom { action } => d(D::ElectronicZoom(match action {
                 IrZoomAction::In => ElectronicZoom::In,
