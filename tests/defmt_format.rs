@@ -3,42 +3,20 @@
 //! node on the bus) from a CRC error (noise).
 #![cfg(feature = "defmt")]
 
-use std::sync::Mutex;
-
 use embedded_can::ErrorKind;
 use idu_gimbal::port::DriverError;
 
-static LOG: Mutex<Vec<u8>> = Mutex::new(Vec::new());
+#[path = "common/defmt_capture.rs"]
+mod defmt_capture;
 
-#[defmt::global_logger]
-struct Capture;
-
-// SAFETY: one test in this binary logs, and the buffer is behind a mutex anyway.
-unsafe impl defmt::Logger for Capture {
-    fn acquire() {}
-    unsafe fn flush() {}
-    unsafe fn release() {}
-    unsafe fn write(bytes: &[u8]) {
-        LOG.lock().unwrap().extend_from_slice(bytes);
-    }
-}
-
-// A constant timestamp, so that two records differ only by what they format.
-defmt::timestamp!("{=u8}", 0);
-
-/// Tests take turns: they share the one global logger.
-static TURN: Mutex<()> = Mutex::new(());
+use defmt_capture::record;
 
 fn encode(kind: ErrorKind) -> Vec<u8> {
-    LOG.lock().unwrap().clear();
-    // println: not filtered by DEFMT_LOG, unlike the log levels.
-    defmt::println!("{}", DriverError(kind));
-    LOG.lock().unwrap().clone()
+    record(&DriverError(kind))
 }
 
 #[test]
 fn every_error_kind_has_its_own_encoding() {
-    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let kinds = [
         ErrorKind::Overrun,
         ErrorKind::Bit,
@@ -64,19 +42,9 @@ fn every_error_kind_has_its_own_encoding() {
 #[test]
 fn a_range_error_encodes_its_value() {
     use idu_gimbal::wire::control::Pitch;
-    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
-    let record = |degrees: f32| {
-        let e = Pitch::new(degrees).unwrap_err();
-        LOG.lock().unwrap().clear();
-        defmt::println!("{}", e);
-        LOG.lock().unwrap().clone()
-    };
-    let empty = {
-        LOG.lock().unwrap().clear();
-        defmt::println!("{}", "");
-        LOG.lock().unwrap().clone()
-    };
-    let (a, b) = (record(200.0), record(300.0));
+    let pitch = |degrees: f32| record(&Pitch::new(degrees).unwrap_err());
+    let empty = record(&"");
+    let (a, b) = (pitch(200.0), pitch(300.0));
     assert_ne!(a, b);
     assert!(
         a.len() > empty.len() + 3 * 8,

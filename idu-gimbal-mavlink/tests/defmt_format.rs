@@ -2,34 +2,13 @@
 //! counters that differ in one field, and errors of different kinds, must come out distinct.
 #![cfg(feature = "defmt")]
 
-use std::sync::Mutex;
-
 use idu_gimbal_mavlink::framing::DecodeError;
 use idu_gimbal_mavlink::BridgeStats;
 
-static LOG: Mutex<Vec<u8>> = Mutex::new(Vec::new());
+#[path = "../../tests/common/defmt_capture.rs"]
+mod defmt_capture;
 
-#[defmt::global_logger]
-struct Capture;
-
-// SAFETY: one test in this binary logs, and the buffer is behind a mutex anyway.
-unsafe impl defmt::Logger for Capture {
-    fn acquire() {}
-    unsafe fn flush() {}
-    unsafe fn release() {}
-    unsafe fn write(bytes: &[u8]) {
-        LOG.lock().unwrap().extend_from_slice(bytes);
-    }
-}
-
-// A constant timestamp, so that two records differ only by what they format.
-defmt::timestamp!("{=u8}", 0);
-
-fn record(value: &impl defmt::Format) -> Vec<u8> {
-    LOG.lock().unwrap().clear();
-    defmt::println!("{}", value);
-    LOG.lock().unwrap().clone()
-}
+use defmt_capture::record;
 
 #[test]
 fn counters_and_errors_encode_what_tells_them_apart() {
