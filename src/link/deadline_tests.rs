@@ -3,9 +3,11 @@
 
 use super::*;
 use crate::geo::Position;
-use crate::wire::control::{Pitch, Rate};
-use crate::wire::vehicle::{Altitude, Attitude, Gps};
+use crate::wire::control::Rate;
+use crate::wire::vehicle::Gps;
 use proptest::prelude::*;
+
+use super::test_ops::{apply, Op};
 
 fn at(ms: u32) -> Instant {
     Instant::from_millis(ms)
@@ -201,37 +203,6 @@ fn point_at_steps_and_pending_frames_are_not_a_deadline() {
 
 // ---- polling only at the deadline ----
 
-#[derive(Clone, Debug)]
-enum Op {
-    Rate(i16),
-    StopRate,
-    Pitch,
-    Vehicle {
-        stamp_back: u32,
-    },
-    Gps {
-        stamp_back: u32,
-    },
-    Postback,
-    BadPostback,
-    PostbackFrame(u8),
-    LatePostback(u32),
-    PointAt,
-    StopPointing,
-    Text,
-    Aim {
-        earth: bool,
-        yaw: u16,
-        pitch: i16,
-    },
-    StopAim,
-    PostbackOf {
-        motor: i16,
-        mode: u8,
-        tracking: bool,
-    },
-}
-
 fn op() -> impl Strategy<Value = Op> {
     prop_oneof![
         3 => (-500i16..500).prop_map(Op::Rate),
@@ -250,7 +221,7 @@ fn op() -> impl Strategy<Value = Op> {
             .prop_map(|(earth, yaw, pitch)| Op::Aim { earth, yaw, pitch }),
         1 => Just(Op::StopAim),
         2 => (-17_000i16..=17_000, 0u8..5, any::<bool>())
-            .prop_map(|(motor, mode, tracking)| Op::PostbackOf { motor, mode, tracking }),
+            .prop_map(|(motor, mode, tracking)| Op::PostbackOf { motor, pitch: 0, mode, tracking }),
     ]
 }
 
@@ -273,79 +244,6 @@ fn config() -> impl Strategy<Value = Config> {
                 ..Config::default()
             },
         )
-}
-
-fn apply<const Q: usize, const T: usize>(link: &mut Link<Q, T>, op: &Op, now: Instant) {
-    let back = |ms: u32| at(now.as_millis().wrapping_sub(ms));
-    match *op {
-        Op::Rate(r) => {
-            let _ = link.set_rate(Rate::from_centi(r, 0).unwrap(), now);
-        }
-        Op::StopRate => link.stop_rate(),
-        Op::Pitch => {
-            let _ = link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()));
-        }
-        Op::Vehicle { stamp_back } => {
-            link.set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), back(stamp_back));
-            link.set_gps(Gps::new(47.0, 8.0).unwrap(), back(stamp_back));
-            link.set_altitude(Altitude::new(500.0).unwrap(), back(stamp_back));
-        }
-        Op::Gps { stamp_back } => link.set_gps(Gps::new(47.0, 8.0).unwrap(), back(stamp_back)),
-        Op::Postback => {
-            for d in Postback::default().to_can_frames() {
-                link.receive(ids::POSTBACK, &d, now);
-            }
-        }
-        Op::BadPostback => {
-            let mut frames = Postback::default().to_can_frames();
-            frames[2][3] ^= 0x40;
-            for d in frames {
-                link.receive(ids::POSTBACK, &d, now);
-            }
-        }
-        Op::LatePostback(ms) => {
-            for d in Postback::default().to_can_frames() {
-                link.receive(ids::POSTBACK, &d, back(ms));
-            }
-        }
-        Op::PostbackFrame(i) => {
-            let d = Postback::default().to_can_frames()[usize::from(i)];
-            link.receive(ids::POSTBACK, &d, now);
-        }
-        Op::PointAt => link.point_at(Position::new(47.001, 8.001, 400.0).unwrap()),
-        Op::StopPointing => link.stop_pointing(),
-        Op::Text => {
-            let _ = link.send_text(b"HELLO");
-        }
-        Op::Aim { earth, yaw, pitch } => {
-            let h = crate::wire::control::Heading::from_deci(yaw).unwrap();
-            let aim = crate::link::Aim {
-                yaw: if earth {
-                    crate::link::Yaw::Earth(h)
-                } else {
-                    crate::link::Yaw::Vehicle(h)
-                },
-                pitch: Pitch::from_deci(pitch).unwrap(),
-            };
-            let _ = link.aim(aim, now);
-        }
-        Op::StopAim => link.stop_aiming(),
-        Op::PostbackOf {
-            motor,
-            mode,
-            tracking,
-        } => {
-            let p = Postback {
-                motor_heading: motor,
-                mode: crate::wire::postback::ControlMode::from_code(mode),
-                tracking,
-                ..Postback::default()
-            };
-            for d in p.to_can_frames() {
-                link.receive(ids::POSTBACK, &d, now);
-            }
-        }
-    }
 }
 
 /// Hands queued frames to a CAN driver that is busy (refuses the next frame) at the

@@ -366,4 +366,6 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
 #[cfg(test)]
 mod deadline_tests;
 #[cfg(test)]
+mod test_ops;
+#[cfg(test)]
 mod tests;

@@ -602,42 +602,9 @@ mod point_at {
 }
 
 mod fast_path {
+    use super::super::test_ops::{apply, Op};
     use super::*;
-    use crate::geo::Position;
-    use crate::wire::control::Pitch;
     use proptest::prelude::*;
-
-    #[derive(Clone, Debug)]
-    enum Op {
-        Wait(u32),
-        Rate(i16),
-        StopRate,
-        Pitch,
-        Vehicle {
-            stamp_back: u32,
-        },
-        Postback,
-        PostbackFrame(u8),
-        /// A postback taken with a time behind the last poll's (a late-processed frame, a
-        /// clock stepped back): the deadlines it brings are before the idle interval ends.
-        LatePostback(u32),
-        PointAt,
-        Text,
-        Aim {
-            earth: bool,
-            yaw: u16,
-            pitch: i16,
-        },
-        StopAim,
-        /// A postback with these angles, mode and tracking flag: judged by an aim held.
-        PostbackOf {
-            motor: i16,
-            pitch: i16,
-            mode: u8,
-            tracking: bool,
-        },
-        Tracking(bool),
-    }
 
     fn op() -> impl Strategy<Value = Op> {
         prop_oneof![
@@ -659,86 +626,6 @@ mod fast_path {
             ),
             1 => any::<bool>().prop_map(Op::Tracking),
         ]
-    }
-
-    fn apply<const Q: usize, const T: usize>(link: &mut Link<Q, T>, op: &Op, now: Instant) {
-        match *op {
-            Op::Wait(_) => {}
-            Op::Rate(r) => {
-                let _ = link.set_rate(Rate::from_centi(r, 0).unwrap(), now);
-            }
-            Op::StopRate => link.stop_rate(),
-            Op::Pitch => {
-                let _ = link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()));
-            }
-            Op::Vehicle { stamp_back } => {
-                let stamp = Instant::from_millis(now.as_millis().wrapping_sub(stamp_back));
-                link.set_attitude(Attitude::new(0.0, 0.0, 10.0).unwrap(), stamp);
-                link.set_gps(Gps::new(47.0, 8.0).unwrap(), stamp);
-                link.set_altitude(Altitude::new(500.0).unwrap(), stamp);
-            }
-            Op::Postback => {
-                for d in Postback::default().to_can_frames() {
-                    link.receive(ids::POSTBACK, &d, now);
-                }
-            }
-            Op::LatePostback(back) => {
-                let at = Instant::from_millis(now.as_millis().wrapping_sub(back));
-                for d in Postback::default().to_can_frames() {
-                    link.receive(ids::POSTBACK, &d, at);
-                }
-            }
-            Op::PostbackFrame(i) => {
-                let d = Postback::default().to_can_frames()[usize::from(i)];
-                link.receive(ids::POSTBACK, &d, now);
-            }
-            Op::PointAt => link.point_at(Position::new(47.001, 8.001, 400.0).unwrap()),
-            Op::Text => {
-                let _ = link.send_text(b"HELLO");
-            }
-            Op::Aim { earth, yaw, pitch } => {
-                let h = crate::wire::control::Heading::from_deci(yaw).unwrap();
-                let aim = crate::link::Aim {
-                    yaw: if earth {
-                        crate::link::Yaw::Earth(h)
-                    } else {
-                        crate::link::Yaw::Vehicle(h)
-                    },
-                    pitch: Pitch::from_deci(pitch).unwrap(),
-                };
-                let _ = link.aim(aim, now);
-            }
-            Op::StopAim => link.stop_aiming(),
-            Op::PostbackOf {
-                motor,
-                pitch,
-                mode,
-                tracking,
-            } => {
-                let p = Postback {
-                    motor_heading: motor,
-                    pitch,
-                    mode: crate::wire::postback::ControlMode::from_code(mode),
-                    tracking,
-                    ..Postback::default()
-                };
-                for d in p.to_can_frames() {
-                    link.receive(ids::POSTBACK, &d, now);
-                }
-            }
-            Op::Tracking(start) => {
-                let c = if start {
-                    GimbalCommand::StartTracking(crate::wire::control::TrackingBox::from_raw(
-                        crate::wire::control::ImagePoint::new(100, 100).unwrap(),
-                        1,
-                        1,
-                    ))
-                } else {
-                    GimbalCommand::StopTracking
-                };
-                let _ = link.send(c);
-            }
-        }
     }
 
     fn drain<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> (Vec<Frame>, Vec<Event>) {
