@@ -46,6 +46,11 @@ fn ask(
     ask4(b, to, cmd, [p[0], p[1], p[2], 0.0], ms)
 }
 
+/// [`ask`] of the camera (component 100).
+fn ask_camera(b: &mut Firmware, cmd: MavCmd, p: [f32; 3], ms: u32) -> (CommandAck, Vec<Frame<V2>>) {
+    ask(b, 100, cmd, p, ms)
+}
+
 /// [`ask`] with param4.
 fn ask4(
     b: &mut Firmware,
@@ -101,32 +106,20 @@ fn camera_heartbeats_beside_the_gimbals_once_its_identity_is_known() {
 fn the_mode_is_set_and_told_back_in_the_settings() {
     let mut b = bridge();
     let mode = |frames: &[Frame<V2>]| of::<CameraSettings>(frames)[0].mode_id;
-    let (_, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::RequestCameraSettings,
-        [1.0, 0.0, 0.0],
-        1,
-    );
+    let (_, frames) = ask_camera(&mut b, MavCmd::RequestCameraSettings, [1.0, 0.0, 0.0], 1);
     assert_eq!(mode(&frames), CameraMode::Image);
     // QGroundControl's photo/video switch: param2 0 or 1 (VehicleCameraControl.cc
     // setCameraMode); it reads the mode back only from CAMERA_SETTINGS, sent at once.
-    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 1.0, 0.0], 2);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraMode, [0.0, 1.0, 0.0], 2);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(mode(&frames), CameraMode::Video);
     // Recording and a photo need no switch either way: nothing sent to the gimbal for it.
     assert!(queued(&mut b.link).is_empty());
-    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 2.0, 0.0], 3);
+    let (ack, _) = ask_camera(&mut b, MavCmd::SetCameraMode, [0.0, 2.0, 0.0], 3);
     assert_eq!(ack.result, MavResult::Denied, "survey: no such mode");
-    let (_, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::RequestCameraSettings,
-        [1.0, 0.0, 0.0],
-        4,
-    );
+    let (_, frames) = ask_camera(&mut b, MavCmd::RequestCameraSettings, [1.0, 0.0, 0.0], 4);
     assert_eq!(mode(&frames), CameraMode::Video);
-    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraMode, [0.0, 0.0, 0.0], 5);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraMode, [0.0, 0.0, 0.0], 5);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(mode(&frames), CameraMode::Image);
 }
@@ -155,7 +148,7 @@ fn information_by_request_message_and_by_the_legacy_command() {
         (MavCmd::RequestMessage, 259.0),
         (MavCmd::RequestCameraInformation, 1.0),
     ] {
-        let (ack, frames) = ask(&mut b, 100, cmd, [p1, 0.0, 0.0], 5);
+        let (ack, frames) = ask_camera(&mut b, cmd, [p1, 0.0, 0.0], 5);
         assert_eq!(ack.result, MavResult::TemporarilyRejected);
         assert!(of::<CameraInformation>(&frames).is_empty());
     }
@@ -202,7 +195,7 @@ fn information_by_request_message_and_by_the_legacy_command() {
         assert_eq!(info[0].cam_definition_version, 2);
     }
     // A gimbal request to the camera: not the camera's, said so.
-    let (ack, _) = ask(&mut b, 100, MavCmd::RequestMessage, [283.0, 0.0, 0.0], 20);
+    let (ack, _) = ask_camera(&mut b, MavCmd::RequestMessage, [283.0, 0.0, 0.0], 20);
     assert_eq!(ack.result, MavResult::Unsupported);
 }
 
@@ -262,13 +255,7 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     let mut b = bridge();
     // Three images 0.5 s apart (under a second: the gimbal's single shot on the bridge's
     // schedule, not its time-lapse).
-    let (ack, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.5, 3.0],
-        1_000,
-    );
+    let (ack, frames) = ask_camera(&mut b, MavCmd::ImageStartCapture, [0.0, 0.5, 3.0], 1_000);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(indexes(&frames), [0]);
     let status = &of::<CameraCaptureStatus>(&frames)[0];
@@ -297,19 +284,13 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     );
     assert_eq!(images, [(1_500, 1), (2_000, 2)]);
     // Until stopped, every 2 s, from 5 s; stopped at 9.5 s.
-    let (_, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 2.0, 0.0],
-        5_000,
-    );
+    let (_, frames) = ask_camera(&mut b, MavCmd::ImageStartCapture, [0.0, 2.0, 0.0], 5_000);
     assert_eq!(indexes(&frames), [3]);
     let _ = queued(&mut b.link);
     let mut images = Vec::new();
     for ms in 5_001..12_000 {
         if ms == 9_500 {
-            let (ack, frames) = ask(&mut b, 100, MavCmd::ImageStopCapture, [0.0; 3], ms);
+            let (ack, frames) = ask_camera(&mut b, MavCmd::ImageStopCapture, [0.0; 3], ms);
             assert_eq!(ack.result, MavResult::Accepted);
             assert_eq!(of::<CameraCaptureStatus>(&frames)[0].image_status, 0);
         }
@@ -329,7 +310,7 @@ fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
         [0.0, -1.0, 0.0], // a negative interval
         [0.0, f32::NAN, 1.0],
     ] {
-        let (ack, _) = ask(&mut b, 100, MavCmd::ImageStartCapture, p, 13_000);
+        let (ack, _) = ask_camera(&mut b, MavCmd::ImageStartCapture, p, 13_000);
         assert_eq!(ack.result, MavResult::Denied, "{p:?}");
     }
     assert!(queued(&mut b.link).is_empty());
@@ -354,13 +335,12 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
     let mut b = bridge();
     take_single_images(&mut b, 20);
     // By index (REQUEST_MESSAGE param2), and by the superseded command MAVSDK falls back to.
-    let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, 17.0, 0.0], 300);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::RequestMessage, [263.0, 17.0, 0.0], 300);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(indexes(&frames), [17]);
     assert_eq!(of::<CameraImageCaptured>(&frames)[0].time_boot_ms, 170);
-    let (ack, frames) = ask(
+    let (ack, frames) = ask_camera(
         &mut b,
-        100,
         MavCmd::RequestCameraImageCapture,
         [5.0, 0.0, 0.0],
         310,
@@ -368,25 +348,13 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(indexes(&frames), [5]);
     // A range, and "all" (−1): the 16 kept, sent as the outbox makes room.
-    let (_, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::RequestMessage,
-        [263.0, 10.0, 12.0],
-        320,
-    );
+    let (_, frames) = ask_camera(&mut b, MavCmd::RequestMessage, [263.0, 10.0, 12.0], 320);
     assert_eq!(indexes(&frames), [10, 11, 12]);
     // From an index on (param3 −1).
-    let (ack, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::RequestMessage,
-        [263.0, 17.0, -1.0],
-        325,
-    );
+    let (ack, frames) = ask_camera(&mut b, MavCmd::RequestMessage, [263.0, 17.0, -1.0], 325);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(indexes(&frames), [17, 18, 19]);
-    let (ack, mut frames) = ask(&mut b, 100, MavCmd::RequestMessage, [263.0, -1.0, 0.0], 330);
+    let (ack, mut frames) = ask_camera(&mut b, MavCmd::RequestMessage, [263.0, -1.0, 0.0], 330);
     assert_eq!(ack.result, MavResult::Accepted);
     for ms in 331..340 {
         b.poll(t(ms));
@@ -410,7 +378,7 @@ fn images_are_sent_again_on_request_from_the_kept_history() {
         ([263.0, -2.0, 0.0], MavResult::Denied),
         ([263.0, -2.0, -1.0], MavResult::Denied),
     ] {
-        let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, p, 400);
+        let (ack, frames) = ask_camera(&mut b, MavCmd::RequestMessage, p, 400);
         assert_eq!(ack.result, result, "{p:?}");
         assert!(indexes(&frames).is_empty());
     }
@@ -424,7 +392,7 @@ fn each_camera_message_by_request_message_is_that_message() {
     // CAMERA_CAPTURE_STATUS 262; param2 0 as QGroundControl sends it, which for a stream
     // request would mean every stream: none of those may come instead.
     for (id, ms) in [(260.0, 10), (261.0, 20), (262.0, 30)] {
-        let (ack, frames) = ask(&mut b, 100, MavCmd::RequestMessage, [id, 0.0, 0.0], ms);
+        let (ack, frames) = ask_camera(&mut b, MavCmd::RequestMessage, [id, 0.0, 0.0], ms);
         assert_eq!(ack.result, MavResult::Accepted, "{id}");
         let got: Vec<u32> = frames
             .iter()
@@ -438,12 +406,11 @@ fn each_camera_message_by_request_message_is_that_message() {
 #[test]
 fn video_start_and_stop_with_the_capture_status() {
     let mut b = bridge();
-    let (ack, frames) = ask(&mut b, 100, MavCmd::VideoStartCapture, [0.0; 3], 1_000);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::VideoStartCapture, [0.0; 3], 1_000);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].video_status, 1);
-    let (_, frames) = ask(
+    let (_, frames) = ask_camera(
         &mut b,
-        100,
         MavCmd::RequestCameraCaptureStatus,
         [1.0, 0.0, 0.0],
         3_500,
@@ -451,7 +418,7 @@ fn video_start_and_stop_with_the_capture_status() {
     let s = &of::<CameraCaptureStatus>(&frames)[0];
     assert_eq!((s.video_status, s.recording_time_ms), (1, 2_500));
     assert!(s.available_capacity.is_nan(), "unknown, not invented");
-    let (_, frames) = ask(&mut b, 100, MavCmd::VideoStopCapture, [0.0; 3], 4_000);
+    let (_, frames) = ask_camera(&mut b, MavCmd::VideoStopCapture, [0.0; 3], 4_000);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].video_status, 0);
     assert_eq!(
         queued(&mut b.link),
@@ -479,31 +446,19 @@ fn while_recording_the_capture_status_comes_at_the_rate_asked() {
         got
     };
     // common.xml: param2 the status's frequency while recording, Hz (MAVProxy sends 1).
-    let (ack, _) = ask(
-        &mut b,
-        100,
-        MavCmd::VideoStartCapture,
-        [0.0, 2.0, 0.0],
-        1_000,
-    );
+    let (ack, _) = ask_camera(&mut b, MavCmd::VideoStartCapture, [0.0, 2.0, 0.0], 1_000);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(
         unasked(&mut b, 1_001, 2_600),
         [(1_500, 1, 500), (2_000, 1, 1_000), (2_500, 1, 1_500)]
     );
     // Stopped: the stop's own status, then none.
-    let (_, frames) = ask(&mut b, 100, MavCmd::VideoStopCapture, [0.0; 3], 2_600);
+    let (_, frames) = ask_camera(&mut b, MavCmd::VideoStopCapture, [0.0; 3], 2_600);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].video_status, 0);
     assert!(unasked(&mut b, 2_601, 5_000).is_empty());
     // 0 (and NaN, a parameter left out): no status unasked.
     for hz in [0.0, f32::NAN] {
-        let (ack, _) = ask(
-            &mut b,
-            100,
-            MavCmd::VideoStartCapture,
-            [0.0, hz, 0.0],
-            5_000,
-        );
+        let (ack, _) = ask_camera(&mut b, MavCmd::VideoStartCapture, [0.0, hz, 0.0], 5_000);
         assert_eq!(ack.result, MavResult::Accepted);
         assert!(unasked(&mut b, 5_001, 7_000).is_empty(), "{hz}");
     }
@@ -511,13 +466,7 @@ fn while_recording_the_capture_status_comes_at_the_rate_asked() {
     // range at the smallest rates): refused, and the gimbal not told.
     let _ = queued(&mut b.link);
     for hz in [-1.0, 1_000.5, f32::INFINITY, 0.000_9, 1e-30] {
-        let (ack, _) = ask(
-            &mut b,
-            100,
-            MavCmd::VideoStartCapture,
-            [0.0, hz, 0.0],
-            7_000,
-        );
+        let (ack, _) = ask_camera(&mut b, MavCmd::VideoStartCapture, [0.0, hz, 0.0], 7_000);
         assert_eq!(ack.result, MavResult::Denied, "{hz}");
     }
     assert!(queued(&mut b.link).is_empty());
@@ -538,11 +487,11 @@ fn postback(b: &mut Firmware, gimbal_type: GimbalType, ms: u32) {
 fn zoom_by_range_continuous_and_step() {
     let mut b = bridge();
     // No postback yet: the zoom range is not known.
-    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 5);
+    let (ack, _) = ask_camera(&mut b, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 5);
     assert_eq!(ack.result, MavResult::TemporarilyRejected);
     postback(&mut b, GimbalType::X30, 6);
     // 50 % of 1×..30×: 15.5×.
-    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 10);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [2.0, 50.0, 0.0], 10);
     assert_eq!(ack.result, MavResult::Accepted);
     match queued(&mut b.link)[..] {
         [GimbalCommand::ZoomRatio(r)] => assert_eq!(r.centi(), 1550),
@@ -557,20 +506,20 @@ fn zoom_by_range_continuous_and_step() {
         (-0.25, Zoom::Out),
         (-1.0, Zoom::Out),
     ] {
-        let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [1.0, v, 0.0], 20);
+        let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [1.0, v, 0.0], 20);
         assert_eq!(ack.result, MavResult::Accepted, "{v}");
         assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(z)]);
         // Where a continuous zoom stops is not reported: the level is unknown.
         assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
     }
     // A step after a continuous zoom: still unknown, not 1×.
-    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 30);
+    let (_, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 30);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(Zoom::Double); 2]);
     assert!(of::<CameraSettings>(&frames)[0].zoom_level.is_nan());
     // From a known level, steps double and halve it within the range.
-    let _ = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 0.0, 0.0], 31);
+    let _ = ask_camera(&mut b, MavCmd::SetCameraZoom, [2.0, 0.0, 0.0], 31);
     let _ = queued(&mut b.link);
-    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 32);
+    let (_, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [0.0, 2.0, 0.0], 32);
     let _ = queued(&mut b.link);
     // 4× of 1×..30×: (4 − 1) / 29 = 10.34 %.
     let level = of::<CameraSettings>(&frames)[0].zoom_level;
@@ -580,16 +529,10 @@ fn zoom_by_range_continuous_and_step() {
     while b.link.command_room() > 4 {
         b.link.send(GimbalCommand::Recenter).unwrap();
     }
-    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
+    let (ack, _) = ask_camera(&mut b, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
     assert_eq!(ack.result, MavResult::TemporarilyRejected);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Recenter; 4]);
-    let (_, frames) = ask(
-        &mut b,
-        100,
-        MavCmd::RequestCameraSettings,
-        [1.0, 0.0, 0.0],
-        33,
-    );
+    let (_, frames) = ask_camera(&mut b, MavCmd::RequestCameraSettings, [1.0, 0.0, 0.0], 33);
     let kept = of::<CameraSettings>(&frames)[0].zoom_level;
     assert_eq!(kept, level);
     // QGroundControl's pinch out: round(scale × −10) steps (FlightDisplayViewVideo.qml), here
@@ -598,7 +541,7 @@ fn zoom_by_range_continuous_and_step() {
     while b.link.command_room() > 5 {
         b.link.send(GimbalCommand::Recenter).unwrap();
     }
-    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [0.0, -10.0, 0.0], 33);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(
         queued(&mut b.link),
@@ -610,7 +553,7 @@ fn zoom_by_range_continuous_and_step() {
     );
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 0.0);
     // And 7 steps in from 1×: five doublings, 30× (32 beyond the range's end).
-    let (ack, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
+    let (ack, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [0.0, 7.0, 0.0], 34);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Zoom(Zoom::Double); 5]);
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
@@ -622,7 +565,7 @@ fn zoom_by_range_continuous_and_step() {
         ([0.0, f32::INFINITY, 0.0], MavResult::Denied),
         ([3.0, 24.0, 0.0], MavResult::Unsupported),
     ] {
-        let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, p, 40);
+        let (ack, _) = ask_camera(&mut b, MavCmd::SetCameraZoom, p, 40);
         assert_eq!(ack.result, result, "{p:?}");
     }
     assert!(queued(&mut b.link).is_empty());
@@ -633,15 +576,14 @@ fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
     let mut b = bridge();
     postback(&mut b, GimbalType::Zoom3_5x, 0);
     // 100 % of a 3.5× camera is 3.5×, not 30×.
-    let (_, frames) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 100.0, 0.0], 10);
+    let (_, frames) = ask_camera(&mut b, MavCmd::SetCameraZoom, [2.0, 100.0, 0.0], 10);
     match queued(&mut b.link)[..] {
         [GimbalCommand::ZoomRatio(r)] => assert_eq!(r.centi(), 350),
         ref other => panic!("{other:?}"),
     }
     assert_eq!(of::<CameraSettings>(&frames)[0].zoom_level, 100.0);
-    let (_, frames) = ask(
+    let (_, frames) = ask_camera(
         &mut b,
-        100,
         MavCmd::RequestCameraInformation,
         [1.0, 0.0, 0.0],
         20,
@@ -662,7 +604,7 @@ fn the_zoom_range_and_the_model_follow_the_gimbal_type() {
     assert!((gi.yaw_min + 325f32.to_radians()).abs() < 1e-6);
     // A model the document gives no zoom for, none configured: range zoom unsupported.
     postback(&mut b, GimbalType::A2000, 40);
-    let (ack, _) = ask(&mut b, 100, MavCmd::SetCameraZoom, [2.0, 10.0, 0.0], 50);
+    let (ack, _) = ask_camera(&mut b, MavCmd::SetCameraZoom, [2.0, 10.0, 0.0], 50);
     assert_eq!(ack.result, MavResult::Unsupported);
 }
 
@@ -679,9 +621,8 @@ fn the_camera_names_its_gimbal_by_the_configured_component() {
     );
     b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
     postback(&mut b, GimbalType::X30T, 10);
-    let (_, frames) = ask(
+    let (_, frames) = ask_camera(
         &mut b,
-        100,
         MavCmd::RequestCameraInformation,
         [1.0, 0.0, 0.0],
         20,
@@ -696,7 +637,7 @@ fn the_stream_and_the_storage_are_said_as_they_are() {
         (MavCmd::RequestVideoStreamInformation, 1.0),
         (MavCmd::RequestMessage, 269.0),
     ] {
-        let (_, frames) = ask(&mut b, 100, cmd, [p1, 0.0, 0.0], 10);
+        let (_, frames) = ask_camera(&mut b, cmd, [p1, 0.0, 0.0], 10);
         let s = &of::<VideoStreamInformation>(&frames)[0];
         assert_eq!(
             (s.stream_id, s.count, s.type_),
@@ -711,13 +652,13 @@ fn the_stream_and_the_storage_are_said_as_they_are() {
         (MavCmd::RequestVideoStreamStatus, 1.0),
         (MavCmd::RequestMessage, 270.0),
     ] {
-        let (ack, frames) = ask(&mut b, 100, cmd, [p1, 0.0, 0.0], 10);
+        let (ack, frames) = ask_camera(&mut b, cmd, [p1, 0.0, 0.0], 10);
         assert_eq!(ack.result, MavResult::Accepted);
         let s = &of::<VideoStreamStatus>(&frames)[0];
         assert_eq!(s.stream_id, 1);
         assert!(s.flags.contains(VideoStreamStatusFlags::RUNNING));
     }
-    let (_, frames) = ask(&mut b, 100, MavCmd::RequestStorageInformation, [0.0; 3], 10);
+    let (_, frames) = ask_camera(&mut b, MavCmd::RequestStorageInformation, [0.0; 3], 10);
     assert_eq!(
         of::<StorageInformation>(&frames)[0].status,
         StorageStatus::NotSupported

@@ -44,6 +44,16 @@ fn ask(
     (acks[0].result, frames, queued)
 }
 
+/// [`ask`] of the camera.
+fn ask_camera(
+    b: &mut Firmware,
+    cmd: MavCmd,
+    p: [f32; 7],
+    ms: u32,
+) -> (MavResult, Vec<Frame<V2>>, Vec<Command>) {
+    ask(b, CAMERA, cmd, p, ms)
+}
+
 const N: f32 = f32::NAN;
 
 /// Params 1 to 4 given, the rest unset (NaN, as MAVSDK sends them).
@@ -67,7 +77,7 @@ fn focus_continuous_by_sign_and_auto_of_every_kind() {
         (7.5, Focus::Plus),
         (-0.01, Focus::Minus),
     ] {
-        let (r, frames, q) = ask(&mut b, CAMERA, MavCmd::SetCameraFocus, p4(1.0, v, N, N), 10);
+        let (r, frames, q) = ask_camera(&mut b, MavCmd::SetCameraFocus, p4(1.0, v, N, N), 10);
         assert_eq!((r, q), (MavResult::Accepted, focus(f)), "continuous {v}");
         // common.xml: the camera answers with CAMERA_SETTINGS on success.
         let s: Vec<CameraSettings> = of(&frames);
@@ -79,13 +89,7 @@ fn focus_continuous_by_sign_and_auto_of_every_kind() {
     }
     // FOCUS_TYPE_AUTO (4), AUTO_SINGLE (5), AUTO_CONTINUOUS (6): the one auto-focus.
     for kind in [4.0, 5.0, 6.0] {
-        let (r, _, q) = ask(
-            &mut b,
-            CAMERA,
-            MavCmd::SetCameraFocus,
-            p4(kind, 0.0, N, N),
-            10,
-        );
+        let (r, _, q) = ask_camera(&mut b, MavCmd::SetCameraFocus, p4(kind, 0.0, N, N), 10);
         assert_eq!(
             (r, q),
             (MavResult::Accepted, focus(Focus::Auto)),
@@ -108,13 +112,7 @@ fn focus_that_needs_a_position_is_denied_and_sends_nothing() {
         (N, 0.0),
         (1.0, N),
     ] {
-        let (r, frames, q) = ask(
-            &mut b,
-            CAMERA,
-            MavCmd::SetCameraFocus,
-            p4(kind, v, N, N),
-            10,
-        );
+        let (r, frames, q) = ask_camera(&mut b, MavCmd::SetCameraFocus, p4(kind, v, N, N), 10);
         assert_eq!(r, MavResult::Denied, "type {kind} value {v}");
         assert!(q.is_empty());
         assert!(of::<CameraSettings>(&frames).is_empty());
@@ -152,9 +150,8 @@ fn a_rectangle_becomes_the_documents_centre_and_sixteenths() {
         // 1/32 of the image: 256 units → 16; centre 0.515625 × 8191 = 4223.48 → 4223.
         ([0.5, 0.5, 0.531_25, 0.531_25], tbox(4223, 4223, 16, 16)),
     ] {
-        let (r, _, q) = ask(
+        let (r, _, q) = ask_camera(
             &mut b,
-            CAMERA,
             MavCmd::CameraTrackRectangle,
             [rect[0], rect[1], rect[2], rect[3], N, N, N],
             10,
@@ -177,9 +174,8 @@ fn a_box_too_large_for_the_byte_or_outside_the_image_is_denied_never_shrunk() {
         [N, 0.2, 0.3, 0.3],
         [0.2, 0.2, 0.3, f32::INFINITY],
     ] {
-        let (r, _, q) = ask(
+        let (r, _, q) = ask_camera(
             &mut b,
-            CAMERA,
             MavCmd::CameraTrackRectangle,
             [rect[0], rect[1], rect[2], rect[3], N, N, N],
             10,
@@ -201,9 +197,8 @@ fn a_point_becomes_a_box_of_twice_its_radius_and_at_least_a_thirty_second() {
         // Radius 0.1: 0.2 × 8192 = 1638.4 units → 102.4 → 102.
         ([0.25, 0.75, 0.1], tbox(2048, 6143, 102, 102)),
     ] {
-        let (r, _, q) = ask(
+        let (r, _, q) = ask_camera(
             &mut b,
-            CAMERA,
             MavCmd::CameraTrackPoint,
             p4(p[0], p[1], p[2], N),
             10,
@@ -217,9 +212,8 @@ fn a_point_becomes_a_box_of_twice_its_radius_and_at_least_a_thirty_second() {
         [0.5, N, 0.01],
         [0.5, 0.5, -0.1],
     ] {
-        let (r, _, q) = ask(
+        let (r, _, q) = ask_camera(
             &mut b,
-            CAMERA,
             MavCmd::CameraTrackPoint,
             p4(p[0], p[1], p[2], N),
             10,
@@ -233,7 +227,7 @@ fn a_point_becomes_a_box_of_twice_its_radius_and_at_least_a_thirty_second() {
 fn stop_tracking_goes_to_the_image_tracking_was_started_on() {
     let mut b = bridge(Family::DualLight);
     let stop = MavCmd::CameraStopTracking;
-    let (r, _, q) = ask(&mut b, CAMERA, stop, [N; 7], 10);
+    let (r, _, q) = ask_camera(&mut b, stop, [N; 7], 10);
     assert_eq!(
         (r, q),
         (
@@ -243,17 +237,10 @@ fn stop_tracking_goes_to_the_image_tracking_was_started_on() {
     );
     // The infrared image as the source (MAV_CMD_SET_CAMERA_SOURCE, param2 IR = 2): tracking
     // is the dual light's.
-    let (r, _, _) = ask(
-        &mut b,
-        CAMERA,
-        MavCmd::SetCameraSource,
-        p4(0.0, 2.0, 0.0, N),
-        10,
-    );
+    let (r, _, _) = ask_camera(&mut b, MavCmd::SetCameraSource, p4(0.0, 2.0, 0.0, N), 10);
     assert_eq!(r, MavResult::Accepted);
-    let (r, _, q) = ask(
+    let (r, _, q) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::CameraTrackPoint,
         p4(0.5, 0.5, 0.015_625, N),
         10,
@@ -264,19 +251,13 @@ fn stop_tracking_goes_to_the_image_tracking_was_started_on() {
         vec![DualLightCommand::StartTracking(tbox(4096, 4096, 16, 16)).into()]
     );
     // Back to the visible image: the stop still goes where tracking runs.
-    let (r, _, _) = ask(
-        &mut b,
-        CAMERA,
-        MavCmd::SetCameraSource,
-        p4(0.0, 1.0, 0.0, N),
-        10,
-    );
+    let (r, _, _) = ask_camera(&mut b, MavCmd::SetCameraSource, p4(0.0, 1.0, 0.0, N), 10);
     assert_eq!(r, MavResult::Accepted);
-    let (_, _, q) = ask(&mut b, CAMERA, stop, [N; 7], 10);
+    let (_, _, q) = ask_camera(&mut b, stop, [N; 7], 10);
     assert_eq!(q, vec![DualLightCommand::StopTracking.into()]);
     // A secondary source (picture in picture) and NDVI cannot be had.
     for p in [p4(0.0, 1.0, 2.0, N), p4(0.0, 3.0, 0.0, N)] {
-        let (r, _, _) = ask(&mut b, CAMERA, MavCmd::SetCameraSource, p, 10);
+        let (r, _, _) = ask_camera(&mut b, MavCmd::SetCameraSource, p, 10);
         assert_eq!(r, MavResult::Denied, "{p:?}");
     }
 }
@@ -284,13 +265,7 @@ fn stop_tracking_goes_to_the_image_tracking_was_started_on() {
 #[test]
 fn the_infrared_source_needs_a_thermal_sensor() {
     let mut b = bridge(Family::X3);
-    let (r, _, _) = ask(
-        &mut b,
-        CAMERA,
-        MavCmd::SetCameraSource,
-        p4(0.0, 2.0, 0.0, N),
-        10,
-    );
+    let (r, _, _) = ask_camera(&mut b, MavCmd::SetCameraSource, p4(0.0, 2.0, 0.0, N), 10);
     assert_eq!(r, MavResult::Denied);
 }
 
@@ -304,6 +279,25 @@ fn postback(b: &mut Firmware, tracking: bool, ms: u32) {
     for data in p.to_can_frames() {
         b.link.receive(ids::POSTBACK, &data, t(ms));
     }
+}
+
+/// Polls every 10 ms over `span`, the gimbal saying `tracking` in a postback at `at`;
+/// what `pick` takes of each poll's frames, with its time.
+fn poll_over<T>(
+    b: &mut Firmware,
+    span: std::ops::RangeInclusive<u32>,
+    (at, tracking): (u32, bool),
+    pick: impl Fn(&[Frame<V2>]) -> Vec<T>,
+) -> Vec<(u32, T)> {
+    let mut seen = Vec::new();
+    for ms in span.step_by(10) {
+        if ms == at {
+            postback(b, tracking, ms);
+        }
+        b.poll(t(ms));
+        seen.extend(pick(&sent(b)).into_iter().map(|x| (ms, x)));
+    }
+    seen
 }
 
 fn statuses(frames: &[Frame<V2>]) -> Vec<(CameraTrackingStatusFlags, CameraTrackingMode)> {
@@ -328,9 +322,8 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
     b.poll(t(1000));
     assert!(statuses(&sent(&mut b)).is_empty());
     // QGroundControl: SET_MESSAGE_INTERVAL(275, 500000) after its track command.
-    let (r, frames, _) = ask(
+    let (r, frames, _) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::SetMessageInterval,
         p4(275.0, 500_000.0, N, N),
         1000,
@@ -339,25 +332,15 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
     assert!(statuses(&frames).is_empty());
     b.poll(t(1000));
     assert_eq!(statuses(&sent(&mut b)), vec![idle]);
-    let (r, _, _) = ask(
+    let (r, _, _) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::CameraTrackRectangle,
         p4(0.4, 0.4, 0.5, 0.5),
         1100,
     );
     assert_eq!(r, MavResult::Accepted);
     // At once, then every 500 ms: idle until the gimbal says it tracks (at 1701).
-    let mut seen = Vec::new();
-    for ms in (1101..=2600).step_by(10) {
-        if ms == 1701 {
-            postback(&mut b, true, ms);
-        }
-        b.poll(t(ms));
-        for s in statuses(&sent(&mut b)) {
-            seen.push((ms, s));
-        }
-    }
+    let seen = poll_over(&mut b, 1101..=2600, (1701, true), statuses);
     let active = (
         CameraTrackingStatusFlags::Active,
         CameraTrackingMode::Rectangle,
@@ -365,19 +348,12 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
     assert_eq!(seen, vec![(1101, idle), (1601, idle), (2101, active)]);
     // The gimbal loses the target: idle again, asked for once by REQUEST_MESSAGE.
     postback(&mut b, false, 2600);
-    let (r, frames, _) = ask(
-        &mut b,
-        CAMERA,
-        MavCmd::RequestMessage,
-        p4(275.0, N, N, N),
-        2600,
-    );
+    let (r, frames, _) = ask_camera(&mut b, MavCmd::RequestMessage, p4(275.0, N, N, N), 2600);
     assert_eq!(r, MavResult::Accepted);
     assert_eq!(statuses(&frames), vec![idle]);
     // −1 stops the stream (QGroundControl's stop); an interval out of range is denied.
-    let (r, _, _) = ask(
+    let (r, _, _) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::SetMessageInterval,
         p4(275.0, -1.0, N, N),
         2600,
@@ -388,9 +364,8 @@ fn the_tracking_status_follows_the_postback_at_the_interval_asked() {
     }
     assert!(statuses(&sent(&mut b)).is_empty());
     for bad in [500.0, 61_000_000.0, N] {
-        let (r, _, _) = ask(
+        let (r, _, _) = ask_camera(
             &mut b,
-            CAMERA,
             MavCmd::SetMessageInterval,
             p4(275.0, bad, N, N),
             4000,
@@ -453,24 +428,19 @@ fn the_target_is_at_the_centre_with_the_box_it_was_given_streamed_unasked() {
     // caller): while tracking what the bridge started it comes every 500 ms unasked.
     let mut b = bridge(Family::X3);
     postback(&mut b, false, 0);
-    let (r, _, _) = ask(
+    let (r, _, _) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::CameraTrackPoint,
         p4(0.3, 0.6, 0.05, N),
         1000,
     );
     assert_eq!(r, MavResult::Accepted);
-    let mut seen = Vec::new();
-    for ms in (1001..=3000).step_by(10) {
-        if ms == 1201 {
-            postback(&mut b, true, ms);
-        }
-        b.poll(t(ms));
-        for s in of::<CameraTrackingImageStatus>(&sent(&mut b)) {
-            seen.push((ms, s));
-        }
-    }
+    let seen = poll_over(
+        &mut b,
+        1001..=3000,
+        (1201, true),
+        of::<CameraTrackingImageStatus>,
+    );
     let times: Vec<u32> = seen.iter().map(|(ms, _)| *ms).collect();
     assert_eq!(times, [1001, 1501, 2001, 2501]);
     assert_eq!(seen[0].1.tracking_status, CameraTrackingStatusFlags::Idle);
@@ -482,9 +452,8 @@ fn the_target_is_at_the_centre_with_the_box_it_was_given_streamed_unasked() {
         assert_eq!((s.point_x, s.point_y, s.radius), (0.5, 0.5, 0.05));
     }
     // A rectangle: the box given, centred.
-    let (r, _, _) = ask(
+    let (r, _, _) = ask_camera(
         &mut b,
-        CAMERA,
         MavCmd::CameraTrackRectangle,
         p4(0.1, 0.2, 0.3, 0.6),
         3000,
@@ -500,24 +469,9 @@ fn the_target_is_at_the_centre_with_the_box_it_was_given_streamed_unasked() {
         "{s:?}"
     );
     // Stopped: IDLE once the gimbal says it no longer tracks, then nothing.
-    let (r, _, _) = ask(
-        &mut b,
-        CAMERA,
-        MavCmd::CameraStopTracking,
-        p4(N, N, N, N),
-        3100,
-    );
+    let (r, _, _) = ask_camera(&mut b, MavCmd::CameraStopTracking, p4(N, N, N, N), 3100);
     assert_eq!(r, MavResult::Accepted);
-    let mut after = Vec::new();
-    for ms in (3101..=5000).step_by(10) {
-        if ms == 3301 {
-            postback(&mut b, false, ms);
-        }
-        b.poll(t(ms));
-        for s in statuses(&sent(&mut b)) {
-            after.push((ms, s));
-        }
-    }
+    let after = poll_over(&mut b, 3101..=5000, (3301, false), statuses);
     let idle = (CameraTrackingStatusFlags::Idle, CameraTrackingMode::None);
     let active_unknown = (CameraTrackingStatusFlags::Active, CameraTrackingMode::None);
     assert_eq!(after, [(3101, active_unknown), (3601, idle)]);
