@@ -58,7 +58,8 @@ use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::Frame;
 use idu_gimbal::Instant;
 // The conversion between embassy-time and the core's clock, as the STM32F405 board does it.
-use idu_firmware_support::embassy::{embassy_at, tick};
+use idu_firmware_support::embassy::{embassy_at, next_wake, tick};
+use idu_firmware_support::vehicle::Sample;
 
 // ---- output and exit ----
 
@@ -80,16 +81,7 @@ static TO_GIMBAL: Channel<CriticalSectionRawMutex, Frame, 3> = Channel::new();
 /// Frames on the emulated bus, gimbal to link: a receive queue (a postback is 4 frames).
 static TO_LINK: Channel<CriticalSectionRawMutex, Frame, 16> = Channel::new();
 
-/// One vehicle state with the time it was measured.
-#[derive(Clone, Copy)]
-struct VehicleSample {
-    attitude: Attitude,
-    gps: Gps,
-    altitude: Altitude,
-    stamp: Instant,
-}
-
-static VEHICLE: Channel<CriticalSectionRawMutex, VehicleSample, 4> = Channel::new();
+static VEHICLE: Channel<CriticalSectionRawMutex, Sample, 4> = Channel::new();
 
 /// What the session asks of the link.
 #[derive(Clone, Copy)]
@@ -185,15 +177,7 @@ async fn link_task() {
 
         // Sleep until the first of: a frame, the link's deadline, vehicle data or a
         // request, room on the bus (only while frames wait for it).
-        let deadline = link.next_deadline(now);
-        // Just polled at `now`: a deadline still at `now` is a retry (a full queue waiting
-        // for the bus to take frames). Wait for the next millisecond or room: a timer
-        // already due would complete at once, and the task would never yield.
-        let deadline = if deadline == now {
-            now.add_millis(1)
-        } else {
-            deadline
-        };
+        let deadline = next_wake(&link, now);
         let waiting = link.has_transmit();
         let room = async {
             if waiting {
@@ -224,9 +208,7 @@ async fn link_task() {
             }
             Either4::Second(()) | Either4::Fourth(()) => {}
             Either4::Third(Either::First(sample)) => {
-                link.set_attitude(sample.attitude, sample.stamp);
-                link.set_gps(sample.gps, sample.stamp);
-                link.set_altitude(sample.altitude, sample.stamp);
+                sample.push(&mut link);
             }
             Either4::Third(Either::Second(request)) => {
                 let refused = match request {
@@ -262,7 +244,7 @@ async fn vehicle_task() {
             Altitude::new(450.0),
         ) {
             VEHICLE
-                .send(VehicleSample {
+                .send(Sample {
                     attitude,
                     gps,
                     altitude,

@@ -42,12 +42,11 @@ use static_cell::StaticCell;
 use idu_gimbal::interface::CAN_BITRATE;
 use idu_gimbal::link::{Config, Event, Link, RxId};
 use idu_gimbal::wire::ids;
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::Instant;
 // Between embassy-time and the core's clock; the stand-in vehicle data shared with the other
 // firmware.
-use idu_firmware_support::embassy::{embassy_at, tick};
-use idu_firmware_support::vehicle::vehicle_stand_in;
+use idu_firmware_support::embassy::{embassy_at, next_wake, tick};
+use idu_firmware_support::vehicle::{vehicle_stand_in, Sample};
 
 bind_interrupts!(struct Irqs {
     CAN1_TX => TxInterruptHandler<CAN1>;
@@ -68,16 +67,7 @@ const POSTBACK: ExtendedId = match ExtendedId::new(ids::POSTBACK) {
 const RX_QUEUE: usize = 16;
 static RX_BUF: StaticCell<RxBuf<RX_QUEUE>> = StaticCell::new();
 
-/// One vehicle state with the time it was measured.
-#[derive(Clone, Copy)]
-struct VehicleSample {
-    attitude: Attitude,
-    gps: Gps,
-    altitude: Altitude,
-    stamp: Instant,
-}
-
-static VEHICLE: Channel<CriticalSectionRawMutex, VehicleSample, 4> = Channel::new();
+static VEHICLE: Channel<CriticalSectionRawMutex, Sample, 4> = Channel::new();
 
 // ---- the gimbal task ----
 
@@ -149,7 +139,7 @@ fn log_event(link: &Link, event: Event, now: Instant) {
 #[embassy_executor::task]
 async fn gimbal_task(
     mut can: Can<'static>,
-    vehicle: Receiver<'static, CriticalSectionRawMutex, VehicleSample, 4>,
+    vehicle: Receiver<'static, CriticalSectionRawMutex, Sample, 4>,
 ) {
     let (mut tx, rx) = can.split();
     let mut rx = rx.buffered(RX_BUF.init(RxBuf::new()));
@@ -175,15 +165,7 @@ async fn gimbal_task(
 
         // Sleep until the first of: a frame, the link's deadline (or the next stats line),
         // vehicle data, a free mailbox (only while frames wait for one).
-        let deadline = link.next_deadline(now);
-        // Just polled at `now`: a deadline still at `now` is a retry (a full queue waiting
-        // for the bus to take frames). Wait for the next millisecond or a free mailbox: a
-        // timer already due would complete at once, and the task would never yield.
-        let deadline = if deadline == now {
-            now.add_millis(1)
-        } else {
-            deadline
-        };
+        let deadline = next_wake(&link, now);
         let wake = if next_stats.millis_since(now) < deadline.millis_since(now) {
             next_stats
         } else {
@@ -225,9 +207,7 @@ async fn gimbal_task(
             }
             Either4::Second(()) | Either4::Fourth(()) => {}
             Either4::Third(sample) => {
-                link.set_attitude(sample.attitude, sample.stamp);
-                link.set_gps(sample.gps, sample.stamp);
-                link.set_altitude(sample.altitude, sample.stamp);
+                sample.push(&mut link);
             }
         }
     }
@@ -238,7 +218,7 @@ async fn gimbal_task(
 /// Vehicle data at 10 Hz, from the stand-in the other firmware uses
 /// (`idu_firmware_support::vehicle`: replace it with the autopilot's estimates).
 #[embassy_executor::task]
-async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, VehicleSample, 4>) {
+async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, Sample, 4>) {
     let mut ticker = embassy_time::Ticker::every(embassy_time::Duration::from_millis(100));
     loop {
         ticker.next().await;
@@ -247,7 +227,7 @@ async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, VehicleS
             continue;
         };
         vehicle
-            .send(VehicleSample {
+            .send(Sample {
                 attitude,
                 gps,
                 altitude,

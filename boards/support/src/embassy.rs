@@ -1,6 +1,7 @@
 //! Between embassy-time and the core's clock, for the embassy boards (`boards/embassy_*`):
 //! the conversion holds at any embassy-time tick rate.
 
+use idu_gimbal::link::{Link, Medium};
 use idu_gimbal::Instant;
 
 /// The crate's wrapping millisecond tick at embassy's `at`: embassy's u64 millisecond
@@ -16,4 +17,20 @@ pub fn tick(at: embassy_time::Instant) -> Instant {
 pub fn embassy_at(deadline: Instant, now: embassy_time::Instant) -> embassy_time::Instant {
     let ahead = deadline.millis_since(tick(now));
     embassy_time::Instant::from_millis(now.as_millis() + u64::from(ahead))
+}
+
+/// When a task that has just polled `link` at `now` should wake: the link's deadline, or
+/// the next millisecond when that deadline is still `now` (a retry: a full queue waiting for
+/// the bus to take frames). A timer already due would complete at once, and the task would
+/// never yield.
+pub fn next_wake<const Q: usize, const T: usize, M: Medium>(
+    link: &Link<Q, T, M>,
+    now: Instant,
+) -> Instant {
+    let deadline = link.next_deadline(now);
+    if deadline == now {
+        now.add_millis(1)
+    } else {
+        deadline
+    }
 }

@@ -282,9 +282,14 @@ pub struct CanRig<'a> {
 impl<'a> CanRig<'a> {
     /// A rig on `bus`, its clock starting at `now`.
     pub fn new(bus: &'a DemoBus, now: Instant) -> Option<Self> {
+        Self::with_gimbal(bus, SimConfig::default(), now)
+    }
+
+    /// A rig on `bus` whose simulated gimbal is set up by `config`.
+    pub fn with_gimbal(bus: &'a DemoBus, config: SimConfig, now: Instant) -> Option<Self> {
         Some(CanRig {
             port: CanPort::new(bus.endpoint(0)?),
-            sim: Simulator::new(SimConfig::default(), now),
+            sim: Simulator::new(config, now),
             sim_can: bus.endpoint(1)?,
         })
     }

@@ -2,7 +2,7 @@
 //! board crates under `boards/`).
 
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-use idu_gimbal::Instant;
+use idu_gimbal::{Instant, Link};
 
 /// The vehicle's position, altitude and attitude, measured at one instant.
 pub type Vehicle = (Gps, Altitude, Attitude);
@@ -17,4 +17,27 @@ pub fn vehicle_stand_in(now: Instant) -> Option<Vehicle> {
     let altitude = Altitude::new(488.0).ok()?;
     let attitude = Attitude::new(1.5, -0.4, heading).ok()?;
     Some((gps, altitude, attitude))
+}
+
+/// One vehicle state with the time it was measured: what a vehicle task hands the task
+/// that owns the link (the embassy boards send it through a channel).
+#[derive(Clone, Copy)]
+pub struct Sample {
+    /// The vehicle's attitude.
+    pub attitude: Attitude,
+    /// The vehicle's position.
+    pub gps: Gps,
+    /// The vehicle's altitude.
+    pub altitude: Altitude,
+    /// When it was measured.
+    pub stamp: Instant,
+}
+
+impl Sample {
+    /// Gives the link each value, measured at the sample's stamp.
+    pub fn push<const Q: usize, const T: usize>(&self, link: &mut Link<Q, T>) {
+        link.set_attitude(self.attitude, self.stamp);
+        link.set_gps(self.gps, self.stamp);
+        link.set_altitude(self.altitude, self.stamp);
+    }
 }

@@ -27,15 +27,14 @@
 use stm32f4xx_hal as _;
 
 mod fw {
-    use embedded_can::{nb::Can, Frame as _};
     use embedded_io::{Read, Write};
     use idu_gimbal::mock::serial::{Pipe, Rx, Tx};
-    use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
-    use idu_gimbal::sim::{SimConfig, Simulator};
+    use idu_gimbal::mock::Bus;
+    use idu_gimbal::sim::SimConfig;
     use idu_gimbal::video::{Camera, Family};
     use idu_gimbal::wire::control::Palette;
     use idu_gimbal::wire::postback::GimbalType;
-    use idu_gimbal::{CanPort, Config, Instant, Link, Port};
+    use idu_gimbal::{Config, Instant, Link, Port};
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::camera::CameraConfig;
     use idu_gimbal_mavlink::framing::{Check, FrameReader, MAX_FRAME_LEN};
@@ -53,6 +52,7 @@ mod fw {
     use mavio::Message;
 
     // Semihosting output and exit (its panic and HardFault handlers exit with status 1).
+    use idu_firmware_support::session::{CanRig, DemoBus, Rig};
     use idu_firmware_support::{println, qemu};
 
     type Line<'a> = (Rx<'a, 512>, Tx<'a, 512>);
@@ -229,10 +229,9 @@ mod fw {
         ap: Autopilot<'a>,
         bridge: Bridge,
         link: Link,
-        port: CanPort<Endpoint<'a, 2, 32>>,
+        /// The firmware's CAN port and the simulated gimbal on the other end of the bus.
+        rig: CanRig<'a>,
         bridge_line: Line<'a>,
-        sim: Simulator,
-        sim_can: Endpoint<'a, 2, 32>,
         /// Bytes read from the autopilot's line that the bridge has not taken yet.
         input: SerialInput<256>,
         ms: u32,
@@ -249,7 +248,7 @@ mod fw {
             let _ = self
                 .input
                 .receive(&mut self.bridge, &mut self.link, now, |buf| line.read(buf));
-            let _ = self.port.poll(&mut self.link, now);
+            let _ = self.rig.port().poll(&mut self.link, now);
             self.bridge.poll(&mut self.link, now);
             loop {
                 let bytes = self.bridge.transmit_bytes();
@@ -260,15 +259,7 @@ mod fw {
                 let _ = self.bridge_line.1.write(bytes);
                 self.bridge.transmit_written(n);
             }
-            while let Ok(f) = Can::receive(&mut self.sim_can) {
-                let _ = self.sim.receive(f.raw_id(), f.data(), now);
-            }
-            let _ = self.sim.poll(now);
-            while let Some(f) = self.sim.pop_frame() {
-                if let Some(frame) = MockFrame::extended(f.id, &f.data) {
-                    let _ = Can::transmit(&mut self.sim_can, &frame);
-                }
-            }
+            self.rig.run_gimbal(now);
             self.ap.read(self.ms);
             self.ms += 1;
         }
@@ -304,19 +295,22 @@ mod fw {
     #[cortex_m_rt::entry]
     fn main() -> ! {
         println!("qemu_mavlink: scripted autopilot -> MAVLink bridge -> CAN -> simulated gimbal");
-        let bus: Bus<2, 32> = Bus::new(7);
+        let bus: DemoBus = Bus::new(7);
         let pipe: Pipe<512> = Pipe::new(7);
-        let (Some(ap_line), Some(bridge_line), Some(can), Some(sim_can)) =
-            (pipe.port(0), pipe.port(1), bus.endpoint(0), bus.endpoint(1))
-        else {
-            qemu::exit(false)
-        };
-        // The dual light: its three streams, the thermal settings of its definition.
-        let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
+        // The dual light: its three streams, the thermal settings of its definition, on
+        // both sides.
         let sim_config = SimConfig {
             gimbal_type: GimbalType::DualLight30x,
             ..SimConfig::default()
         };
+        let (Some(ap_line), Some(bridge_line), Some(rig)) = (
+            pipe.port(0),
+            pipe.port(1),
+            CanRig::with_gimbal(&bus, sim_config, Instant::from_millis(0)),
+        ) else {
+            qemu::exit(false)
+        };
+        let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
         let mut w = World {
             ap: Autopilot {
                 line: ap_line,
@@ -329,10 +323,8 @@ mod fw {
                 ..BridgeConfig::default()
             }),
             link: Link::new(Config::default()),
-            port: CanPort::new(can),
+            rig,
             bridge_line,
-            sim: Simulator::new(sim_config, Instant::from_millis(0)),
-            sim_can,
             input: SerialInput::new(),
             ms: 0,
             failures: 0,
@@ -356,7 +348,7 @@ mod fw {
                     w.ap.setpoint(GimbalDeviceFlags::YAW_IN_EARTH_FRAME, 90.0, -30.0, 0.0);
                 }
             },
-            |w| w.status_near(90.0, -30.0) && w.sim.state().motor_yaw_deg == 60.0,
+            |w| w.status_near(90.0, -30.0) && w.rig.sim_state().motor_yaw_deg == 60.0,
         );
         w.until(
             "setpoint flags 0 (vehicle frame) yaw 0 pitch -100 reached",
@@ -369,7 +361,7 @@ mod fw {
             |w| w.status_near(30.0, -100.0),
         );
         // A rate for 1 s, then nothing: the gimbal turns, then the dead-man stops it.
-        let before = w.sim.state().motor_yaw_deg;
+        let before = w.rig.sim_state().motor_yaw_deg;
         for _ in 0..1_000 {
             if w.ms.is_multiple_of(50) {
                 w.ap.setpoint(GimbalDeviceFlags::empty(), 0.0, 0.0, 20.0);
@@ -379,12 +371,12 @@ mod fw {
         for _ in 0..600 {
             w.tick();
         }
-        let stopped = w.sim.state().motor_yaw_deg;
+        let stopped = w.rig.sim_state().motor_yaw_deg;
         for _ in 0..500 {
             w.tick();
         }
-        let still = w.sim.state().motor_yaw_deg;
-        if stopped - before > 10.0 && still == stopped && w.sim.state().rate == (0.0, 0.0) {
+        let still = w.rig.sim_state().motor_yaw_deg;
+        if stopped - before > 10.0 && still == stopped && w.rig.sim_state().rate == (0.0, 0.0) {
             println!(
                 "  ok   rate setpoints turned the gimbal {:.1} deg, the dead-man stopped it",
                 stopped - before
@@ -405,13 +397,13 @@ mod fw {
                     w.ap.command(100, MavCmd::ImageStartCapture, [0.0, 0.0, 1.0]);
                 }
             },
-            |w| w.sim.state().photos == 1,
+            |w| w.rig.sim_state().photos == 1,
         );
         // Tracking as QGroundControl asks for it: the status every 500 ms, then a rectangle
         // right of the centre, (0.6, 0.45)-(0.7, 0.55): the simulated gimbal turns toward
         // it (its heading grows), and the status says it tracks.
         w.ap.command(100, MavCmd::SetMessageInterval, [275.0, 500_000.0, 0.0]);
-        let heading = w.sim.state().motor_yaw_deg;
+        let heading = w.rig.sim_state().motor_yaw_deg;
         w.until(
             "TRACK_RECTANGLE: the gimbal tracks, turns toward the box, the status says ACTIVE",
             3_000,
@@ -421,7 +413,7 @@ mod fw {
                 }
             },
             |w| {
-                let s = w.sim.state();
+                let s = w.rig.sim_state();
                 s.tracking && s.motor_yaw_deg > heading + 1.0 && w.ap.seen.tracking == Some(true)
             },
         );
@@ -433,7 +425,7 @@ mod fw {
                     w.ap.command(100, MavCmd::CameraStopTracking, [0.0; 3]);
                 }
             },
-            |w| !w.sim.state().tracking && w.ap.seen.tracking == Some(false),
+            |w| !w.rig.sim_state().tracking && w.ap.seen.tracking == Some(false),
         );
         // The palette, a setting of the dual light's camera definition (PARAM_EXT_SET).
         w.until(
@@ -456,7 +448,7 @@ mod fw {
             },
             |w| {
                 w.ap.seen.param_ack == Some((ParamAck::Accepted, 2))
-                    && w.sim.state().palette == Some(Palette::IronRed)
+                    && w.rig.sim_state().palette == Some(Palette::IronRed)
             },
         );
         let gap = w.ap.seen.worst_gap;
