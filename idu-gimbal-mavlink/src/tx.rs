@@ -13,126 +13,77 @@ use crate::framing::Outbox;
 /// Bytes of serialized frames the bridge holds for the transport.
 pub const OUTBOX_LEN: usize = 1024;
 
-/// What the camera is given to send with: the outbox, and what it reports from the
-/// bridge's state.
-pub(crate) struct Tx<'a> {
-    pub(crate) out: &'a mut Outbox<OUTBOX_LEN>,
+/// Where every frame the bridge and its camera send goes: the outbox, the system ID they
+/// send as, and a count of the frames a full outbox refused.
+pub(crate) struct Sender {
+    pub(crate) outbox: Outbox<OUTBOX_LEN>,
     pub(crate) system_id: u8,
-    pub(crate) outbox_full: &'a mut u32,
-    /// The vehicle's position and the camera's attitude now, for captures.
-    pub(crate) vantage: Vantage,
-    /// The gimbal type from the latest postback.
-    pub(crate) gimbal_type: Option<GimbalType>,
+    /// Frames a full outbox refused.
+    pub(crate) outbox_full: u32,
 }
 
-/// Queues `message` from `(system_id, component)`; a full outbox is counted in `full`.
-/// The one way every frame the bridge sends goes out.
-pub(crate) fn push_counted(
-    out: &mut Outbox<OUTBOX_LEN>,
-    system_id: u8,
-    full: &mut u32,
-    component: u8,
-    message: &dyn Message,
-) {
-    if out.push(system_id, component, message).is_err() {
-        bump(full);
-    }
-}
-
-/// [`push_counted`] for message `M`, its `len`-byte payload written in place by its codec
-/// ([`crate::codec`]).
-pub(crate) fn push_encoded<M: MessageSpecStatic>(
-    out: &mut Outbox<OUTBOX_LEN>,
-    system_id: u8,
-    full: &mut u32,
-    component: u8,
-    len: usize,
-    encode: impl FnOnce(&mut [u8]),
-) {
-    if out
-        .push_with(
+impl Sender {
+    /// Sending into `outbox` as `system_id`.
+    pub(crate) fn new(outbox: Outbox<OUTBOX_LEN>, system_id: u8) -> Self {
+        Sender {
+            outbox,
             system_id,
-            component,
-            M::message_id(),
-            M::crc_extra(),
-            len,
-            encode,
-        )
-        .is_err()
-    {
-        bump(full);
-    }
-}
-
-/// Queues `me`'s `COMMAND_ACK` of `command` with `result` to `to`: the one way ACKs go out.
-/// Out of line: three callers, one copy of the codec.
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn push_ack(
-    out: &mut Outbox<OUTBOX_LEN>,
-    system_id: u8,
-    full: &mut u32,
-    me: u8,
-    command: u16,
-    result: MavResult,
-    to: (u8, u8),
-) {
-    push_encoded::<CommandAck>(
-        out,
-        system_id,
-        full,
-        me,
-        crate::codec::command_ack::LEN,
-        |p| crate::codec::command_ack::encode(command, result, to, p),
-    );
-}
-
-impl Tx<'_> {
-    /// Queues `me`'s ACK of `command` to `to`.
-    pub(crate) fn ack(&mut self, me: u8, command: u16, result: MavResult, to: (u8, u8)) {
-        push_ack(
-            self.out,
-            self.system_id,
-            self.outbox_full,
-            me,
-            command,
-            result,
-            to,
-        );
+            outbox_full: 0,
+        }
     }
 
     /// Queues `message` from `component`; a full outbox is counted.
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
-        push_counted(
-            self.out,
-            self.system_id,
-            self.outbox_full,
-            component,
-            message,
-        );
+        let pushed = self.outbox.push(self.system_id, component, message);
+        if pushed.is_err() {
+            bump(&mut self.outbox_full);
+        }
     }
 
-    /// Queues message `M` from `component`, its `len`-byte payload written by its codec.
+    /// Queues message `M` from `component`, its `len`-byte payload written in place by its
+    /// codec ([`crate::codec`]); a full outbox is counted.
     pub(crate) fn send_encoded<M: MessageSpecStatic>(
         &mut self,
         component: u8,
         len: usize,
         encode: impl FnOnce(&mut [u8]),
     ) {
-        push_encoded::<M>(
-            self.out,
+        let pushed = self.outbox.push_with(
             self.system_id,
-            self.outbox_full,
             component,
+            M::message_id(),
+            M::crc_extra(),
             len,
             encode,
         );
+        if pushed.is_err() {
+            bump(&mut self.outbox_full);
+        }
+    }
+
+    /// Queues `me`'s `COMMAND_ACK` of `command` with `result` to `to`: the one way ACKs go
+    /// out. Out of line: several callers, one copy of the codec.
+    #[inline(never)]
+    pub(crate) fn ack(&mut self, me: u8, command: u16, result: MavResult, to: (u8, u8)) {
+        self.send_encoded::<CommandAck>(me, crate::codec::command_ack::LEN, |p| {
+            crate::codec::command_ack::encode(command, result, to, p)
+        });
     }
 
     /// Bytes the outbox has room for.
     pub(crate) fn room(&self) -> usize {
-        self.out.room()
+        self.outbox.room()
     }
+}
+
+/// What the camera is given to send with: the bridge's sender, and what it reports from the
+/// bridge's state.
+pub(crate) struct Tx<'a> {
+    pub(crate) out: &'a mut Sender,
+    /// The vehicle's position and the camera's attitude now, for captures.
+    pub(crate) vantage: Vantage,
+    /// The gimbal type from the latest postback.
+    pub(crate) gimbal_type: Option<GimbalType>,
 }
 
 /// A message's id.

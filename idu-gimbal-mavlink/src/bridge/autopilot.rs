@@ -12,7 +12,7 @@ use mavio::dialects::common::messages::{
 
 use super::{State, AUTOPILOT_COMPONENT, AUTOPILOT_SILENCE_MS};
 use crate::attitude;
-use crate::tx::{bump, push_counted};
+use crate::tx::bump;
 use idu_gimbal::link::{Link, Medium};
 
 /// How often to ask the autopilot again for a stream that does not come.
@@ -154,7 +154,7 @@ impl State {
         }
         self.autopilot = Some((system, component));
         if self.config.system_id.is_none() {
-            self.system_id = system;
+            self.out.system_id = system;
         }
     }
 
@@ -235,13 +235,7 @@ impl State {
                 param6: 0.0,
                 param7: 0.0,
             };
-            push_counted(
-                &mut self.out,
-                self.system_id,
-                &mut self.stats.outbox_full,
-                self.config.gimbal_component,
-                &ask,
-            );
+            self.out.send(self.config.gimbal_component, &ask);
         }
     }
 }

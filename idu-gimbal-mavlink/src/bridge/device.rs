@@ -67,7 +67,7 @@ impl State {
             id: 0,
             chunk_seq: 0,
         };
-        self.send_encoded::<Statustext>(
+        self.out.send_encoded::<Statustext>(
             self.config.gimbal_component,
             codec::statustext::LEN,
             |p| codec::statustext::encode(&message, p),
@@ -91,14 +91,17 @@ impl State {
         let camera_known = gimbal.gimbal_type().is_some();
         self.next_heartbeat = Some(now.add_millis(self.config.heartbeat_ms.max(1)));
         let hb = codec::heartbeat::of_component(MavType::Gimbal);
-        self.send_encoded::<Heartbeat>(self.config.gimbal_component, codec::heartbeat::LEN, |p| {
-            codec::heartbeat::encode(&hb, p)
-        });
+        self.out.send_encoded::<Heartbeat>(
+            self.config.gimbal_component,
+            codec::heartbeat::LEN,
+            |p| codec::heartbeat::encode(&hb, p),
+        );
         if let (Some(camera), true) = (self.camera_component(), camera_known) {
             let hb = codec::heartbeat::of_component(MavType::Camera);
-            self.send_encoded::<Heartbeat>(camera, codec::heartbeat::LEN, |p| {
-                codec::heartbeat::encode(&hb, p)
-            });
+            self.out
+                .send_encoded::<Heartbeat>(camera, codec::heartbeat::LEN, |p| {
+                    codec::heartbeat::encode(&hb, p)
+                });
         }
     }
 
@@ -132,7 +135,7 @@ impl State {
             yaw_max: yaw_limit,
             gimbal_device_id: 0,
         };
-        self.send(self.config.gimbal_component, &info);
+        self.out.send(self.config.gimbal_component, &info);
     }
 
     pub(super) fn status<const Q: usize, const T: usize, M: Medium>(
@@ -179,7 +182,7 @@ impl State {
                 .unwrap_or(f32::NAN),
             gimbal_device_id: 0,
         };
-        self.send_encoded::<GimbalDeviceAttitudeStatus>(
+        self.out.send_encoded::<GimbalDeviceAttitudeStatus>(
             self.config.gimbal_component,
             codec::attitude_status::LEN,
             |p| codec::attitude_status::encode(&status, p),

@@ -43,7 +43,7 @@ impl State {
         frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
-        if self.room() < ANSWER_ROOM {
+        if self.out.room() < ANSWER_ROOM {
             return Check::Wait;
         }
         self.dispatch(gimbal, frame, now)
@@ -61,7 +61,7 @@ impl State {
         // Signing: only frames signed with the key, newer than their stream's last (a frame
         // changed in transit fails its signature, counted so).
         #[cfg(feature = "signing")]
-        if let Some(signing) = self.out.signing_mut() {
+        if let Some(signing) = self.out.outbox.signing_mut() {
             let (system, component) = (frame.system_id(), frame.component_id());
             if !signing.verify(frame.bytes(), frame.is_signed(), system, component) {
                 return Check::Unhandled;
@@ -179,7 +179,7 @@ impl State {
                 true,
             )
         };
-        let for_camera = (target.0 == self.system_id || target.0 == 0 && broadcast_ok)
+        let for_camera = (target.0 == self.out.system_id || target.0 == 0 && broadcast_ok)
             && (target.1 == me || target.1 == 0 && broadcast_ok);
         if !for_camera {
             bump(&mut self.stats.not_for_us);
@@ -265,7 +265,7 @@ impl State {
             let acked = self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
                 let (result, reply) = camera.command(config, gimbal, cmd, now, vantage);
                 // The ACK first, then what the command produced.
-                tx.ack(me, cmd.command as u16, result, from);
+                tx.out.ack(me, cmd.command as u16, result, from);
                 camera.reply(config, gimbal, reply, now, tx);
             });
             if acked.is_some() {

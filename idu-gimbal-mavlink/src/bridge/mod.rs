@@ -10,14 +10,12 @@
 use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand};
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::MavResult;
-use mavio::mavspec::rust::spec::MessageSpecStatic;
-use mavio::Message;
 
 use crate::camera::{CameraComponent, CameraConfig};
 use crate::capture::Vantage;
 use crate::framing::{self, Check, FrameReader, Outbox, ReaderStats, ReceivedFrame};
 use crate::status::Pose;
-use crate::tx::{bump, push_ack, push_counted, push_encoded, Tx};
+use crate::tx::{bump, Sender, Tx};
 use idu_gimbal::link::{Link, Medium};
 
 mod autopilot;
@@ -155,8 +153,8 @@ pub struct Bridge {
 /// Everything but the reader, so that the reader's callback can borrow it.
 pub(crate) struct State {
     pub(crate) config: BridgeConfig,
-    out: Outbox<OUTBOX_LEN>,
-    system_id: u8,
+    /// Every frame the bridge sends goes through it, as its system ID.
+    pub(crate) out: Sender,
     /// The autopilot's (system, component), from its heartbeat, and when it was last heard
     /// (see [`AUTOPILOT_SILENCE_MS`]).
     autopilot: Option<(u8, u8)>,
@@ -207,8 +205,7 @@ impl Bridge {
             reader: FrameReader::new(),
             state: State {
                 config,
-                out,
-                system_id,
+                out: Sender::new(out, system_id),
                 autopilot: None,
                 autopilot_heard: None,
                 next_heartbeat: None,
@@ -299,17 +296,17 @@ impl Bridge {
     /// The MAVLink bytes to write next; empty when nothing waits. Report with
     /// [`Bridge::transmit_written`].
     pub fn transmit_bytes(&self) -> &[u8] {
-        self.state.out.bytes()
+        self.state.out.outbox.bytes()
     }
 
     /// `n` bytes of [`Bridge::transmit_bytes`] were written.
     pub fn transmit_written(&mut self, n: usize) {
-        self.state.out.written(n)
+        self.state.out.outbox.written(n)
     }
 
     /// The system id in use (configured, or learned from the autopilot).
     pub fn system_id(&self) -> u8 {
-        self.state.system_id
+        self.state.out.system_id
     }
 
     /// The configuration.
@@ -325,7 +322,7 @@ impl Bridge {
     /// What signing accepted and turned away; `None` when not signing (feature `signing`).
     #[cfg(feature = "signing")]
     pub fn signing_stats(&self) -> Option<crate::signing::SigningStats> {
-        self.state.out.signing().map(|s| s.stats())
+        self.state.out.outbox.signing().map(|s| s.stats())
     }
 
     /// The timestamps signed from now on are at least `timestamp` (10 µs units since
@@ -333,7 +330,7 @@ impl Bridge {
     /// receivers that know the time take its first frames (feature `signing`).
     #[cfg(feature = "signing")]
     pub fn signing_time_at_least(&mut self, timestamp: u64) {
-        if let Some(s) = self.state.out.signing_mut() {
+        if let Some(s) = self.state.out.outbox.signing_mut() {
             s.at_least(timestamp);
         }
     }
@@ -342,57 +339,17 @@ impl Bridge {
     pub fn stats(&self) -> BridgeStats {
         BridgeStats {
             reader: self.reader.stats(),
+            outbox_full: self.state.out.outbox_full,
             ..self.state.stats
         }
     }
 }
 
 impl State {
-    /// Queues message `M` from `component`, its `len`-byte payload written by its codec
-    /// ([`crate::codec`]); a full outbox is counted.
-    fn send_encoded<M: MessageSpecStatic>(
-        &mut self,
-        component: u8,
-        len: usize,
-        encode: impl FnOnce(&mut [u8]),
-    ) {
-        push_encoded::<M>(
-            &mut self.out,
-            self.system_id,
-            &mut self.stats.outbox_full,
-            component,
-            len,
-            encode,
-        );
-    }
-
-    /// Bytes the outbox has room for.
-    fn room(&self) -> usize {
-        self.out.room()
-    }
-
     /// Queues `me`'s ACK of `command` to `to`, counted.
     pub(super) fn ack(&mut self, me: u8, to: (u8, u8), command: u16, result: MavResult) {
         bump(&mut self.stats.acks);
-        push_ack(
-            &mut self.out,
-            self.system_id,
-            &mut self.stats.outbox_full,
-            me,
-            command,
-            result,
-            to,
-        );
-    }
-
-    pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
-        push_counted(
-            &mut self.out,
-            self.system_id,
-            &mut self.stats.outbox_full,
-            component,
-            message,
-        );
+        self.out.ack(me, command, result, to);
     }
 
     fn camera_component(&self) -> Option<u8> {
@@ -404,7 +361,7 @@ impl State {
 
     /// Whether a message to `(system, component)` is for one of the bridge's components.
     fn for_us(&self, system: u8, component: u8) -> bool {
-        (system == 0 || system == self.system_id)
+        (system == 0 || system == self.out.system_id)
             && (component == 0
                 || component == self.config.gimbal_component
                 || Some(component) == self.camera_component())
@@ -413,7 +370,7 @@ impl State {
     /// Whether a gimbal message (set attitude, autopilot state) to `(system, component)` is
     /// the gimbal device's.
     fn for_gimbal(&self, system: u8, component: u8) -> bool {
-        (system == 0 || system == self.system_id)
+        (system == 0 || system == self.out.system_id)
             && (component == 0 || component == self.config.gimbal_component)
     }
 
@@ -430,15 +387,11 @@ impl State {
             camera,
             config,
             out,
-            system_id,
-            stats,
             ..
         } = self;
         let (camera, config) = (camera.as_mut()?, config.camera.as_ref()?);
         let mut tx = Tx {
             out,
-            system_id: *system_id,
-            outbox_full: &mut stats.outbox_full,
             vantage,
             gimbal_type: gimbal.gimbal_type(),
         };

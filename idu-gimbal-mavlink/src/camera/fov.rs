@@ -223,5 +223,5 @@ pub(crate) fn send_status(
         vfov,
         camera_device_id: 0,
     };
-    tx.send(config.component, &m);
+    tx.out.send(config.component, &m);
 }

@@ -498,7 +498,7 @@ impl CameraComponent {
     /// next polls.
     fn resend_images(&mut self, config: &CameraConfig, tx: &mut Tx<'_>) {
         while let Some((first, last)) = self.resend {
-            if tx.room() < MAX_FRAME_LEN {
+            if tx.out.room() < MAX_FRAME_LEN {
                 return;
             }
             let next = self.capture.history(first, last).next().copied();
@@ -541,7 +541,7 @@ impl CameraComponent {
         self.resend_images(config, tx);
         self.streams.send(config, self.zoom, tx);
         self.settings.send_pending(config.component, tx);
-        while self.ftp.burst_pending() && tx.room() >= MAX_FRAME_LEN {
+        while self.ftp.burst_pending() && tx.out.room() >= MAX_FRAME_LEN {
             let mut payload = [0u8; PAYLOAD_LEN];
             let files = [self.definition(config, tx)];
             if !self.ftp.burst_next(&files, now, &mut payload) {
@@ -549,20 +549,20 @@ impl CameraComponent {
             }
             self.send_ftp(config, payload, self.burst_client, tx);
         }
-        if self.tracking.due(now) && tx.room() >= MAX_FRAME_LEN {
+        if self.tracking.due(now) && tx.out.room() >= MAX_FRAME_LEN {
             self.tracking.send_status(gimbal, config.component, now, tx);
         }
-        if self.recording_status.due(now) && tx.room() >= MAX_FRAME_LEN {
+        if self.recording_status.due(now) && tx.out.room() >= MAX_FRAME_LEN {
             self.recording_status.sent(now);
             self.send_capture_status(config, now, tx);
         }
-        if self.fov_status.due(now) && tx.room() >= MAX_FRAME_LEN {
+        if self.fov_status.due(now) && tx.out.room() >= MAX_FRAME_LEN {
             fov::send_status(config, &mut self.fov_status, self.zoom, now, tx);
         }
         // An image whose command the gimbal's queue has no room for is tried at the next
         // poll: late, never lost.
         if self.capture.due(now)
-            && tx.room() >= MAX_FRAME_LEN
+            && tx.out.room() >= MAX_FRAME_LEN
             && gimbal
                 .send(GimbalCmd::from(GimbalCommand::Photo(Photo::Single)))
                 .is_ok()
@@ -622,7 +622,7 @@ impl CameraComponent {
             target_component: to.1,
             payload,
         };
-        tx.send(config.component, &m);
+        tx.out.send(config.component, &m);
     }
 
     fn send_captured(&self, config: &CameraConfig, image: &Image, tx: &mut Tx<'_>) {
@@ -641,7 +641,7 @@ impl CameraComponent {
             capture_result: 1,
             file_url: [0; 205],
         };
-        tx.send(config.component, &msg);
+        tx.out.send(config.component, &msg);
     }
 
     fn send_information(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
@@ -668,7 +668,7 @@ impl CameraComponent {
             gimbal_device_id: self.gimbal_device_id,
             camera_device_id: 0,
         };
-        tx.send(config.component, &info);
+        tx.out.send(config.component, &info);
     }
 
     /// The zoom level in % of the range; NaN when the level or the range is unknown.
@@ -687,7 +687,7 @@ impl CameraComponent {
             focus_level: f32::NAN,
             camera_device_id: 0,
         };
-        tx.send(config.component, &s);
+        tx.out.send(config.component, &s);
     }
 
     fn send_storage(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
@@ -705,7 +705,7 @@ impl CameraComponent {
             name: [0; 32],
             storage_usage: StorageUsageFlag::SET,
         };
-        tx.send(config.component, &s);
+        tx.out.send(config.component, &s);
     }
 
     fn send_capture_status(&self, config: &CameraConfig, now: Instant, tx: &mut Tx<'_>) {
@@ -727,6 +727,6 @@ impl CameraComponent {
             image_count: self.capture.count(),
             camera_device_id: 0,
         };
-        tx.send(config.component, &s);
+        tx.out.send(config.component, &s);
     }
 }

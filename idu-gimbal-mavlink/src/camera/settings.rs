@@ -165,7 +165,7 @@ impl Settings {
             if self.listing & bit == 0 {
                 continue;
             }
-            if tx.room() < MAX_FRAME_LEN {
+            if tx.out.room() < MAX_FRAME_LEN {
                 return;
             }
             self.send_value(i, component, tx);
@@ -185,7 +185,7 @@ impl Settings {
             param_count: self.count as u16,
             param_index: i as u16,
         };
-        tx.send(component, &m);
+        tx.out.send(component, &m);
     }
 
     /// `PARAM_EXT_SET`: the setting sent to the gimbal, and the `PARAM_EXT_ACK`.
@@ -205,9 +205,10 @@ impl Settings {
                 Some(v) => (value_field(v), MavParamExtType::Uint8 as u8),
                 None => (set.param_value, set.param_type),
             };
-        tx.send_encoded::<ParamExtAck>(component, param_ext::ACK_LEN, |p| {
-            param_ext::encode_ack(&set.param_id, &param_value, param_type, result as u8, p)
-        });
+        tx.out
+            .send_encoded::<ParamExtAck>(component, param_ext::ACK_LEN, |p| {
+                param_ext::encode_ack(&set.param_id, &param_value, param_type, result as u8, p)
+            });
     }
 
     fn apply<const Q: usize, const T: usize, M: Medium>(

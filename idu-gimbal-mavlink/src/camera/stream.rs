@@ -103,14 +103,14 @@ impl Pending {
             // The index is below MAX_STREAMS: the id fits.
             let id = (i as u8).saturating_add(1);
             if self.information & bit != 0 {
-                if tx.room() < MAX_FRAME_LEN {
+                if tx.out.room() < MAX_FRAME_LEN {
                     return;
                 }
                 send_information(config, stream, id, count, hfov, tx);
                 self.information &= !bit;
             }
             if self.status & bit != 0 {
-                if tx.room() < MAX_FRAME_LEN {
+                if tx.out.room() < MAX_FRAME_LEN {
                     return;
                 }
                 send_status(config, stream, id, hfov, tx);
@@ -145,7 +145,7 @@ fn send_information(
         encoding: VideoStreamEncoding::Unknown,
         camera_device_id: 0,
     };
-    tx.send(config.component, &s);
+    tx.out.send(config.component, &s);
 }
 
 /// A stream's status (MAVSDK's camera plugin asks for it before it reports the stream):
@@ -163,5 +163,5 @@ fn send_status(config: &CameraConfig, stream: &VideoStream, id: u8, hfov: u16, t
         hfov,
         camera_device_id: 0,
     };
-    tx.send(config.component, &s);
+    tx.out.send(config.component, &s);
 }

@@ -260,7 +260,7 @@ impl Tracking {
                 }
             }
         }
-        tx.send_encoded::<CameraTrackingImageStatus>(
+        tx.out.send_encoded::<CameraTrackingImageStatus>(
             component,
             crate::codec::tracking_image_status::LEN,
             |p| crate::codec::tracking_image_status::encode(&s, p),
