@@ -3,7 +3,8 @@
 # QEMU `-icount shift=0` (benches/mcu: qemu_bench, qemu_bench_mavlink, the latter beside the
 # C MAVLink library on the same bytes, and qemu_bench_signing, what MAVLink 2 signing costs
 # a frame), then the flash cost of each CRC variant (nm) and the
-# driver's flash and static RAM (scripts/size-report.sh). Built with the pinned toolchain
+# driver's flash and static RAM (scripts/size-report.sh), and that no panic path of the
+# libraries is left in these programs (scripts/panic-paths.py). Built with the pinned toolchain
 # BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
 #
 # Exit status 1 if a budget is exceeded. Installs the bench toolchain, the target,
@@ -101,4 +102,9 @@ scripts/size-report.sh || status=$?
 echo
 echo "A poll generic over its port against the poll written for the port (footprint_generic):"
 scripts/port-generic.sh || status=$?
+
+echo
+echo "No panic path of the libraries in the benchmark programs (scripts/panic-paths.py):"
+python3 scripts/panic-paths.py "$PWD" "$(firmware_elf qemu_bench)" "$(firmware_elf qemu_bench_mavlink)" \
+    "$FIRMWARE_TARGET_DIR-signing/$TARGET/release/qemu_bench_signing" || status=$?
 exit "$status"

@@ -200,14 +200,15 @@ impl StreamParser {
         let mut out = None;
         loop {
             // Hand back all buffered bytes but the first, ahead of those not yet seen.
-            let keep = self.len.saturating_sub(1);
             self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(1);
-            let new_start = start.saturating_sub(keep);
-            if let (Some(dst), Some(src)) =
-                (todo.get_mut(new_start..start), self.buf.get(1..self.len))
-            {
-                dst.copy_from_slice(src);
-                start = new_start;
+            let kept = self.buf.get(1..self.len).unwrap_or(&[]);
+            // They fit ahead of `start` (everything in play fits `todo`); the slices are of
+            // one length, so the copy has no length check to fail.
+            if let Some(new_start) = start.checked_sub(kept.len()) {
+                if let Some(dst) = todo.get_mut(new_start..start) {
+                    dst.copy_from_slice(kept);
+                    start = new_start;
+                }
             }
             self.len = 0;
             let mut again = false;

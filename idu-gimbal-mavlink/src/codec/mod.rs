@@ -102,7 +102,8 @@ fn u8_at(p: &[u8], at: usize) -> u8 {
 /// Writes `value`'s bytes at `at` (in bounds for every offset the codecs use).
 #[inline(always)]
 fn put<const N: usize>(p: &mut [u8], at: usize, value: [u8; N]) {
-    if let Some(dst) = p.get_mut(at..at.saturating_add(N)) {
+    // `..N` of what is past `at`: N bytes, so the copy has no length check to fail.
+    if let Some(dst) = p.get_mut(at..).and_then(|p| p.get_mut(..N)) {
         dst.copy_from_slice(&value);
     }
 }

@@ -118,7 +118,10 @@ impl<const N: usize> Outbox<N> {
         payload: &[u8],
     ) -> Result<(), OutboxError> {
         self.push_with(system, component, id, crc_extra, payload.len(), |p| {
-            p.copy_from_slice(payload)
+            // `p` is `payload.len()` long; taken as such, the copy has no length check.
+            if let Some(dst) = p.get_mut(..payload.len()) {
+                dst.copy_from_slice(payload);
+            }
         })
     }
 
@@ -213,14 +216,17 @@ impl<const N: usize> Outbox<N> {
         let checksummed = frame.get(1..payload_end).unwrap_or(&[]);
         let crc = x25::step(x25::update(x25::INIT, checksummed), crc_extra);
         let body_len = payload_end.saturating_add(CHECKSUM_LEN);
-        if let Some(at) = frame.get_mut(payload_end..body_len) {
-            at.copy_from_slice(&crc.to_le_bytes());
+        if let Some(at) = frame
+            .get_mut(payload_end..)
+            .and_then(|f| f.first_chunk_mut())
+        {
+            *at = crc.to_le_bytes();
         }
         #[cfg(feature = "signing")]
         if let Some(signing) = self.signing.as_mut() {
             let block = signing.sign(frame.get(..body_len).unwrap_or(&[]));
-            if let Some(at) = frame.get_mut(body_len..body_len.saturating_add(signature_len)) {
-                at.copy_from_slice(&block);
+            if let Some(at) = frame.get_mut(body_len..).and_then(|f| f.first_chunk_mut()) {
+                *at = block;
             }
         }
         self.end = self
