@@ -250,15 +250,29 @@ impl<const N: usize> Pipe<N> {
         self.state.try_borrow_mut().ok().map(|mut s| f(&mut s))
     }
 
-    /// Reads into `buf`: `Ok(0)` when nothing waits.
-    fn read(&self, line: usize, buf: &mut [u8]) -> Result<usize, MockSerialError> {
+    /// `f` on `line` with the fault generator and settings; `Ok(0)` (nothing moved) when the
+    /// pipe is busy or there is no such line.
+    fn on_line(
+        &self,
+        line: usize,
+        f: impl FnOnce(
+            &mut fastrand::Rng,
+            &SerialFaults,
+            &mut Line<N>,
+        ) -> Result<usize, MockSerialError>,
+    ) -> Result<usize, MockSerialError> {
         self.with(|s| {
             let State {
                 rng, faults, lines, ..
             } = s;
-            let Some(l) = lines.get_mut(line) else {
-                return Ok(0);
-            };
+            lines.get_mut(line).map_or(Ok(0), |l| f(rng, faults, l))
+        })
+        .unwrap_or(Ok(0))
+    }
+
+    /// Reads into `buf`: `Ok(0)` when nothing waits.
+    fn read(&self, line: usize, buf: &mut [u8]) -> Result<usize, MockSerialError> {
+        self.on_line(line, |rng, faults, l| {
             if l.overrun {
                 l.overrun = false;
                 bump(&mut l.stats.errors, 1);
@@ -275,7 +289,6 @@ impl<const N: usize> Pipe<N> {
             bump(&mut l.stats.delivered, n);
             Ok(n)
         })
-        .unwrap_or(Ok(0))
     }
 
     fn read_ready(&self, line: usize) -> bool {
@@ -300,13 +313,7 @@ impl<const N: usize> Pipe<N> {
         bytes: &[u8],
         stall_checked: bool,
     ) -> Result<usize, MockSerialError> {
-        self.with(|s| {
-            let State {
-                rng, faults, lines, ..
-            } = s;
-            let Some(l) = lines.get_mut(line) else {
-                return Ok(0);
-            };
+        self.on_line(line, |rng, faults, l| {
             if roll(rng, faults.tx_error) {
                 bump(&mut l.stats.errors, 1);
                 return Err(MockSerialError::Noise);
@@ -334,7 +341,6 @@ impl<const N: usize> Pipe<N> {
             }
             Ok(n)
         })
-        .unwrap_or(Ok(0))
     }
 
     /// One word, `embedded-hal-nb` style: the slow writer refuses a word once `max_write`
