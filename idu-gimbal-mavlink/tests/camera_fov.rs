@@ -97,6 +97,14 @@ fn stream_hfov(b: &mut Firmware, ms: u32) -> (u16, u16) {
 }
 
 /// The angle at zoom `z` of one that is `a` degrees at 1×, for an optical zoom.
+/// `SET_CAMERA_ZOOM` of `zoom_type` to `value`, accepted.
+fn zoom(b: &mut Firmware, zoom_type: f32, value: f32, ms: u32) {
+    assert_eq!(
+        ask(b, MavCmd::SetCameraZoom, zoom_type, value, ms),
+        MavResult::Accepted
+    );
+}
+
 fn at_zoom(a: f64, z: f64) -> f64 {
     2.0 * ((a / 2.0).to_radians().tan() / z).atan().to_degrees()
 }
@@ -125,27 +133,18 @@ fn the_angles_follow_the_zoom() {
     assert!(near(s.hfov, LENS.0) && near(s.vfov, LENS.1), "{s:?}");
     assert_eq!(stream_hfov(&mut b, 20), (60, 0));
     // One zoom step in: 2× (ZOOM_TYPE_STEP), told in CAMERA_SETTINGS.
-    assert_eq!(
-        ask(&mut b, MavCmd::SetCameraZoom, 0.0, 1.0, 30),
-        MavResult::Accepted
-    );
+    zoom(&mut b, 0.0, 1.0, 30);
     let s = fov_status(&mut b, 40);
     assert!(near(s.hfov, at_zoom(LENS.0, 2.0)), "{} vs 32.204", s.hfov);
     assert!(near(s.vfov, at_zoom(LENS.1, 2.0)), "{}", s.vfov);
     assert_eq!(stream_hfov(&mut b, 50), (32, 0));
     // To 30× (ZOOM_TYPE_RANGE 100 %): 2 atan(tan 30° / 30) = 2.205°.
-    assert_eq!(
-        ask(&mut b, MavCmd::SetCameraZoom, 2.0, 100.0, 60),
-        MavResult::Accepted
-    );
+    zoom(&mut b, 2.0, 100.0, 60);
     let s = fov_status(&mut b, 70);
     assert!(near(s.hfov, at_zoom(LENS.0, 30.0)), "{}", s.hfov);
     assert_eq!(stream_hfov(&mut b, 80), (2, 0));
     // A continuous zoom: the ratio, so the angles, no longer known.
-    assert_eq!(
-        ask(&mut b, MavCmd::SetCameraZoom, 1.0, 1.0, 90),
-        MavResult::Accepted
-    );
+    zoom(&mut b, 1.0, 1.0, 90);
     let s = fov_status(&mut b, 100);
     assert!(s.hfov.is_nan() && s.vfov.is_nan());
     assert_eq!(stream_hfov(&mut b, 110), (0, 0));

@@ -116,6 +116,18 @@ fn value_of(v: u8) -> [u8; 128] {
     f
 }
 
+/// A ground station's `PARAM_EXT_REQUEST_READ` of the camera's setting at `index`, or named
+/// `id` when `index` is −1.
+fn read(b: &mut Firmware, id: [u8; 16], index: i16) {
+    let m = ParamExtRequestRead {
+        target_system: AP.0,
+        target_component: CAMERA,
+        param_id: id,
+        param_index: index,
+    };
+    b.receive_all(&frame(GCS, 0, &m), t(20));
+}
+
 /// The PARAM_EXT_VALUEs the camera sent, as (name, value, index, count).
 fn values(frames: &[Frame<V2>]) -> Vec<(String, u8, u16, u16)> {
     of::<ParamExtValue>(frames)
@@ -192,13 +204,7 @@ fn setting_the_palette_sends_the_gimbal_its_command_and_acks_the_value() {
     );
     // The value read back, by name (MAVSDK: index −1) and by index.
     for (id, index) in [(param_id("IR_PALETTE"), -1), ([0; 16], 1)] {
-        let m = ParamExtRequestRead {
-            target_system: AP.0,
-            target_component: CAMERA,
-            param_id: id,
-            param_index: index,
-        };
-        b.receive_all(&frame(GCS, 0, &m), t(20));
+        read(&mut b, id, index);
         assert_eq!(
             values(&sent(&mut b)),
             vec![("IR_PALETTE".to_string(), 10, 1, 3)]
@@ -362,13 +368,7 @@ fn reads_of_unknown_names_or_indexes_are_not_answered() {
         ([0; 16], 1),
         ([0; 16], 300),
     ] {
-        let m = ParamExtRequestRead {
-            target_system: AP.0,
-            target_component: CAMERA,
-            param_id: id,
-            param_index: index,
-        };
-        b.receive_all(&frame(GCS, 0, &m), t(20));
+        read(&mut b, id, index);
         assert!(values(&sent(&mut b)).is_empty());
     }
     // A list for another component is not ours.

@@ -51,10 +51,16 @@ fn int(
     }
 }
 
-/// `DO_SET_ROI_LOCATION` to the gimbal as `COMMAND_INT`: a target in `frame_`, 1e-7° and
-/// metres.
+/// The region of interest every ROI test points at, 1e-7°: 0.001° north and east (111 m,
+/// 75 m) of the vehicle's position in them.
 #[cfg(feature = "roi")]
-fn roi(frame_: MavFrame, lat: i32, lon: i32, alt_m: f32) -> CommandInt {
+const ROI: (i32, i32) = (473_987_420, 85_465_940);
+
+/// `DO_SET_ROI_LOCATION` to the gimbal as `COMMAND_INT`: [`ROI`] at `alt_m` metres in
+/// `frame_`.
+#[cfg(feature = "roi")]
+fn roi(frame_: MavFrame, alt_m: f32) -> CommandInt {
+    let (lat, lon) = ROI;
     int(
         (AP.0, 154),
         MavCmd::DoSetRoiLocation,
@@ -147,7 +153,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
         t(5),
     );
     // Absolute altitude (MAV_FRAME_GLOBAL_INT): as given.
-    let c = roi(MavFrame::GlobalInt, 473_987_420, 85_465_940, 420.5);
+    let c = roi(MavFrame::GlobalInt, 420.5);
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(acks, [(154, MavCmd::DoSetRoiLocation, MavResult::Accepted)]);
     let p = b.link.pointing_target().unwrap();
@@ -232,12 +238,7 @@ fn a_region_of_interest_addressed_to_the_gimbal_is_pointed_at() {
 #[test]
 fn a_relative_roi_waits_for_home_s_height() {
     let mut b = bridge();
-    let c = roi(
-        MavFrame::GlobalRelativeAltInt,
-        473_987_420,
-        85_465_940,
-        20.0,
-    );
+    let c = roi(MavFrame::GlobalRelativeAltInt, 20.0);
     let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
     assert_eq!(
         acks,
@@ -261,12 +262,7 @@ fn home_s_height_from_extreme_altitudes_is_refused_never_wrapped() {
             &frame(AP, 1, &position(473_977_420, 85_455_940, alt, relative)),
             t(5),
         );
-        let c = roi(
-            MavFrame::GlobalRelativeAltInt,
-            473_987_420,
-            85_465_940,
-            20.0,
-        );
+        let c = roi(MavFrame::GlobalRelativeAltInt, 20.0);
         let (acks, _) = acks_of(&mut b, &frame(GCS, 0, &c), 10);
         assert_eq!(
             acks,
