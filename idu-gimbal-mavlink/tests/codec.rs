@@ -4,6 +4,10 @@
 //! anywhere (as MAVLink 2 truncates trailing zeros), decoded by both and compared field by
 //! field, bit for bit.
 
+mod common;
+// `mavio`'s frame of a message: the reference the codecs' frames are held to.
+use common::frame;
+
 use idu_gimbal_mavlink::codec;
 use idu_gimbal_mavlink::framing::Outbox;
 use mavio::dialects::common::enums::{
@@ -17,24 +21,8 @@ use mavio::dialects::common::messages::{
     ParamExtSet, Statustext,
 };
 use mavio::mavspec::rust::spec::{MavLinkVersion, MessageSpecStatic};
-use mavio::protocol::{Frame, V2};
 use mavio::Message;
 use proptest::prelude::*;
-
-/// `mavio`'s frame of `m`: sequence, system and component as given.
-fn mavio_frame(seq: u8, system: u8, component: u8, m: &dyn Message) -> Vec<u8> {
-    let f = Frame::builder()
-        .version(V2)
-        .sequence(seq)
-        .system_id(system)
-        .component_id(component)
-        .message(m)
-        .unwrap()
-        .build();
-    let mut buf = [0u8; 300];
-    let n = f.serialize(&mut buf).unwrap();
-    buf[..n].to_vec()
-}
 
 /// `mavio`'s payload of `m`, MAVLink 2 (trailing zeros dropped).
 fn mavio_payload(m: &dyn Message) -> Vec<u8> {
@@ -119,7 +107,7 @@ proptest! {
             seq, sys, 154, codec::attitude_status::LEN,
             |p| codec::attitude_status::encode(&m, p),
         );
-        prop_assert_eq!(ours, mavio_frame(seq, sys, 154, &m));
+        prop_assert_eq!(ours, frame((sys, 154), seq, &m));
     }
 
     #[test]
@@ -138,7 +126,7 @@ proptest! {
         let ours = codec_frame::<Heartbeat>(
             1, 7, 100, codec::heartbeat::LEN, |p| codec::heartbeat::encode(&m, p),
         );
-        prop_assert_eq!(ours, mavio_frame(1, 7, 100, &m));
+        prop_assert_eq!(ours, frame((7, 100), 1, &m));
     }
 
     #[test]
@@ -155,7 +143,7 @@ proptest! {
         let ours = codec_frame::<Statustext>(
             2, 9, 154, codec::statustext::LEN, |p| codec::statustext::encode(&m, p),
         );
-        prop_assert_eq!(ours, mavio_frame(2, 9, 154, &m));
+        prop_assert_eq!(ours, frame((9, 154), 2, &m));
     }
 
     #[test]
@@ -176,7 +164,7 @@ proptest! {
             2, 1, 100, codec::tracking_image_status::LEN,
             |p| codec::tracking_image_status::encode(&m, p),
         );
-        prop_assert_eq!(ours, mavio_frame(2, 1, 100, &m));
+        prop_assert_eq!(ours, frame((1, 100), 2, &m));
     }
 
     #[test]
@@ -196,7 +184,7 @@ proptest! {
             2, 1, 154, codec::command_ack::LEN,
             |p| codec::command_ack::encode(command as u16, result, to, p),
         );
-        prop_assert_eq!(ours, mavio_frame(2, 1, 154, &m));
+        prop_assert_eq!(ours, frame((1, 154), 2, &m));
     }
 
     #[test]
@@ -215,13 +203,13 @@ proptest! {
             2, 1, 100, codec::param_ext::ACK_LEN,
             |p| codec::param_ext::encode_ack(&id, &value, ty, result, p),
         );
-        prop_assert_eq!(ours, mavio_frame(2, 1, 100, &ack));
+        prop_assert_eq!(ours, frame((1, 100), 2, &ack));
         // A set as mavio writes it (trailing zeros dropped) reads back field for field.
         let set = ParamExtSet {
             target_system: target.0, target_component: target.1,
             param_id: id, param_value: value, param_type,
         };
-        let bytes = mavio_frame(2, 1, 100, &set);
+        let bytes = frame((1, 100), 2, &set);
         // MAVLink 2: a 10-byte header, its second byte the payload's length.
         let got = codec::param_ext::decode_set(&bytes[10..10 + usize::from(bytes[1])]);
         prop_assert_eq!(
@@ -240,7 +228,7 @@ proptest! {
             out.written(n);
         }
         out.push(9, 154, &m).unwrap();
-        prop_assert_eq!(out.bytes().to_vec(), mavio_frame(seq, 9, 154, &m));
+        prop_assert_eq!(out.bytes().to_vec(), frame((9, 154), seq, &m));
     }
 
     #[test]
