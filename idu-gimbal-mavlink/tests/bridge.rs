@@ -1106,3 +1106,22 @@ fn a_frame_cut_at_a_datagrams_end_is_dropped_there_and_counted() {
     assert_eq!(of::<CommandAck>(&sent(&mut b)).len(), 1);
     assert_eq!(b.stats().reader.skipped_bytes, 20);
 }
+
+/// Nothing is lost quietly: with its output never taken, the bridge's outbox fills, and
+/// every frame it then refuses is counted. A twin whose output is taken every poll says how
+/// many frames the same polls send.
+#[test]
+fn every_frame_a_full_outbox_refuses_is_counted() {
+    let (mut taken, mut full) = (bridge(), bridge());
+    let mut sent_by_taken = 0;
+    for ms in (10..200_000).step_by(10) {
+        taken.poll(t(ms));
+        full.poll(t(ms));
+        sent_by_taken += sent(&mut taken).len();
+    }
+    let kept = sent(&mut full).len();
+    let refused = full.stats().outbox_full as usize;
+    assert!(kept > 0 && refused > 0, "kept {kept}, refused {refused}");
+    assert_eq!(kept + refused, sent_by_taken);
+    assert_eq!(taken.stats().outbox_full, 0);
+}
