@@ -7,10 +7,10 @@
 # libraries is left in these programs (scripts/panic-paths.py). Built with the pinned toolchain
 # BENCH_TOOLCHAIN (scripts/firmware-env.sh), the one the budgets are measured with.
 #
-# Exit status 1 if a budget is exceeded. Installs the bench toolchain, the target,
-# qemu-system-arm, the ARM binutils and, for the C MAVLink library, gcc-arm-none-eabi,
-# newlib and a pinned pymavlink (its mavgen) when missing. QEMU is bounded by QEMU_TIMEOUT seconds
-# (default 120).
+# Exit status 1 if a budget is exceeded or a panic path is found. Installs the bench
+# toolchain, the target, qemu-system-arm, the ARM binutils, pyelftools and, for the C MAVLink
+# library, gcc-arm-none-eabi, newlib and a pinned pymavlink (its mavgen) when missing. QEMU is
+# bounded by QEMU_TIMEOUT seconds (default 120).
 #
 #   scripts/bench.sh                 this tree's numbers
 #   scripts/bench.sh --compare REV   the same for REV (built in a scratch worktree, removed
@@ -75,6 +75,7 @@ ensure_target
 ensure_bench_toolchain
 ensure_qemu
 ensure_binutils
+ensure_pyelftools
 ensure_mavlink_c
 
 echo "bench toolchain: $(rustc "+$BENCH_TOOLCHAIN" --version)"

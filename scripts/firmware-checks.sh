@@ -20,6 +20,7 @@ cd "$(dirname "$0")/.."
 ensure_target
 ensure_qemu
 ensure_binutils
+ensure_pyelftools
 
 echo "--- firmware: QEMU demo session"
 scripts/demo.sh

@@ -15,12 +15,15 @@ with no location at all is an error too: the check would prove nothing there.
     scripts/panic-paths.py ROOT ELF...
 
 Exit 0: no library location in any ELF; 1: some (listed), or an ELF without locations;
-2: bad usage.
+2: bad usage. Reads the ELFs with pyelftools (scripts/firmware-env.sh installs it).
 """
 
 import re
 import struct
 import sys
+
+from elftools.common.exceptions import ELFError
+from elftools.elf.elffile import ELFFile
 
 LIBRARY_SOURCES = ("src/", "idu-gimbal-mavlink/src/", "idu-gimbal-fdcan/src/")
 
@@ -28,23 +31,13 @@ LIBRARY_SOURCES = ("src/", "idu-gimbal-mavlink/src/", "idu-gimbal-fdcan/src/")
 def rodata(path):
     """The `.rodata` section of a 32-bit little-endian ELF: (address, bytes)."""
     with open(path, "rb") as f:
-        elf = f.read()
-    if elf[:4] != b"\x7fELF" or elf[4] != 1 or elf[5] != 1:
-        raise ValueError(f"{path}: not a 32-bit little-endian ELF")
-    shoff, = struct.unpack_from("<I", elf, 0x20)
-    shentsize, shnum, shstrndx = struct.unpack_from("<HHH", elf, 0x2E)
-
-    def header(i):
-        # name, type, flags, addr, offset, size
-        return struct.unpack_from("<IIIIII", elf, shoff + i * shentsize)
-
-    names = header(shstrndx)
-    for i in range(shnum):
-        name, _, _, addr, offset, size = header(i)
-        end = elf.index(b"\0", names[4] + name)
-        if elf[names[4] + name:end] == b".rodata":
-            return addr, elf[offset:offset + size]
-    raise ValueError(f"{path}: no .rodata section")
+        elf = ELFFile(f)
+        if elf.elfclass != 32 or not elf.little_endian:
+            raise ValueError(f"{path}: not a 32-bit little-endian ELF")
+        section = elf.get_section_by_name(".rodata")
+        if section is None:
+            raise ValueError(f"{path}: no .rodata section")
+        return section["sh_addr"], section.data()
 
 
 def locations(path):
@@ -74,6 +67,9 @@ def main(argv):
     for elf in argv[2:]:
         try:
             found = locations(elf)
+        except ELFError as e:
+            print(f"panic-paths: {elf}: not an ELF the check can read: {e}", file=sys.stderr)
+            return 1
         except (OSError, ValueError) as e:
             print(f"panic-paths: {e}", file=sys.stderr)
             return 1
