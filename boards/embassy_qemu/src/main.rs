@@ -54,12 +54,11 @@ use idu_gimbal::link::{Config, Event, Link, LinkStats};
 use idu_gimbal::sim::{SimConfig, Simulator};
 use idu_gimbal::wire::control::{GimbalCommand, Rate};
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::wire::Frame;
 use idu_gimbal::Instant;
 // The conversion between embassy-time and the core's clock, as the STM32F405 board does it.
 use idu_firmware_support::embassy::{embassy_at, next_wake, tick};
-use idu_firmware_support::vehicle::Sample;
+use idu_firmware_support::vehicle::Vehicle;
 
 // ---- output and exit ----
 
@@ -69,8 +68,8 @@ use idu_firmware_support::println;
 use idu_firmware_support::qemu::{exit, Stdout};
 // The script and what a player says, shared with the synchronous player (`Script`).
 use idu_firmware_support::session::{
-    say_event, say_fail, say_ok, say_postback, say_verdict, steps, vehicle_frames_verdict, Check,
-    Step, RATE_HOLD, TEXT,
+    self, say_event, say_fail, say_ok, say_postback, say_verdict, steps, vehicle_frames_verdict,
+    Check, Step, RATE_HOLD, TEXT,
 };
 
 // ---- what the tasks exchange ----
@@ -81,7 +80,7 @@ static TO_GIMBAL: Channel<CriticalSectionRawMutex, Frame, 3> = Channel::new();
 /// Frames on the emulated bus, gimbal to link: a receive queue (a postback is 4 frames).
 static TO_LINK: Channel<CriticalSectionRawMutex, Frame, 16> = Channel::new();
 
-static VEHICLE: Channel<CriticalSectionRawMutex, Sample, 4> = Channel::new();
+static VEHICLE: Channel<CriticalSectionRawMutex, Vehicle, 4> = Channel::new();
 
 /// What the session asks of the link.
 #[derive(Clone, Copy)]
@@ -237,20 +236,8 @@ async fn link_task() {
 async fn vehicle_task() {
     let mut ticker = Ticker::every(Duration::from_millis(100));
     loop {
-        let stamp = tick(embassy_time::Instant::now());
-        if let (Ok(attitude), Ok(gps), Ok(altitude)) = (
-            Attitude::new(0.0, 0.0, 30.0),
-            Gps::new(47.397_742, 8.545_594),
-            Altitude::new(450.0),
-        ) {
-            VEHICLE
-                .send(Sample {
-                    attitude,
-                    gps,
-                    altitude,
-                    stamp,
-                })
-                .await;
+        if let Some(v) = session::vehicle(tick(embassy_time::Instant::now())) {
+            VEHICLE.send(v).await;
         }
         ticker.next().await;
     }

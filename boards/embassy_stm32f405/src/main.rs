@@ -46,7 +46,7 @@ use idu_gimbal::Instant;
 // Between embassy-time and the core's clock; the stand-in vehicle data shared with the other
 // firmware.
 use idu_firmware_support::embassy::{embassy_at, next_wake, tick};
-use idu_firmware_support::vehicle::{vehicle_stand_in, Sample};
+use idu_firmware_support::vehicle::{vehicle_stand_in, Vehicle};
 
 bind_interrupts!(struct Irqs {
     CAN1_TX => TxInterruptHandler<CAN1>;
@@ -67,7 +67,7 @@ const POSTBACK: ExtendedId = match ExtendedId::new(ids::POSTBACK) {
 const RX_QUEUE: usize = 16;
 static RX_BUF: StaticCell<RxBuf<RX_QUEUE>> = StaticCell::new();
 
-static VEHICLE: Channel<CriticalSectionRawMutex, Sample, 4> = Channel::new();
+static VEHICLE: Channel<CriticalSectionRawMutex, Vehicle, 4> = Channel::new();
 
 // ---- the gimbal task ----
 
@@ -139,7 +139,7 @@ fn log_event(link: &Link, event: Event, now: Instant) {
 #[embassy_executor::task]
 async fn gimbal_task(
     mut can: Can<'static>,
-    vehicle: Receiver<'static, CriticalSectionRawMutex, Sample, 4>,
+    vehicle: Receiver<'static, CriticalSectionRawMutex, Vehicle, 4>,
 ) {
     let (mut tx, rx) = can.split();
     let mut rx = rx.buffered(RX_BUF.init(RxBuf::new()));
@@ -218,22 +218,14 @@ async fn gimbal_task(
 /// Vehicle data at 10 Hz, from the stand-in the other firmware uses
 /// (`idu_firmware_support::vehicle`: replace it with the autopilot's estimates).
 #[embassy_executor::task]
-async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, Sample, 4>) {
+async fn vehicle_task(vehicle: Sender<'static, CriticalSectionRawMutex, Vehicle, 4>) {
     let mut ticker = embassy_time::Ticker::every(embassy_time::Duration::from_millis(100));
     loop {
         ticker.next().await;
         let stamp = tick(embassy_time::Instant::now());
-        let Some((gps, altitude, attitude)) = vehicle_stand_in(stamp) else {
-            continue;
-        };
-        vehicle
-            .send(Sample {
-                attitude,
-                gps,
-                altitude,
-                stamp,
-            })
-            .await;
+        if let Some(v) = vehicle_stand_in(stamp) {
+            vehicle.send(v).await;
+        }
     }
 }
 

@@ -62,10 +62,12 @@ use idu_firmware_support::vehicle::vehicle_stand_in;
 fn vehicle_stand_in(now: Instant) -> Option<idu_firmware_support::vehicle::Vehicle> {
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
-    let gps = Gps::from_e7(473_977_420, 85_455_940).ok()?;
-    let altitude = Altitude::from_cm(48_800);
-    let attitude = Attitude::from_centideg(150, -40, heading).ok()?;
-    Some((gps, altitude, attitude))
+    Some(idu_firmware_support::vehicle::Vehicle {
+        gps: Gps::from_e7(473_977_420, 85_455_940).ok()?,
+        altitude: Altitude::from_cm(48_800),
+        attitude: Attitude::from_centideg(150, -40, heading).ok()?,
+        stamp: now,
+    })
 }
 
 /// The first command: look 30° down.

@@ -13,8 +13,9 @@ use embedded_can::nb::Can;
 use idu_gimbal::link::LinkStats;
 use idu_gimbal::port::{CanPort, CanPortStats, DriverError, Port};
 use idu_gimbal::wire::postback::Postback;
-use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, Instant, Link};
+
+use crate::vehicle::Vehicle;
 
 /// What a turn of the loop has to tell.
 pub enum Report {
@@ -47,15 +48,13 @@ impl App {
         link: &mut Link<Q, T>,
         port: &mut CanPort<C>,
         now: Instant,
-        vehicle: impl FnOnce(Instant) -> Option<(Gps, Altitude, Attitude)>,
+        vehicle: impl FnOnce(Instant) -> Option<Vehicle>,
         mut report: impl FnMut(Report),
     ) {
         if now.is_at_or_after(self.next_vehicle) {
             self.next_vehicle = now.add_millis(100);
-            if let Some((gps, altitude, attitude)) = vehicle(now) {
-                link.set_gps(gps, now);
-                link.set_altitude(altitude, now);
-                link.set_attitude(attitude, now);
+            if let Some(v) = vehicle(now) {
+                v.push(link);
             }
         }
         if let Err(e) = port.poll(link, now) {

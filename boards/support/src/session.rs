@@ -24,6 +24,8 @@ use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Config, Event, Instant, Link};
 
+use crate::vehicle::Vehicle;
+
 /// The text the script sends where the transport carries text.
 pub const TEXT: &[u8] = b"HELLO FROM THE FLIGHT CONTROLLER";
 
@@ -44,6 +46,17 @@ pub enum Step {
     RateHold,
     /// Send [`TEXT`] and wait, at most `.0` ms, for the gimbal to have it.
     Text(u32),
+}
+
+/// The session's stand-in vehicle, measured at `now`: level, heading 30°, hovering over
+/// Zurich at 450 m.
+pub fn vehicle(now: Instant) -> Option<Vehicle> {
+    Some(Vehicle {
+        gps: Gps::new(47.397_742, 8.545_594).ok()?,
+        altitude: Altitude::new(450.0).ok()?,
+        attitude: Attitude::new(0.0, 0.0, 30.0).ok()?,
+        stamp: now,
+    })
 }
 
 /// The script, for a transport that carries the vehicle's attitude (`north`: headings are
@@ -421,15 +434,8 @@ impl<R: Rig, W: Write> Script<R, W> {
         let now = Instant::from_millis(self.now);
         let elapsed = self.now.wrapping_sub(self.start);
         if elapsed.is_multiple_of(100) {
-            // Stand-in vehicle: level, heading 30°, hovering over Zurich at 450 m.
-            if let (Ok(att), Ok(gps), Ok(alt)) = (
-                Attitude::new(0.0, 0.0, 30.0),
-                Gps::new(47.397_742, 8.545_594),
-                Altitude::new(450.0),
-            ) {
-                self.link.set_attitude(att, now);
-                self.link.set_gps(gps, now);
-                self.link.set_altitude(alt, now);
+            if let Some(v) = vehicle(now) {
+                v.push(&mut self.link);
             }
         }
         // A port error is counted in the port's stats; the session goes on.

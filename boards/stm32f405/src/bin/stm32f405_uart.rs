@@ -33,12 +33,13 @@ mod fw {
 
     use board_stm32f405::board::{self, now};
     use board_stm32f405::usart2_ring::{self, RingRx};
+    use idu_firmware_support::vehicle::Vehicle;
     use idu_gimbal::geo::Position;
     use idu_gimbal::interface::UART_BAUD;
     use idu_gimbal::port::{Nb, Port, PortError};
     use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    use idu_gimbal::{Config, SerialLink, SerialPort};
+    use idu_gimbal::{Config, Instant, SerialLink, SerialPort};
 
     /// USART2 receive into the ring.
     #[interrupt]
@@ -48,12 +49,13 @@ mod fw {
 
     /// STAND-IN VEHICLE DATA. Replace with the autopilot's estimates, each with the time it
     /// was measured. Used for point-at only: the serial link carries no vehicle frames.
-    fn vehicle_stand_in() -> Option<(Gps, Altitude, Attitude)> {
-        Some((
-            Gps::new(47.397_742, 8.545_594).ok()?,
-            Altitude::new(488.0).ok()?,
-            Attitude::new(0.0, 0.0, 30.0).ok()?,
-        ))
+    fn vehicle_stand_in(now: Instant) -> Option<Vehicle> {
+        Some(Vehicle {
+            gps: Gps::new(47.397_742, 8.545_594).ok()?,
+            altitude: Altitude::new(488.0).ok()?,
+            attitude: Attitude::new(0.0, 0.0, 30.0).ok()?,
+            stamp: now,
+        })
     }
 
     #[entry]
@@ -86,10 +88,8 @@ mod fw {
             let now = now();
             if now.is_at_or_after(next_vehicle) {
                 next_vehicle = now.add_millis(100);
-                if let Some((gps, altitude, attitude)) = vehicle_stand_in() {
-                    link.set_gps(gps, now);
-                    link.set_altitude(altitude, now);
-                    link.set_attitude(attitude, now);
+                if let Some(v) = vehicle_stand_in(now) {
+                    v.push(&mut link);
                 }
             }
 
