@@ -5,6 +5,7 @@
 //! integers (latitude and longitude in 1e7 degrees for global frames) and the frame is
 //! given". Newer ArduPilot sends location commands (ROI) as `COMMAND_INT`.
 
+use crate::bridge::Period;
 use mavio::dialects::common::enums::{MavCmd, MavFrame};
 use mavio::dialects::common::messages::{CommandInt, CommandLong};
 
@@ -97,13 +98,16 @@ pub(crate) enum Interval {
 }
 
 impl Interval {
-    /// The interval `us` asks for; `None` below 1 ms or above a minute (or NaN).
+    /// The interval `us` asks for; `None` below 1 ms or above a minute ([`Period`]'s range)
+    /// or NaN.
     pub(crate) fn from_us(us: f32) -> Option<Self> {
+        // 60,000,000 = 2^7 × 468,750: exact in an f32.
+        const MAX_US: f32 = Period::MAX_MS as f32 * 1_000.0;
         if us == -1.0 {
             Some(Interval::Stop)
         } else if us == 0.0 {
             Some(Interval::Default)
-        } else if (1_000.0..=60_000_000.0).contains(&us) {
+        } else if (1_000.0..=MAX_US).contains(&us) {
             // In range: the cast is exact to the millisecond.
             Some(Interval::Every((us / 1_000.0) as u32))
         } else {
@@ -115,6 +119,27 @@ impl Interval {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_interval_is_stop_default_or_a_period_of_1_ms_to_a_minute() {
+        assert_eq!(Interval::from_us(-1.0), Some(Interval::Stop));
+        assert_eq!(Interval::from_us(0.0), Some(Interval::Default));
+        assert_eq!(Interval::from_us(1_000.0), Some(Interval::Every(1)));
+        assert_eq!(
+            Interval::from_us(60_000_000.0),
+            Some(Interval::Every(60_000))
+        );
+        for us in [-2.0, 999.0, 60_001_000.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(Interval::from_us(us), None, "{us}");
+        }
+        // Every interval taken is a period the configuration could hold.
+        for us in [1_000.0, 1_500.0, 100_000.0, 60_000_000.0] {
+            let Some(Interval::Every(ms)) = Interval::from_us(us) else {
+                panic!("{us}")
+            };
+            assert_eq!(Period::from_millis(ms).map(Period::millis), Ok(ms));
+        }
+    }
 
     #[test]
     fn a_position_is_taken_only_when_both_are_finite_and_in_range() {

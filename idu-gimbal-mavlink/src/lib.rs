@@ -101,6 +101,7 @@ pub mod status;
 mod tx;
 
 pub use bridge::{
-    Bridge, BridgeConfig, BridgeStats, SerialInput, ANSWER_ROOM, AUTOPILOT_SILENCE_MS,
+    Bridge, BridgeConfig, BridgeStats, Period, PeriodOutOfRange, SerialInput, ANSWER_ROOM,
+    ATTITUDE_STATUS, AUTOPILOT_SILENCE_MS, HEARTBEAT,
 };
 pub use mavio;

@@ -10,7 +10,7 @@ use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal_mavlink::attitude::YawPitch;
-use idu_gimbal_mavlink::{BridgeConfig, AUTOPILOT_SILENCE_MS};
+use idu_gimbal_mavlink::{BridgeConfig, Period, AUTOPILOT_SILENCE_MS};
 use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
@@ -54,6 +54,64 @@ fn heartbeats_at_1_hz_with_the_autopilots_system_id() {
         && h.2.autopilot == MavAutopilot::Invalid));
     // System 1 until the autopilot's heartbeat, then the autopilot's.
     assert_eq!(hbs.iter().map(|h| h.0).collect::<Vec<_>>(), [1, 1, 7]);
+}
+
+/// The times (ms after `start`, each poll 1 ms apart) at which `M` was sent in `polls`
+/// polls.
+fn sent_at<M>(b: &mut Firmware, start: u32, polls: u32) -> Vec<u32>
+where
+    M: mavio::mavspec::rust::spec::MessageSpecStatic
+        + for<'a> TryFrom<&'a mavio::protocol::Payload, Error = mavio::error::SpecError>,
+{
+    (0..polls)
+        .filter(|&i| {
+            b.poll(t(start.wrapping_add(i)));
+            !of::<M>(&sent(b)).is_empty()
+        })
+        .collect()
+}
+
+#[test]
+fn configured_periods_hold_at_their_extremes_and_across_the_clocks_wrap() {
+    let minute = Period::from_millis(Period::MAX_MS).unwrap();
+    let ms = Period::MAX_MS;
+    // The longest periods, from 70 s before the clock wraps: each message at once, then
+    // exactly one period later, past the wrap.
+    let start = 70_000u32.wrapping_neg();
+    let mut b = Firmware::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            heartbeat: minute,
+            attitude_status: None,
+            ..BridgeConfig::default()
+        },
+    );
+    assert_eq!(
+        sent_at::<Heartbeat>(&mut b, start, 125_000),
+        [0, ms, 2 * ms]
+    );
+    let mut b = Firmware::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            attitude_status: Some(minute),
+            ..BridgeConfig::default()
+        },
+    );
+    assert_eq!(
+        sent_at::<GimbalDeviceAttitudeStatus>(&mut b, start, 125_000),
+        [0, ms, 2 * ms]
+    );
+    // The shortest: every poll; and a status not configured is not sent.
+    let mut b = Firmware::new(
+        Link::new(Config::default()),
+        BridgeConfig {
+            heartbeat: Period::from_millis(1).unwrap(),
+            attitude_status: None,
+            ..BridgeConfig::default()
+        },
+    );
+    assert_eq!(sent_at::<Heartbeat>(&mut b, start, 5), [0, 1, 2, 3, 4]);
+    assert!(sent_at::<GimbalDeviceAttitudeStatus>(&mut b, start, 2_000).is_empty());
 }
 
 /// The system id of the next gimbal heartbeat after `ms`.

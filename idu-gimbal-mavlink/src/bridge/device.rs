@@ -89,7 +89,7 @@ impl State {
         }
         // The camera's identity is its gimbal type's: asked only when a heartbeat is due.
         let camera_known = gimbal.gimbal_type().is_some();
-        self.next_heartbeat = Some(now.add_millis(self.config.heartbeat_ms.max(1)));
+        self.next_heartbeat = Some(now.add_millis(self.config.heartbeat.millis()));
         let hb = codec::heartbeat::of_component(MavType::Gimbal);
         self.out.send_encoded::<Heartbeat>(
             self.config.gimbal_component,

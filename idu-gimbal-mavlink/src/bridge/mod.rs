@@ -21,11 +21,13 @@ use idu_gimbal::link::{Link, Medium};
 mod autopilot;
 mod device;
 mod dispatch;
+mod period;
 mod serial_input;
 
 pub use crate::tx::OUTBOX_LEN;
 use autopilot::{StreamState, Vehicle};
 pub use device::yaw_limit_deg;
+pub use period::{Period, PeriodOutOfRange};
 pub use serial_input::SerialInput;
 
 /// The autopilot's component id (`MAV_COMP_ID_AUTOPILOT1`).
@@ -46,6 +48,21 @@ pub const ANSWER_ROOM: usize = framing::HEADER_LEN
 
 // A frame that waits for more room than the outbox has would wait for ever.
 const _: () = assert!(ANSWER_ROOM <= OUTBOX_LEN);
+
+/// [`BridgeConfig::heartbeat`]'s default: MAVLink's 1 Hz.
+pub const HEARTBEAT: Period = match Period::from_millis(1_000) {
+    Ok(p) => p,
+    // Evaluated at compile time: a period out of range would not build.
+    Err(_) => panic!("the heartbeat period is in range"),
+};
+
+/// [`BridgeConfig::attitude_status`]'s default: 10 Hz (the gimbal reports at 2 Hz, and
+/// ArduPilot calls a mount unhealthy when its status is over a second old).
+pub const ATTITUDE_STATUS: Period = match Period::from_millis(100) {
+    Ok(p) => p,
+    // Evaluated at compile time: a period out of range would not build.
+    Err(_) => panic!("the attitude status period is in range"),
+};
 
 /// How long the autopilot followed must be silent (no heartbeat, ms) before another
 /// autopilot's heartbeat is taken instead: 5 missed heartbeats at MAVLink's 1 Hz, longer
@@ -77,12 +94,12 @@ pub struct BridgeConfig {
     pub system_id: Option<u8>,
     /// The gimbal device's component id (default [`GIMBAL_COMPONENT`], 154).
     pub gimbal_component: u8,
-    /// HEARTBEAT period, ms (1000).
-    pub heartbeat_ms: u32,
-    /// GIMBAL_DEVICE_ATTITUDE_STATUS period, ms (100: the gimbal reports at 2 Hz, and
-    /// ArduPilot calls a mount unhealthy when its status is over a second old); 0 stops it.
-    /// `MAV_CMD_SET_MESSAGE_INTERVAL` changes it at run time.
-    pub attitude_status_ms: u32,
+    /// HEARTBEAT period (default [`HEARTBEAT`], 1 s).
+    pub heartbeat: Period,
+    /// GIMBAL_DEVICE_ATTITUDE_STATUS period (default [`ATTITUDE_STATUS`], 100 ms); `None`:
+    /// not sent until asked for. `MAV_CMD_SET_MESSAGE_INTERVAL` changes it at run time, and
+    /// its "default" is this.
+    pub attitude_status: Option<Period>,
     /// The camera component; `None`: the bridge is a gimbal device only.
     pub camera: Option<CameraConfig>,
     /// MAVLink 2 signing (feature `signing`; see [`crate::signing`]): with a key, only
@@ -97,8 +114,8 @@ impl Default for BridgeConfig {
         BridgeConfig {
             system_id: None,
             gimbal_component: GIMBAL_COMPONENT,
-            heartbeat_ms: 1000,
-            attitude_status_ms: 100,
+            heartbeat: HEARTBEAT,
+            attitude_status: Some(ATTITUDE_STATUS),
             camera: None,
             #[cfg(feature = "signing")]
             signing: None,
@@ -194,7 +211,7 @@ impl Bridge {
             .as_ref()
             .map(|c| CameraComponent::new(c, config.gimbal_component));
         let system_id = config.system_id.unwrap_or(1);
-        let status_ms = config.attitude_status_ms;
+        let status_ms = config.attitude_status.map_or(0, Period::millis);
         #[allow(unused_mut)]
         let mut out = Outbox::new();
         #[cfg(feature = "signing")]

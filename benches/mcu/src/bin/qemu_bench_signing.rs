@@ -47,7 +47,7 @@ mod fw {
 
     fn bridge(signing: bool) -> Fw {
         Fw::new(BridgeConfig {
-            attitude_status_ms: 0,
+            attitude_status: None,
             signing: signing.then(|| SigningConfig::from_passphrase(b"bench", 0)),
             ..BridgeConfig::default()
         })
