@@ -81,6 +81,6 @@ fn serial_gimbal_is_due_at_once_while_bytes_wait() {
     assert_eq!(gimbal.next_deadline(at(t0 + 51)), at(t0 + 100));
     pipe.set_faults(SerialFaults::NONE);
     port.poll(&mut gimbal, at(t0 + 52)).unwrap();
-    assert_eq!(pipe.stats(0).written, 48);
+    assert_eq!(pipe.stats(0).unwrap().written, 48);
     assert_eq!(port.next_deadline(&gimbal, at(t0 + 52)), at(t0 + 100));
 }

@@ -227,7 +227,7 @@ fn slow_writers_never_interleave_or_lose_a_frame() {
             (0, 0, 0)
         );
         assert_eq!(arrived.2.bytes_sent, 40 * FRAME_LEN as u32);
-        assert_eq!(pipe.stats(0).written, 40 * FRAME_LEN as u32);
+        assert_eq!(pipe.stats(0).unwrap().written, 40 * FRAME_LEN as u32);
     }
 }
 
@@ -362,7 +362,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     let mut b = Bench::new(&pipe, io_port(&pipe, 0), sim_config, u32::MAX - 20_000);
     let mut sent = Vec::new();
     let mut i = 0u32;
-    while pipe.stats(0).written + pipe.stats(1).written < 1_000_000 {
+    while pipe.stats(0).unwrap().written + pipe.stats(1).unwrap().written < 1_000_000 {
         let c = GimbalCommand::Pitch(Pitch::new(-((i % 10_000) as f32) / 100.0).unwrap());
         if b.host.link.send(c).is_ok() {
             sent.push(encode(c));
@@ -371,7 +371,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
         b.tick();
     }
     b.run(100);
-    let (to_gimbal, to_fc) = (pipe.stats(0), pipe.stats(1));
+    let (to_gimbal, to_fc) = (pipe.stats(0).unwrap(), pipe.stats(1).unwrap());
     assert!(to_gimbal.lost > 0 && to_gimbal.corrupted > 0 && to_fc.lost > 0 && to_fc.corrupted > 0);
     // No wrong item got through either way (CRC-16 and the fixed bytes).
     assert!(
@@ -405,8 +405,8 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
             "{s:?}"
         );
     };
-    accounted(to_gimbal, pipe.pending(1));
-    accounted(to_fc, pipe.pending(0));
+    accounted(to_gimbal, pipe.pending(1).unwrap());
+    accounted(to_fc, pipe.pending(0).unwrap());
     let g = b.host.port.stats();
     assert_eq!(g.bytes_sent, to_gimbal.written);
     assert_eq!(g.bytes_received, to_fc.delivered);
@@ -630,7 +630,7 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
     }
     let mut got = Vec::new();
     let mut polls = 0;
-    while pipe.pending(0) > 0 {
+    while pipe.pending(0).unwrap() > 0 {
         port.poll(&mut gimbal, Instant::from_millis(polls)).unwrap();
         polls += 1;
         // At most 2 reads of at most 3 bytes a poll.

@@ -30,7 +30,8 @@
 //! assert_eq!(gimbal_rx.read(&mut buf), Ok(3));
 //! assert_eq!(&buf[..3], &[0xEB, 0x90, 0x0A]);
 //! assert_eq!(gimbal_rx.read_ready(), Ok(false));
-//! assert_eq!(pipe.stats(0).delivered, 3);
+//! assert_eq!(pipe.stats(0).unwrap().delivered, 3);
+//! assert_eq!(pipe.stats(2), None);
 //! ```
 
 use core::cell::RefCell;
@@ -228,22 +229,18 @@ impl<const N: usize> Pipe<N> {
         ))
     }
 
-    /// The counters of the bytes port `writer` (0 or 1) wrote; zeros for another index.
-    pub fn stats(&self, writer: usize) -> PipeStats {
-        self.state
-            .try_borrow()
-            .ok()
-            .and_then(|s| s.lines.get(writer).map(|l| l.stats))
-            .unwrap_or_default()
+    /// The counters of the bytes port `writer` wrote; `None` unless `writer` is 0 or 1.
+    pub fn stats(&self, writer: usize) -> Option<PipeStats> {
+        let s = self.state.try_borrow().ok()?;
+        s.lines.get(writer).map(|l| l.stats)
     }
 
-    /// Bytes waiting for port `reader` (0 or 1) to read.
-    pub fn pending(&self, reader: usize) -> usize {
-        self.state
-            .try_borrow()
-            .ok()
-            .and_then(|s| s.lines.get(reader.min(1) ^ 1).map(|l| l.buf.len()))
-            .unwrap_or(0)
+    /// Bytes waiting for port `reader` to read; `None` unless `reader` is 0 or 1.
+    pub fn pending(&self, reader: usize) -> Option<usize> {
+        let s = self.state.try_borrow().ok()?;
+        // Port `reader` reads the line the other port writes; `reader ^ 1` is 0 or 1 only
+        // for a `reader` that is.
+        s.lines.get(reader ^ 1).map(|l| l.buf.len())
     }
 
     fn with<R>(&self, f: impl FnOnce(&mut State<N>) -> R) -> Option<R> {
@@ -493,8 +490,21 @@ mod tests {
         assert_eq!(&buf[..3], b"xyz");
         assert_eq!(Read::read(&mut a_rx, &mut buf), Ok(0));
         assert_eq!(a_rx.read_ready(), Ok(false));
-        assert_eq!(pipe.stats(0).delivered, 2);
-        assert_eq!(pipe.stats(1).delivered, 3);
+        assert_eq!(pipe.stats(0).unwrap().delivered, 2);
+        assert_eq!(pipe.stats(1).unwrap().delivered, 3);
+    }
+
+    #[test]
+    fn pending_is_the_readers_and_a_port_beyond_1_is_none() {
+        let pipe: Pipe<8> = Pipe::new(1);
+        let (_, mut a_tx) = pipe.port(0).unwrap();
+        assert_eq!(Write::write(&mut a_tx, b"abc"), Ok(3));
+        // Port 0 wrote: port 1 has the bytes to read, port 0 none.
+        assert_eq!((pipe.pending(0), pipe.pending(1)), (Some(0), Some(3)));
+        for port in [2, 3, usize::MAX] {
+            assert_eq!(pipe.pending(port), None, "{port}");
+            assert_eq!(pipe.stats(port), None, "{port}");
+        }
     }
 
     #[test]
@@ -509,7 +519,7 @@ mod tests {
         assert_eq!(Read::read(&mut rx, &mut buf), Err(MockSerialError::Overrun));
         assert_eq!(Read::read(&mut rx, &mut buf), Ok(4));
         assert_eq!(&buf[..4], &[1, 2, 3, 4]);
-        let s = pipe.stats(0);
+        let s = pipe.stats(0).unwrap();
         assert_eq!((s.written, s.delivered, s.overruns, s.errors), (6, 4, 2, 1));
     }
 
@@ -590,10 +600,10 @@ mod tests {
                     Err(_) => errors += 1,
                 }
             }
-            let s = pipe.stats(0);
+            let s = pipe.stats(0).unwrap();
             assert_eq!(
                 s.written,
-                s.delivered + s.lost + s.overruns + pipe.pending(1) as u32
+                s.delivered + s.lost + s.overruns + pipe.pending(1).unwrap() as u32
             );
             assert_eq!(s.errors, errors);
             assert_eq!(received.len() as u32, s.delivered);
