@@ -73,43 +73,33 @@ where
 
 #[test]
 fn configured_periods_hold_at_their_extremes_and_across_the_clocks_wrap() {
+    let with = |heartbeat: Period, attitude_status: Option<Period>| {
+        Firmware::new(
+            Link::new(Config::default()),
+            BridgeConfig {
+                heartbeat,
+                attitude_status,
+                ..BridgeConfig::default()
+            },
+        )
+    };
     let minute = Period::from_millis(Period::MAX_MS).unwrap();
     let ms = Period::MAX_MS;
     // The longest periods, from 70 s before the clock wraps: each message at once, then
     // exactly one period later, past the wrap.
     let start = 70_000u32.wrapping_neg();
-    let mut b = Firmware::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            heartbeat: minute,
-            attitude_status: None,
-            ..BridgeConfig::default()
-        },
-    );
+    let mut b = with(minute, None);
     assert_eq!(
         sent_at::<Heartbeat>(&mut b, start, 125_000),
         [0, ms, 2 * ms]
     );
-    let mut b = Firmware::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            attitude_status: Some(minute),
-            ..BridgeConfig::default()
-        },
-    );
+    let mut b = with(minute, Some(minute));
     assert_eq!(
         sent_at::<GimbalDeviceAttitudeStatus>(&mut b, start, 125_000),
         [0, ms, 2 * ms]
     );
     // The shortest: every poll; and a status not configured is not sent.
-    let mut b = Firmware::new(
-        Link::new(Config::default()),
-        BridgeConfig {
-            heartbeat: Period::from_millis(1).unwrap(),
-            attitude_status: None,
-            ..BridgeConfig::default()
-        },
-    );
+    let mut b = with(Period::from_millis(1).unwrap(), None);
     assert_eq!(sent_at::<Heartbeat>(&mut b, start, 5), [0, 1, 2, 3, 4]);
     assert!(sent_at::<GimbalDeviceAttitudeStatus>(&mut b, start, 2_000).is_empty());
 }
