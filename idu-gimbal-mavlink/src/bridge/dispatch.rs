@@ -16,7 +16,7 @@ use mavio::dialects::common::messages::{
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use super::{Period, State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
+use super::{State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
 use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
@@ -401,7 +401,7 @@ impl State {
     pub(super) fn set_status_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
         self.status_ms = match Interval::from_us(interval_us) {
             Some(Interval::Stop) => 0,
-            Some(Interval::Default) => self.config.attitude_status.map_or(0, Period::millis),
+            Some(Interval::Default) => self.config.attitude_status_ms(),
             Some(Interval::Every(ms)) => ms,
             None => return MavResult::Denied,
         };

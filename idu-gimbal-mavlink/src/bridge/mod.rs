@@ -109,6 +109,13 @@ pub struct BridgeConfig {
     pub signing: Option<crate::signing::SigningConfig>,
 }
 
+impl BridgeConfig {
+    /// The attitude status period as the bridge keeps it at run time, ms: 0 for none.
+    fn attitude_status_ms(&self) -> u32 {
+        self.attitude_status.map_or(0, Period::millis)
+    }
+}
+
 impl Default for BridgeConfig {
     fn default() -> Self {
         BridgeConfig {
@@ -211,7 +218,7 @@ impl Bridge {
             .as_ref()
             .map(|c| CameraComponent::new(c, config.gimbal_component));
         let system_id = config.system_id.unwrap_or(1);
-        let status_ms = config.attitude_status.map_or(0, Period::millis);
+        let status_ms = config.attitude_status_ms();
         #[allow(unused_mut)]
         let mut out = Outbox::new();
         #[cfg(feature = "signing")]
