@@ -6,6 +6,8 @@ mod common;
 
 use common::Host;
 
+use core::num::NonZeroU16;
+
 use embedded_can::{nb::Can, Frame as _};
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::{Bus, Endpoint, Faults, MockFrame};
@@ -335,7 +337,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
         attitude_period_ms: 5,
         gps_period_ms: 5,
         altitude_period_ms: 5,
-        rate_repeat_ms: 5,
+        rate_repeat_ms: NonZeroU16::new(5).unwrap(),
         link_timeout_ms: 1500,
         ..Config::default()
     };

@@ -333,7 +333,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             now,
             ahead: MAX_QUIET_MS,
         };
-        let period = u32::from(self.config.aim_period_ms);
+        let period = u32::from(self.config.aim_period_ms.get());
         self.hold_step(&mut hold, now, &mut earliest, period);
         self.steering = Steering::Aim(hold);
         // The next poll runs the loop's step.
@@ -374,7 +374,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         let Steering::Aim(mut hold) = self.steering else {
             return;
         };
-        let period = u32::from(self.config.aim_period_ms);
+        let period = u32::from(self.config.aim_period_ms.get());
         self.hold_step(&mut hold, now, earliest, period);
         self.steering = Steering::Aim(hold);
     }
@@ -409,7 +409,6 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         period: u32,
     ) {
         let new = h.flags & NEW != 0;
-        let period = period.max(1);
         let north = self.north_referenced(now);
         let vehicle = self
             .is_fresh(ATTITUDE, now)

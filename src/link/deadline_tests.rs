@@ -183,7 +183,7 @@ fn postback_window_expiry_and_link_health() {
 #[test]
 fn point_at_steps_and_pending_frames_are_not_a_deadline() {
     let config = Config {
-        point_at_period_ms: 70,
+        point_at_period_ms: NonZeroU16::new(70).unwrap(),
         ..Config::default()
     };
     let mut link: Link = Link::new(config);
@@ -236,11 +236,11 @@ fn config() -> impl Strategy<Value = Config> {
                 gps_period_ms: gps,
                 altitude_period_ms: alt,
                 vehicle_stale_ms: stale,
-                rate_repeat_ms: repeat,
+                rate_repeat_ms: NonZeroU16::new(repeat).unwrap(),
                 rate_deadman_ms: deadman,
                 link_timeout_ms: timeout,
                 postback_max_gap_ms: gap,
-                point_at_period_ms: point,
+                point_at_period_ms: NonZeroU16::new(point).unwrap(),
                 ..Config::default()
             },
         )

@@ -48,6 +48,7 @@ mod transmit;
 mod vehicle;
 
 use core::fmt;
+use core::num::NonZeroU16;
 
 use crate::time::Instant;
 use crate::wire::control::{Command, GimbalCommand, Rate};
@@ -64,7 +65,34 @@ pub use receive::RxId;
 use vehicle::VehicleSources;
 
 /// Timing of the link. Every field is in milliseconds (at most 65 535) unless it says
-/// otherwise. A vehicle push period of 0 disables that push.
+/// otherwise. A vehicle push period of 0 disables that push; the periods of what the link
+/// repeats by itself (a rate hold's command, the closed loop's and a point-at's looks) are
+/// never 0, in their type.
+///
+/// ```
+/// use core::num::NonZeroU16;
+/// use idu_gimbal::Config;
+///
+/// // The closed loop and a rate hold's command every 20 ms, no altitude push.
+/// let period = NonZeroU16::new(20).ok_or("a period is at least 1 ms")?;
+/// let config = Config {
+///     aim_period_ms: period,
+///     rate_repeat_ms: period,
+///     altitude_period_ms: 0,
+///     ..Config::default()
+/// };
+/// assert_eq!(config.point_at_period_ms.get(), 100);
+/// # Ok::<(), &str>(())
+/// ```
+///
+/// A repeat period of 0 does not build:
+///
+/// ```compile_fail
+/// let config = idu_gimbal::Config {
+///     rate_repeat_ms: 0,
+///     ..idu_gimbal::Config::default()
+/// };
+/// ```
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
@@ -78,7 +106,7 @@ pub struct Config {
     pub vehicle_stale_ms: u16,
     /// Period at which a rate hold repeats its rate command (default 50, as the document
     /// recommends).
-    pub rate_repeat_ms: u16,
+    pub rate_repeat_ms: NonZeroU16,
     /// A rate hold not refreshed within this stops with one zero-rate command (default 250).
     pub rate_deadman_ms: u16,
     /// The link is up while a valid postback arrived within this (default 1500: three
@@ -88,7 +116,7 @@ pub struct Config {
     pub postback_max_gap_ms: u16,
     /// Period at which [`Link::point_at`] recomputes the aim at its target (default 100:
     /// 10 Hz).
-    pub point_at_period_ms: u16,
+    pub point_at_period_ms: NonZeroU16,
     /// An aim held ([`Link::aim`], [`Link::point_at`]) is sent again when it, or the
     /// vehicle's heading, moved by more than this since the last command, in millidegrees
     /// (default 200: twice the command's 0.1°, so that rounding alone never re-sends).
@@ -100,18 +128,24 @@ pub struct Config {
     pub aim_tolerance_mdeg: u16,
     /// The closed loop's period: an aim held is looked at this often, and re-commanded at
     /// most this often (default 50, the document's period for a repeated rate command).
-    pub aim_period_ms: u16,
+    pub aim_period_ms: NonZeroU16,
     /// Frames a port's [`poll`](crate::Port::poll) receives at most in one call, so that a
     /// flooded bus cannot starve the rest of the main loop (default 32; a poll always
     /// tries at least one).
-    pub max_rx_per_poll: core::num::NonZeroU16,
+    pub max_rx_per_poll: NonZeroU16,
 }
 
-/// [`Config::max_rx_per_poll`]'s default, checked non-zero at compile time.
-const DEFAULT_MAX_RX_PER_POLL: core::num::NonZeroU16 = match core::num::NonZeroU16::new(32) {
-    Some(n) => n,
-    None => panic!("the default receive bound is not zero"),
-};
+/// A [`Config`] default that must not be zero, checked at compile time.
+macro_rules! non_zero {
+    ($n:literal) => {
+        const {
+            match NonZeroU16::new($n) {
+                Some(n) => n,
+                None => panic!("a non-zero default of Config is zero"),
+            }
+        }
+    };
+}
 
 impl Default for Config {
     fn default() -> Self {
@@ -120,15 +154,15 @@ impl Default for Config {
             gps_period_ms: 200,
             altitude_period_ms: 200,
             vehicle_stale_ms: 1000,
-            rate_repeat_ms: 50,
+            rate_repeat_ms: non_zero!(50),
             rate_deadman_ms: 250,
             link_timeout_ms: 1500,
             postback_max_gap_ms: postback::DEFAULT_MAX_GAP_MS,
-            point_at_period_ms: 100,
+            point_at_period_ms: non_zero!(100),
             aim_deadband_mdeg: 200,
             aim_tolerance_mdeg: 500,
-            aim_period_ms: 50,
-            max_rx_per_poll: DEFAULT_MAX_RX_PER_POLL,
+            aim_period_ms: non_zero!(50),
+            max_rx_per_poll: non_zero!(32),
         }
     }
 }

@@ -182,7 +182,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         let Steering::Point(mut p) = self.steering else {
             return;
         };
-        let period = u32::from(self.config.point_at_period_ms);
+        let period = u32::from(self.config.point_at_period_ms.get());
         if p.due || now.is_at_or_after(p.hold.next) {
             let first = p.due;
             p.due = false;
@@ -198,7 +198,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
                 p.hold.next = if first {
                     now.add_millis(period)
                 } else {
-                    advance(p.hold.next, period.max(1), now)
+                    advance(p.hold.next, period, now)
                 };
                 earliest.offer(p.hold.next);
             }

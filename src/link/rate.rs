@@ -40,7 +40,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.steering = Steering::Rate(RateHold {
             rate,
             refreshed: now,
-            next: now.add_millis(u32::from(self.config.rate_repeat_ms)),
+            next: now.add_millis(u32::from(self.config.rate_repeat_ms.get())),
         });
         // The new rate supersedes a zero-rate frame still waiting.
         self.tx.cancel_zero_rate();
@@ -85,7 +85,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
                 )
                 .is_ok()
             {
-                hold.next = advance(hold.next, u32::from(self.config.rate_repeat_ms), now);
+                hold.next = advance(hold.next, u32::from(self.config.rate_repeat_ms.get()), now);
                 self.steering = Steering::Rate(hold);
             } else {
                 // Try again at the next poll.
