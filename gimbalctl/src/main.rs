@@ -124,9 +124,14 @@ enum Top {
         /// Exit after MS milliseconds (for scripted tests)
         #[arg(long, value_name = "MS")]
         exit_after_ms: Option<u64>,
-        /// Clients served at once; more are turned away
-        #[arg(long, value_name = "N", default_value_t = 8)]
-        max_clients: usize,
+        /// Clients served at once, 1..=65535; more are turned away
+        #[arg(
+            long,
+            value_name = "N",
+            default_value_t = 8,
+            value_parser = clap::value_parser!(u16).range(1..)
+        )]
+        max_clients: u16,
     },
     /// Bridge MAVLink 2 (UDP or a serial port) to a gimbal: a MAVLink gimbal device (154) and camera (100)
     Mavlink {
@@ -256,7 +261,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             if pty {
                 sim::run_pty(exit_after_ms)
             } else {
-                sim::run(&listen, exit_after_ms, max_clients)
+                sim::run(&listen, exit_after_ms, usize::from(max_clients))
             }
         }
         Top::Mavlink {

@@ -105,6 +105,11 @@ const OUT_OF_RANGE: &[(&[&str], &[&str])] = &[
         &["send", "--tcp", "127.0.0.1:9", "pitch", "70"],
         &["pitch", "-100", "60"],
     ),
+    // A server that serves nobody is no server.
+    (
+        &["sim", "--max-clients", "0"],
+        &["--max-clients", "1..=65535"],
+    ),
 ];
 
 #[test]
