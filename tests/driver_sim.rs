@@ -6,7 +6,7 @@ mod common;
 
 use common::Host;
 
-use core::num::NonZeroU16;
+use core::num::{NonZeroU16, NonZeroU32};
 
 use embedded_can::{nb::Can, Frame as _};
 use idu_gimbal::link::Config;
@@ -342,7 +342,7 @@ fn soak_a_million_frames_with_loss_corruption_and_duplication() {
         ..Config::default()
     };
     let sim_config = SimConfig {
-        postback_period_ms: 5,
+        postback_period_ms: NonZeroU32::new(5).unwrap(),
         ..SimConfig::default()
     };
     let mut b = Bench::new(&bus, config, sim_config, u32::MAX - 100_000);

@@ -7,6 +7,8 @@ mod common;
 
 use common::Host;
 
+use core::num::NonZeroU32;
+
 use idu_gimbal::geo::Position;
 use idu_gimbal::link::Config;
 use idu_gimbal::mock::serial::{Pipe, PipeStats, Rx, SerialFaults, Tx};
@@ -356,7 +358,7 @@ fn soak_a_million_bytes_with_loss_corruption_and_random_splits() {
     };
     let pipe: Pipe<N> = Pipe::new(0x5eed).with_faults(faults);
     let sim_config = SimConfig {
-        postback_period_ms: 2,
+        postback_period_ms: NonZeroU32::new(2).unwrap(),
         ..SimConfig::default()
     };
     let mut b = Bench::new(&pipe, io_port(&pipe, 0), sim_config, u32::MAX - 20_000);

@@ -158,9 +158,9 @@
 //! text frame changes nothing but its counter and is returned as a [`SimError`]. Frames on
 //! any other ID are ignored and counted.
 //!
-//! **Postbacks** are due every `postback_period_ms` (at least 1) from [`Simulator::new`],
-//! on a fixed grid of deadlines: `poll` emits one when a deadline has passed, and the next
-//! deadline is the first one on the grid after `now`, so there is no drift and a long gap
+//! **Postbacks** are due every `postback_period_ms` from [`Simulator::new`], on a fixed
+//! grid of deadlines: `poll` emits one when a deadline has passed, and the next deadline
+//! is the first one on the grid after `now`, so there is no drift and a long gap
 //! gives one postback, not a burst. The first is due one period after `new`. The postback
 //! carries the state at the poll (pitch, heading and motor ×100, rounded and clamped to
 //! their documented ranges), Data_id attitude and the configured gimbal type. While
@@ -236,6 +236,12 @@ const SECOND_MS: NonZeroU32 = match NonZeroU32::new(1000) {
     None => panic!("a second is not zero ms"),
 };
 
+/// [`SimConfig::postback_period_ms`]'s default: 500 ms, as the document's gimbal sends them.
+const POSTBACK_PERIOD_MS: NonZeroU32 = match NonZeroU32::new(500) {
+    Some(n) => n,
+    None => panic!("the postback period is not zero"),
+};
+
 /// What a gimbal in lock or full lock holds while the vehicle turns under it (see the
 /// [module docs](self#model-and-decisions)).
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
@@ -255,8 +261,8 @@ pub struct SimConfig {
     /// Largest angular speed toward angle targets, deg/s (60). Not positive or NaN: the
     /// gimbal does not slew; infinite: targets are reached at once.
     pub slew_dps: f32,
-    /// Period of the postback, ms (500; 0 is taken as 1).
-    pub postback_period_ms: u32,
+    /// Period of the postback, ms (500).
+    pub postback_period_ms: NonZeroU32,
     /// The gimbal type reported in the postback (X30).
     pub gimbal_type: GimbalType,
     /// How long a rate command is honoured after it arrives, ms (200).
@@ -278,7 +284,7 @@ impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
             slew_dps: 60.0,
-            postback_period_ms: 500,
+            postback_period_ms: POSTBACK_PERIOD_MS,
             gimbal_type: GimbalType::X30,
             rate_timeout_ms: 200,
             attitude_timeout_ms: 1000,
@@ -511,7 +517,7 @@ impl<const TX: usize> Simulator<TX> {
             state: SimState::initial(),
             stats: SimStats::default(),
             last: now,
-            next_postback: now.add_millis(config.postback_period_ms.max(1)),
+            next_postback: now.add_millis(config.postback_period_ms.get()),
             silent: false,
             rate_left_ms: 0,
             attitude_age_ms: None,
@@ -600,7 +606,7 @@ impl<const TX: usize> Simulator<TX> {
     pub fn poll(&mut self, now: Instant) -> Option<Postback> {
         self.advance(now);
         let now = self.last;
-        let period = NonZeroU32::new(self.config.postback_period_ms).unwrap_or(NonZeroU32::MIN);
+        let period = self.config.postback_period_ms;
         if !now.is_at_or_after(self.next_postback) {
             // Normally at most one period ahead; more only if calls came ≥ 2^31 ms apart
             // and the deadline looks to be in the future: restart the grid.

@@ -504,7 +504,7 @@ fn stream_mode_queues_no_frames() {
     let config = SimConfig {
         emit_can_frames: false,
         gimbal_type: GimbalType::X30T,
-        postback_period_ms: 100,
+        postback_period_ms: NonZeroU32::new(100).unwrap(),
         ..SimConfig::default()
     };
     let mut sim = Simulator::new(config, t(0));
@@ -1272,7 +1272,7 @@ proptest! {
     #[test]
     fn arbitrary_input_never_panics_and_keeps_invariants(
         slew in prop_oneof![Just(60.0f32), any::<f32>()],
-        period in prop_oneof![Just(500u32), 0u32..50, any::<u32>()],
+        period in prop_oneof![Just(500u32), 1u32..50, 1u32..=u32::MAX],
         rate_timeout in prop_oneof![Just(200u32), any::<u32>()],
         attitude_timeout in any::<u32>(),
         emit in any::<bool>(),
@@ -1284,7 +1284,7 @@ proptest! {
     ) {
         let config = SimConfig {
             slew_dps: slew,
-            postback_period_ms: period,
+            postback_period_ms: NonZeroU32::new(period).unwrap(),
             gimbal_type: GimbalType::Unknown(9),
             rate_timeout_ms: rate_timeout,
             attitude_timeout_ms: attitude_timeout,
