@@ -334,7 +334,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             ahead: MAX_QUIET_MS,
         };
         let period = u32::from(self.config.aim_period_ms.get());
-        self.hold_step(&mut hold, now, &mut earliest, period);
+        self.hold_step(&mut hold, now, period, &mut earliest);
         self.steering = Steering::Aim(hold);
         // The next poll runs the loop's step.
         self.quiet = quiet::Quiet::NONE;
@@ -375,7 +375,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             return;
         };
         let period = u32::from(self.config.aim_period_ms.get());
-        self.hold_step(&mut hold, now, earliest, period);
+        self.hold_step(&mut hold, now, period, earliest);
         self.steering = Steering::Aim(hold);
     }
 
@@ -389,14 +389,14 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         &mut self,
         h: &mut Hold<Q, T, M>,
         now: Instant,
-        earliest: &mut Earliest,
         period: u32,
+        earliest: &mut Earliest,
     ) {
         if h.flags & NEW == 0 && !now.is_at_or_after(h.next) {
             earliest.offer(h.next);
             return;
         }
-        self.hold_look(h, now, earliest, period);
+        self.hold_look(h, now, period, earliest);
     }
 
     /// The loop's look at `now`, a time on its grid or a new aim's: what came since, and
@@ -405,8 +405,8 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         &mut self,
         h: &mut Hold<Q, T, M>,
         now: Instant,
-        earliest: &mut Earliest,
         period: u32,
+        earliest: &mut Earliest,
     ) {
         let new = h.flags & NEW != 0;
         let north = self.north_referenced(now);

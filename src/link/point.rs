@@ -192,7 +192,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             }
             if p.aiming {
                 // The loop looks on the point-at's grid (it sets the next look).
-                self.hold_look(&mut p.hold, now, earliest, period);
+                self.hold_look(&mut p.hold, now, period, earliest);
             } else {
                 // No aim yet: look again a period on.
                 p.hold.next = if first {
