@@ -385,6 +385,8 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// the vehicle's heading, the gimbal's reference) is looked at there, and a re-command
     /// goes there. So what the loop does depends on the grid, not on how often the link is
     /// polled.
+    // `period` before `earliest`, so that it is passed in a register: fifth, it goes on
+    // the stack, 7 instructions a step.
     pub(super) fn hold_step(
         &mut self,
         h: &mut Hold<Q, T, M>,
