@@ -79,6 +79,19 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+/// `$n` as the `core::num` non-zero type `$ty`, checked at compile time: a 0 does not build.
+/// Defined before the modules, so that all of them can use it.
+macro_rules! non_zero {
+    ($ty:ty, $n:literal) => {
+        const {
+            match <$ty>::new($n) {
+                Some(n) => n,
+                None => panic!("a non-zero constant is zero"),
+            }
+        }
+    };
+}
+
 pub mod geo;
 pub mod interface;
 pub mod link;

@@ -135,18 +135,6 @@ pub struct Config {
     pub max_rx_per_poll: NonZeroU16,
 }
 
-/// A [`Config`] default that must not be zero, checked at compile time.
-macro_rules! non_zero {
-    ($n:literal) => {
-        const {
-            match NonZeroU16::new($n) {
-                Some(n) => n,
-                None => panic!("a non-zero default of Config is zero"),
-            }
-        }
-    };
-}
-
 impl Default for Config {
     fn default() -> Self {
         Config {
@@ -154,15 +142,15 @@ impl Default for Config {
             gps_period_ms: 200,
             altitude_period_ms: 200,
             vehicle_stale_ms: 1000,
-            rate_repeat_ms: non_zero!(50),
+            rate_repeat_ms: non_zero!(NonZeroU16, 50),
             rate_deadman_ms: 250,
             link_timeout_ms: 1500,
             postback_max_gap_ms: postback::DEFAULT_MAX_GAP_MS,
-            point_at_period_ms: non_zero!(100),
+            point_at_period_ms: non_zero!(NonZeroU16, 100),
             aim_deadband_mdeg: 200,
             aim_tolerance_mdeg: 500,
-            aim_period_ms: non_zero!(50),
-            max_rx_per_poll: non_zero!(32),
+            aim_period_ms: non_zero!(NonZeroU16, 50),
+            max_rx_per_poll: non_zero!(NonZeroU16, 32),
         }
     }
 }

@@ -231,16 +231,10 @@ pub const FOCUS_SPEED_PER_S: f32 = 0.5;
 pub const CALIBRATION_MS: u32 = 2000;
 
 /// A second, in ms: a time-lapse's period is its seconds times this.
-const SECOND_MS: NonZeroU32 = match NonZeroU32::new(1000) {
-    Some(n) => n,
-    None => panic!("a second is not zero ms"),
-};
+const SECOND_MS: NonZeroU32 = non_zero!(NonZeroU32, 1000);
 
 /// [`SimConfig::postback_period_ms`]'s default: 500 ms, as the document's gimbal sends them.
-const POSTBACK_PERIOD_MS: NonZeroU32 = match NonZeroU32::new(500) {
-    Some(n) => n,
-    None => panic!("the postback period is not zero"),
-};
+const POSTBACK_PERIOD_MS: NonZeroU32 = non_zero!(NonZeroU32, 500);
 
 /// What a gimbal in lock or full lock holds while the vehicle turns under it (see the
 /// [module docs](self#model-and-decisions)).
