@@ -17,7 +17,7 @@ use idu_gimbal::sim::serial::SerialSimulator;
 use idu_gimbal::sim::SimConfig;
 use idu_gimbal::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
 use idu_gimbal::wire::postback::{Postback, MESSAGE_LEN};
-use idu_gimbal::wire::serial::{StreamItem, StreamParser, FRAME_LEN};
+use idu_gimbal::wire::serial::{control_frame, StreamItem, StreamParser, FRAME_LEN};
 use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
 use idu_gimbal::{Event, Instant};
 use idu_gimbal::{Port, SerialLink};
@@ -650,4 +650,71 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
     assert_eq!(port.stats().bytes_received, 9 * MESSAGE_LEN as u32);
     assert_eq!(gimbal.stats().postbacks, 9);
     assert_eq!(got, sent);
+}
+
+/// A UART that says it read or wrote more bytes than the buffer it was given holds: each
+/// read hands out the stream form of one postback and reports 5 bytes beyond the buffer,
+/// each write reports 3 bytes beyond what it was given.
+struct Overlong {
+    postback: [u8; MESSAGE_LEN],
+    reads_left: u32,
+    written: Vec<u8>,
+}
+
+impl Uart for Overlong {
+    type ReadError = core::convert::Infallible;
+    type WriteError = core::convert::Infallible;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::ReadError> {
+        if self.reads_left == 0 {
+            return Ok(0);
+        }
+        self.reads_left -= 1;
+        buf.fill(0);
+        buf[..MESSAGE_LEN].copy_from_slice(&self.postback);
+        Ok(buf.len() + 5)
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<usize, Self::WriteError> {
+        self.written.extend_from_slice(bytes);
+        Ok(bytes.len() + 3)
+    }
+}
+
+/// A UART that breaks its contract by saying it read or wrote more than the buffer held is
+/// counted (`overlong`) each time, never silently: its buffer is taken whole (the postback
+/// in it arrives, the zeros after it are skipped bytes), and a write it over-reports
+/// finishes the frame once, with nothing written twice.
+#[test]
+fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
+    let postback = Postback {
+        pitch: -1234,
+        ..Postback::default()
+    };
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut port = SerialPort::new(Overlong {
+        postback: postback.to_stream_bytes(),
+        reads_left: 2,
+        written: Vec::new(),
+    });
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
+    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+
+    // Two reads of the 32-byte buffer and one write of a whole frame, each over-reported.
+    let stats = port.stats();
+    assert_eq!(stats.port_errors.overlong, 3);
+    assert_eq!((stats.port_errors.read, stats.port_errors.write), (0, 0));
+    assert_eq!(stats.bytes_received, 64);
+    assert_eq!(link.stats().postbacks, 2);
+    assert_eq!(
+        link.latest_postback(Instant::from_millis(0)).unwrap().0,
+        postback
+    );
+    // The frame went out once, whole, and is counted as its 24 bytes.
+    let pitch = encode(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()));
+    assert_eq!(port.uart().written, control_frame(&pitch));
+    assert_eq!(stats.bytes_sent, FRAME_LEN as u32);
+    assert_eq!(link.stats().frames_sent, 1);
+    assert!(!link.has_transmit());
 }

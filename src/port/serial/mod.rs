@@ -82,6 +82,9 @@ pub struct PortErrors {
     pub read: u32,
     /// Failed writes.
     pub write: u32,
+    /// Reads and writes the UART said were longer than the buffer it was given, which
+    /// breaks the [`Uart`] contract: taken as the whole buffer, and counted here.
+    pub overlong: u32,
 }
 
 /// What a [`SerialPort`] counts; the link counts the rest ([`Link::stats`](crate::Link::stats)).
@@ -185,7 +188,13 @@ impl<U: Uart> SerialPort<U> {
             match read {
                 Ok(0) => return,
                 Ok(n) => {
-                    let bytes = self.rx_buf.get(..n).unwrap_or(&self.rx_buf);
+                    let bytes = match self.rx_buf.get(..n) {
+                        Some(bytes) => bytes,
+                        None => {
+                            self.errors.overlong = self.errors.overlong.wrapping_add(1);
+                            &self.rx_buf
+                        }
+                    };
                     self.stream.receive(link, bytes, now)
                 }
                 Err(e) => {
@@ -212,6 +221,7 @@ impl<U: Uart> SerialPort<U> {
             if bytes.is_empty() {
                 return None;
             }
+            let len = bytes.len();
             match self.uart.write(bytes) {
                 Ok(0) => {
                     self.stream.transmit_written(link, 0);
@@ -220,7 +230,12 @@ impl<U: Uart> SerialPort<U> {
                     link.hold_idle();
                     return None;
                 }
-                Ok(n) => self.stream.transmit_written(link, n),
+                Ok(n) => {
+                    if n > len {
+                        self.errors.overlong = self.errors.overlong.wrapping_add(1);
+                    }
+                    self.stream.transmit_written(link, n)
+                }
                 Err(e) => {
                     self.stream.transmit_written(link, 0);
                     link.hold_idle();

@@ -21,11 +21,13 @@ pub trait Uart {
     type WriteError;
 
     /// Reads bytes that are waiting, at most `buf.len()`, without blocking: `Ok(0)` when
-    /// none are.
+    /// none are. (A [`SerialPort`](super::SerialPort) told more takes the whole buffer and
+    /// counts it: [`PortErrors::overlong`](super::PortErrors::overlong).)
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::ReadError>;
 
     /// Writes the first bytes of `bytes` that the port takes now, without blocking, and
-    /// says how many: `Ok(0)` when it takes none now.
+    /// says how many: `Ok(0)` when it takes none now. (More than `bytes.len()` is taken as
+    /// all of them and counted, as for a read.)
     fn write(&mut self, bytes: &[u8]) -> Result<usize, Self::WriteError>;
 }
 
