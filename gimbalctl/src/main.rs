@@ -5,8 +5,10 @@
 
 use std::io::Write;
 use std::net::Ipv4Addr;
+use std::num::NonZeroU64;
 use std::process::ExitCode;
 
+use clap::builder::TypedValueParser as _;
 use clap::{Parser, Subcommand};
 use idu_gimbal::wire::serial;
 
@@ -80,9 +82,9 @@ enum Top {
             value_name = "MS",
             requires = "for_ms",
             global = true,
-            value_parser = clap::value_parser!(u64).range(1..)
+            value_parser = clap::value_parser!(u64).range(1..).try_map(NonZeroU64::try_from)
         )]
-        repeat_ms: Option<u64>,
+        repeat_ms: Option<NonZeroU64>,
         /// How long to repeat, milliseconds
         #[arg(long, value_name = "MS", requires = "repeat_ms", global = true)]
         for_ms: Option<u64>,

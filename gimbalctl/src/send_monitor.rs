@@ -2,6 +2,7 @@
 //! [`crate::transport`]), and how a frame is printed.
 
 use std::io::Write;
+use std::num::NonZeroU64;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use idu_gimbal::link::text::TextAssembler;
@@ -48,7 +49,11 @@ const SEND_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// `gimbalctl send (--tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD]) [--repeat-ms MS
 /// --for-ms MS] COMMAND ARGS...`.
-pub fn send(target: &Target, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<(), Failure> {
+pub fn send(
+    target: &Target,
+    spec: &Spec,
+    repeat: Option<(NonZeroU64, u64)>,
+) -> Result<(), Failure> {
     let message = spec.build()?;
     if !target.carries_vehicle() {
         // Vehicle and text frames exist only on CAN: a usage error before connecting.
@@ -71,7 +76,7 @@ pub fn send(target: &Target, spec: &Spec, repeat: Option<(u64, u64)>) -> Result<
 struct SendJob {
     message: Message,
     text: Option<String>,
-    repeat: Option<(u64, u64)>,
+    repeat: Option<(NonZeroU64, u64)>,
 }
 
 impl Job for SendJob {
@@ -85,8 +90,7 @@ impl Job for SendJob {
         flush(&mut s, want, now)?;
         if let Some((every_ms, for_ms)) = self.repeat {
             let start = Instant::now();
-            // clap rejects 0; guard anyway so the loop always advances.
-            let every = Duration::from_millis(every_ms.max(1));
+            let every = Duration::from_millis(every_ms.get());
             let total = Duration::from_millis(for_ms);
             let mut next = start + every;
             while next <= start + total {
@@ -470,7 +474,7 @@ mod tests {
     }
 
     /// What `gimbalctl send --can` puts on the bus for `args`, as `ID#DATA`.
-    fn sent_on_can(args: &[&str], repeat: Option<(u64, u64)>) -> Vec<String> {
+    fn sent_on_can(args: &[&str], repeat: Option<(NonZeroU64, u64)>) -> Vec<String> {
         let bus: Bus<2, 64> = Bus::new(1);
         let mut gimbal = bus.endpoint(1).unwrap();
         let session = mock_session(&bus, Mode::Drive);
@@ -527,7 +531,7 @@ mod tests {
 
     #[test]
     fn send_on_can_holds_a_rate_then_sends_zero_rate() {
-        let frames = sent_on_can(&["rate", "10", "0"], Some((50, 300)));
+        let frames = sent_on_can(&["rate", "10", "0"], NonZeroU64::new(50).zip(Some(300)));
         let (last, held) = frames.split_last().unwrap();
         assert_eq!(last, "00000F01#0F04000000000000");
         assert!((5..=8).contains(&held.len()), "{frames:?}");

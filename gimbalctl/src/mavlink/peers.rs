@@ -6,6 +6,7 @@
 //! expiry and eviction are tested without sleeping.
 
 use std::net::SocketAddr;
+use std::num::NonZeroUsize;
 use std::time::{Duration, Instant};
 
 /// How long a peer may stay silent before it is dropped. Ground stations and autopilots send
@@ -19,7 +20,7 @@ pub const PEER_TIMEOUT: Duration = Duration::from_secs(10);
 /// full of live peers a newcomer is refused: evicting a live ground station (16 sockets
 /// beating at 2 Hz would leave a 1 Hz one without a heartbeat for seconds) is worse than
 /// turning away the 65th address.
-pub const PEER_CAPACITY: usize = 64;
+pub const PEER_CAPACITY: NonZeroUsize = NonZeroUsize::new(64).unwrap();
 
 /// What one datagram changed in the table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,10 +49,10 @@ pub struct Peers {
 }
 
 impl Peers {
-    /// A table of at most `capacity` peers (at least one), each dropped after `timeout`
+    /// A table of at most `capacity` peers, each dropped after `timeout`
     /// of silence.
-    pub fn new(capacity: usize, timeout: Duration) -> Self {
-        let capacity = capacity.max(1);
+    pub fn new(capacity: NonZeroUsize, timeout: Duration) -> Self {
+        let capacity = capacity.get();
         Peers {
             slots: Vec::with_capacity(capacity),
             capacity,
@@ -151,7 +152,7 @@ mod tests {
     #[test]
     fn garbage_never_joins() {
         let t0 = Instant::now();
-        let mut peers = Peers::new(2, PEER_TIMEOUT);
+        let mut peers = Peers::new(NonZeroUsize::new(2).unwrap(), PEER_TIMEOUT);
         for port in 1..=100 {
             assert_eq!(peers.heard(addr(port), 0, t0), None);
         }
@@ -217,7 +218,7 @@ mod tests {
     #[test]
     fn a_full_table_of_live_peers_refuses_the_newcomer() {
         let t0 = Instant::now();
-        let mut peers = Peers::new(3, PEER_TIMEOUT);
+        let mut peers = Peers::new(NonZeroUsize::new(3).unwrap(), PEER_TIMEOUT);
         peers.heard(addr(1), 1, t0);
         peers.heard(addr(2), 1, t0 + S);
         peers.heard(addr(3), 1, t0 + 2 * S);
@@ -267,7 +268,7 @@ mod tests {
                 "client {i}"
             );
             assert!(has(&peers, addr(10_000 + i)));
-            assert!(peers.len() <= PEER_CAPACITY);
+            assert!(peers.len() <= PEER_CAPACITY.get());
         }
     }
 
@@ -285,9 +286,9 @@ mod tests {
             expired(&mut peers, t0 + 10 * S + Duration::from_millis(50)),
             [addr(1)]
         );
-        // A capacity of 0 is taken as 1: a good stranger is answered, the next refused
-        // while the first is live, and given its slot once it is not.
-        let mut one = Peers::new(0, PEER_TIMEOUT);
+        // A capacity of 1: a good stranger is answered, the next refused while the first
+        // is live, and given its slot once it is not.
+        let mut one = Peers::new(NonZeroUsize::MIN, PEER_TIMEOUT);
         assert_eq!(one.heard(addr(1), 1, t0), Some(Change::Joined(addr(1))));
         assert_eq!(one.heard(addr(2), 1, t0), Some(Change::Refused(addr(2))));
         assert_eq!(
