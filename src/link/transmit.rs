@@ -26,6 +26,16 @@ impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     pub fn transmit_refused(&mut self, frame: Frame) {
         self.frame_refused(frame)
     }
+
+    /// [`Link::transmit_done`] with a frame handed back that no link sends (a standard ID, a
+    /// remote frame, not 8 bytes), for a port: it cannot be re-queued, and is counted as a
+    /// frame handed back that was not this link's.
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn transmit_done_foreign(&mut self) {
+        self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
+        self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+    }
 }
 
 impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {

@@ -264,14 +264,18 @@ impl<C: Can> CanPort<C> {
             return Err(Some(self.unsendable()));
         };
         match self.can.transmit(&can_frame) {
-            Ok(displaced) => {
-                let displaced = displaced.and_then(|d| match d.id() {
-                    Id::Extended(id) => <[u8; 8]>::try_from(d.data())
-                        .ok()
-                        .map(|data| Frame::new(id.as_raw(), data)),
-                    Id::Standard(_) => None,
-                });
-                link.transmit_done(displaced);
+            Ok(None) => {
+                link.transmit_done(None);
+                Ok(())
+            }
+            Ok(Some(displaced)) => {
+                match displaced.id() {
+                    Id::Extended(id) => match <[u8; 8]>::try_from(displaced.data()) {
+                        Ok(data) => link.transmit_done(Some(Frame::new(id.as_raw(), data))),
+                        Err(_) => link.transmit_done_foreign(),
+                    },
+                    Id::Standard(_) => link.transmit_done_foreign(),
+                }
                 Ok(())
             }
             Err(e) => Err(self.refused(link, Frame::new(id.as_raw(), data), e)),
@@ -375,6 +379,87 @@ mod tests {
             CONTROL_ID,
             ExtendedId::new(crate::wire::ids::CONTROL).unwrap()
         );
+    }
+
+    /// A CAN driver that takes every frame and hands back, each time, the next of `back`
+    /// (as a driver hands back a lower-priority frame it took out of a mailbox).
+    #[cfg(feature = "mock")]
+    struct HandsBack {
+        back: std::vec::Vec<crate::mock::MockFrame>,
+        sent: std::vec::Vec<crate::mock::MockFrame>,
+    }
+
+    #[cfg(feature = "mock")]
+    impl Can for HandsBack {
+        type Frame = crate::mock::MockFrame;
+        type Error = ErrorKind;
+
+        fn transmit(
+            &mut self,
+            frame: &Self::Frame,
+        ) -> nb::Result<Option<Self::Frame>, Self::Error> {
+            self.sent.push(*frame);
+            Ok(if self.back.is_empty() {
+                None
+            } else {
+                Some(self.back.remove(0))
+            })
+        }
+
+        fn receive(&mut self) -> nb::Result<Self::Frame, Self::Error> {
+            Err(nb::Error::WouldBlock)
+        }
+    }
+
+    /// A frame handed back that no link sends (a standard ID, a remote frame, fewer than 8
+    /// bytes) cannot be re-queued: it is counted with the frames handed back that were not
+    /// the link's (`queue_full`), never dropped without a word; the link's own frame
+    /// handed back is re-queued and sent again.
+    #[cfg(feature = "mock")]
+    #[test]
+    fn a_handed_back_frame_no_link_sends_is_counted() {
+        use crate::link::Config;
+        use crate::mock::MockFrame;
+        use crate::wire::control::{Command, GimbalCommand, Pitch};
+
+        let pitch = |deg| GimbalCommand::Pitch(Pitch::new(deg).unwrap());
+        let remote = <MockFrame as embedded_can::Frame>::new_remote(
+            ExtendedId::new(crate::wire::ids::CONTROL).unwrap(),
+            8,
+        )
+        .unwrap();
+        // The first command, handed back after the driver took it.
+        let own = MockFrame::extended(
+            crate::wire::ids::CONTROL,
+            &Command::from(pitch(-10.0)).encode(),
+        )
+        .unwrap();
+        let mut port = CanPort::new(HandsBack {
+            back: std::vec![
+                MockFrame::standard(0x123, &[0; 8]).unwrap(),
+                remote,
+                MockFrame::extended(crate::wire::ids::CONTROL, &[1, 2, 3, 4]).unwrap(),
+                own,
+            ],
+            sent: std::vec::Vec::new(),
+        });
+        let mut link: Link = Link::new(Config::default());
+        for deg in [-10.0, -20.0, -30.0, -40.0] {
+            link.send(pitch(deg)).unwrap();
+        }
+        port.poll(&mut link, Instant::from_millis(0)).unwrap();
+
+        let stats = link.stats();
+        assert_eq!(stats.queue_full, 3, "the three frames no link sends");
+        assert_eq!(stats.requeued, 1, "the link's own frame");
+        // Four commands, the first taken again after it was handed back; counted as sent
+        // once each.
+        assert_eq!(port.can().sent.len(), 5);
+        assert_eq!(port.can().sent.first(), Some(&own));
+        assert_eq!(port.can().sent.last(), Some(&own));
+        assert_eq!(stats.frames_sent, 4);
+        assert_eq!(port.stats().driver_errors.total(), 0);
+        assert!(!link.has_transmit());
     }
 
     #[test]
