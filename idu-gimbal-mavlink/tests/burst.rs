@@ -155,11 +155,39 @@ fn a_burst_read_from_a_serial_line_through_serial_input_is_answered_in_full() {
         a.take(&mut b);
     }
     assert_all_answered(&a, &asked, &b);
+    assert_eq!(input.overlong_reads(), 0);
     // A read error ends the call, and is the caller's; nothing held is lost.
     assert_eq!(
         input.receive(&mut b.bridge, &mut b.link, t(12), |_| Err("overrun")),
         Err("overrun")
     );
+}
+
+/// A read that says it gave more bytes than the buffer holds breaks its contract: the
+/// buffer is taken whole (the request in it answered) and the read counted, never silently.
+#[test]
+fn a_read_claiming_more_than_the_buffer_is_counted() {
+    let mut b = bridge();
+    let frame = request(0, 0, 0);
+    let mut input: SerialInput<64> = SerialInput::new();
+    let mut reads = 0;
+    let read = |buf: &mut [u8]| {
+        reads += 1;
+        if reads > 1 {
+            return Ok::<usize, ()>(0);
+        }
+        buf.fill(0);
+        buf[..frame.len()].copy_from_slice(&frame);
+        Ok(buf.len() + 5)
+    };
+    input
+        .receive(&mut b.bridge, &mut b.link, t(10), read)
+        .unwrap();
+    assert_eq!(input.overlong_reads(), 1);
+    assert_eq!(input.held(), 0);
+    let mut a = Answers::default();
+    a.take(&mut b);
+    assert_all_answered(&a, &[1], &b);
 }
 
 #[test]

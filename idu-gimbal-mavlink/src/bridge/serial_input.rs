@@ -33,6 +33,8 @@ pub struct SerialInput<const N: usize> {
     buf: [u8; N],
     /// What of `buf` the bridge has not taken.
     held: Range<usize>,
+    /// Reads that said they gave more bytes than the buffer holds.
+    overlong: u32,
 }
 
 impl<const N: usize> SerialInput<N> {
@@ -41,13 +43,16 @@ impl<const N: usize> SerialInput<N> {
         SerialInput {
             buf: [0; N],
             held: 0..0,
+            overlong: 0,
         }
     }
 
     /// Offers the bridge what is held, then what `read` gives (into the buffer; `Ok(0)`:
     /// nothing waiting), until `read` has nothing more or a frame waits for room in the
     /// outbox: then send what [`Bridge::transmit_bytes`] holds and call again. A read error
-    /// ends the call and is returned; nothing held is lost.
+    /// ends the call and is returned; nothing held is lost. A read that says it gave more
+    /// bytes than the buffer holds is taken as the whole buffer and counted
+    /// ([`SerialInput::overlong_reads`]).
     pub fn receive<const Q: usize, const T: usize, M: Medium, E>(
         &mut self,
         bridge: &mut Bridge,
@@ -61,7 +66,11 @@ impl<const N: usize> SerialInput<N> {
                 if n == 0 {
                     return Ok(());
                 }
-                // A reader that claims more than the buffer is held to the buffer.
+                // A reader that claims more than the buffer is held to the buffer, and
+                // counted.
+                if n > N {
+                    self.overlong = self.overlong.wrapping_add(1);
+                }
                 self.held = 0..n.min(N);
             }
             let bytes = self.buf.get(self.held.clone()).unwrap_or(&[]);
@@ -76,6 +85,12 @@ impl<const N: usize> SerialInput<N> {
     /// How many bytes are held, not yet taken by the bridge.
     pub fn held(&self) -> usize {
         self.held.len()
+    }
+
+    /// How many reads said they gave more bytes than the buffer holds, which breaks
+    /// `read`'s contract (wraps at `u32::MAX`): each was taken as the whole buffer.
+    pub fn overlong_reads(&self) -> u32 {
+        self.overlong
     }
 }
 
