@@ -5,7 +5,7 @@
 
 use std::io::Write;
 use std::net::Ipv4Addr;
-use std::num::NonZeroU64;
+use std::num::{NonZeroU16, NonZeroU64, NonZeroUsize};
 use std::process::ExitCode;
 
 use clap::builder::TypedValueParser as _;
@@ -130,10 +130,10 @@ enum Top {
         #[arg(
             long,
             value_name = "N",
-            default_value_t = 8,
-            value_parser = clap::value_parser!(u16).range(1..)
+            default_value = "8",
+            value_parser = clap::value_parser!(u16).range(1..).try_map(NonZeroU16::try_from)
         )]
-        max_clients: u16,
+        max_clients: NonZeroU16,
     },
     /// Bridge MAVLink 2 (UDP or a serial port) to a gimbal: a MAVLink gimbal device (154) and camera (100)
     Mavlink {
@@ -263,7 +263,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             if pty {
                 sim::run_pty(exit_after_ms)
             } else {
-                sim::run(&listen, exit_after_ms, usize::from(max_clients))
+                sim::run(&listen, exit_after_ms, NonZeroUsize::from(max_clients))
             }
         }
         Top::Mavlink {

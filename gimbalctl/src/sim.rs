@@ -18,6 +18,7 @@
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::num::NonZeroUsize;
 use std::time::{Duration, Instant as StdInstant};
 
 use idu_gimbal::sim::serial::SerialSimulator;
@@ -47,7 +48,11 @@ struct Client {
 }
 
 /// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
-pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Result<(), Failure> {
+pub fn run(
+    listen: &str,
+    exit_after_ms: Option<u64>,
+    max_clients: NonZeroUsize,
+) -> Result<(), Failure> {
     let addrs = crate::tcp::resolve(listen)?;
     let listener = TcpListener::bind(&addrs[..])
         .map_err(|e| Failure::Runtime(format!("cannot listen on {listen}: {e}")))?;
@@ -84,7 +89,7 @@ pub fn run(listen: &str, exit_after_ms: Option<u64>, max_clients: usize) -> Resu
         loop {
             match listener.accept() {
                 Ok((stream, peer)) => {
-                    if clients.len() >= max_clients {
+                    if clients.len() >= max_clients.get() {
                         eprintln!(
                             "gimbalctl sim: refusing {peer}: {max_clients} clients already connected"
                         );
