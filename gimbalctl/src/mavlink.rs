@@ -157,7 +157,7 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
 /// What signing let through and turned away, for stderr.
 fn signing_line(s: &SigningStats) -> String {
     format!(
-        "{} frames accepted; turned away: {} unsigned, {} with a bad signature, {} replayed",
+        "frames accepted: {}; turned away: {} unsigned, {} with a bad signature, {} replayed",
         s.accepted, s.unsigned, s.bad_signature, s.replayed
     )
 }

@@ -50,13 +50,14 @@ def start(gimbalctl, *key_args):
     return proc, port, err
 
 
-def turned_away(err):
+def signing_counts(err):
     """The counts of the bridge's latest signing line on stderr (said once a second as they
-    grow): (unsigned, bad signature, replayed), or None."""
+    grow): (accepted, unsigned, bad signature, replayed), or None."""
     err.seek(0)
     text = err.read()
     sys.stderr.write(text)
-    found = re.findall(r"turned away: (\d+) unsigned, (\d+) with a bad signature, (\d+) replayed", text)
+    found = re.findall(r"frames accepted: (\d+); turned away: (\d+) unsigned, "
+                       r"(\d+) with a bad signature, (\d+) replayed", text)
     return tuple(int(v) for v in found[-1]) if found else None
 
 
@@ -131,11 +132,13 @@ def session(gimbalctl, label, *key_args):
         check(len(acks) == 1 and len(infos) == 1,
               f"{label}: a signed request sent twice byte for byte is answered once ({len(acks)} ACKs)")
 
-        # The bridge says what it turned away (once a second, as the counts grow).
+        # The bridge says what it let through and turned away (once a second, as the counts
+        # grow): the signed client's two requests (the replay is not one of them).
         good.idle(1.5)
-        counts = turned_away(err)
-        check(counts is not None and counts[0] >= 1 and counts[1] >= 1 and counts[2] == 1,
-              f"{label}: stderr counts the unsigned, wrong-key and replayed frames: {counts}")
+        counts = signing_counts(err)
+        check(counts is not None and counts[0] == 2 and counts[1] >= 1 and counts[2] >= 1
+              and counts[3] == 1,
+              f"{label}: stderr counts the accepted, unsigned, wrong-key and replayed frames: {counts}")
     except Exception as e:  # a crash is a failure with its reason
         check(False, f"{label}: crashed: {e!r}")
     finally:
