@@ -21,7 +21,8 @@
 //! missed heartbeats) of silence. At most [`peers::PEER_CAPACITY`] (64) peers are kept, and
 //! a live one is never evicted: when all slots hold live peers a new address is refused
 //! (said once per address, and counted). What the bridge sends goes, one frame a datagram,
-//! to every peer and to each `--to` address (those are permanent and outside the table).
+//! to every peer and to each `--to` address (those are permanent and outside the table);
+//! a datagram the socket refuses is counted by address and said ([`udp::Unsent`]).
 //! Joins, departures and refusals go to stderr, at most [`peer_log::PEER_LINES`] lines a second; the
 //! lines held back are summed up after.
 //!
@@ -69,7 +70,7 @@ mod udp;
 use peer_log::PeerLog;
 use peers::{Peers, PEER_CAPACITY, PEER_TIMEOUT};
 use sim_watch::SimWatch;
-use udp::{receive_udp, send_udp, Clients};
+use udp::{receive_udp, send_udp, Clients, Unsent};
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(1);
@@ -452,6 +453,7 @@ fn serve<S: Pump>(
         peers: Peers::new(PEER_CAPACITY, PEER_TIMEOUT),
         log: PeerLog::new(start),
         splitter: FrameReader::new(),
+        unsent: Unsent::default(),
     };
     // Allocated once; see DATAGRAM_BUFFER.
     let mut buf = vec![0u8; DATAGRAM_BUFFER];
@@ -466,6 +468,14 @@ fn serve<S: Pump>(
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
             if let Some(s) = bridge.signing_stats() {
                 eprintln!("gimbalctl mavlink: signing: {}", signing_line(&s));
+            }
+            for line in clients.unsent.lines(StdInstant::now(), true) {
+                eprintln!("gimbalctl mavlink: warning: {line}");
+            }
+            match clients.unsent.total() {
+                0 => {}
+                1 => eprintln!("gimbalctl mavlink: 1 datagram not sent in all"),
+                n => eprintln!("gimbalctl mavlink: {n} datagrams not sent in all"),
             }
             eprintln!(
                 "gimbalctl mavlink: exiting after {} ms",
@@ -507,7 +517,11 @@ fn serve<S: Pump>(
             was_up = up;
         }
         if clock >= notes_at {
-            for note in side.notes() {
+            for note in side
+                .notes()
+                .into_iter()
+                .chain(clients.unsent.lines(clock, false))
+            {
                 eprintln!("gimbalctl mavlink: warning: {note}");
             }
             let others = bridge.stats().other_autopilots;

@@ -591,3 +591,92 @@ fn zoom_steps_back_to_back_are_each_accepted() {
         "every step ACCEPTED\n{stderr}"
     );
 }
+
+/// The counts of the "N datagram(s) to ADDR not sent: ..." lines on `stderr` for `to`,
+/// summed.
+fn said_unsent(stderr: &str, to: &str) -> u64 {
+    let mark = format!(" to {to} not sent: ");
+    stderr
+        .lines()
+        .filter(|l| l.contains(&mark))
+        .filter_map(|l| {
+            l.split("warning: ")
+                .nth(1)?
+                .split(' ')
+                .next()?
+                .parse::<u64>()
+                .ok()
+        })
+        .sum()
+}
+
+/// Datagrams the socket refuses are counted by destination and said, never lost without a
+/// word: a `--to` address beyond a loopback socket's reach (with the remedy) and a
+/// broadcast address are each refused every frame the bridge sends, which a `--to` socket
+/// that can be reached receives; and the total said at the end is their sum.
+#[test]
+fn datagrams_the_socket_refuses_are_counted_and_said() {
+    let sink = socket();
+    let sink_addr = sink.local_addr().expect("sink address").to_string();
+    // A loopback socket cannot send beyond this host (Linux: EINVAL) nor to a broadcast
+    // address without SO_BROADCAST (EACCES).
+    const BEYOND: &str = "10.255.255.1:14550";
+    const BROADCAST: &str = "127.255.255.255:14550";
+    let out = common::run_timeout(
+        &[
+            "mavlink",
+            "--sim",
+            "--listen",
+            "127.0.0.1:0",
+            "--to",
+            &sink_addr,
+            "--to",
+            BEYOND,
+            "--to",
+            BROADCAST,
+            "--exit-after-ms",
+            "1500",
+        ],
+        b"",
+        Duration::from_secs(30),
+    );
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    // Every datagram the sink was sent is waiting in its buffer (a few dozen, on loopback).
+    sink.set_nonblocking(true).expect("non-blocking");
+    let mut buf = [0u8; 512];
+    let mut received = 0u64;
+    while sink.recv_from(&mut buf).is_ok() {
+        received += 1;
+    }
+    assert!(
+        received > 0,
+        "the reachable --to address is sent to\n{}",
+        out.stderr
+    );
+    assert_eq!(
+        said_unsent(&out.stderr, BEYOND),
+        received,
+        "every frame refused for the address beyond reach\n{}",
+        out.stderr
+    );
+    assert_eq!(
+        said_unsent(&out.stderr, BROADCAST),
+        received,
+        "every frame refused for the broadcast address\n{}",
+        out.stderr
+    );
+    assert_eq!(said_unsent(&out.stderr, &sink_addr), 0, "{}", out.stderr);
+    assert!(
+        out.stderr
+            .contains("a loopback address: --listen 0.0.0.0:PORT reaches other hosts")
+            && out.stderr.contains("(a broadcast address is not sent to)"),
+        "the reasons are said with the remedy\n{}",
+        out.stderr
+    );
+    assert!(
+        out.stderr
+            .contains(&format!("{} datagrams not sent in all", 2 * received)),
+        "the total\n{}",
+        out.stderr
+    );
+}

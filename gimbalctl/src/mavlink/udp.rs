@@ -2,9 +2,10 @@
 //! answers sent before the next is read, one frame a datagram to every peer and `--to`
 //! address; the peer table kept and what changed in it said ([`super::peer_log`]).
 
-use std::io::ErrorKind;
+use std::collections::BTreeMap;
+use std::io::{self, ErrorKind};
 use std::net::{SocketAddr, UdpSocket};
-use std::time::Instant as StdInstant;
+use std::time::{Duration, Instant as StdInstant};
 
 use idu_gimbal::link::{Link, Medium};
 use idu_gimbal::Instant;
@@ -22,6 +23,73 @@ pub(super) struct Clients {
     pub(super) log: PeerLog,
     /// Splits the bridge's bytes into frames, one a datagram.
     pub(super) splitter: FrameReader,
+    /// Datagrams the socket did not take.
+    pub(super) unsent: Unsent,
+}
+
+/// Datagrams the socket did not take (a destination it cannot reach from the address it
+/// listens on, a broadcast address, a full send buffer): counted by destination and said on
+/// stderr, a destination's first at the next note and the rest at most every
+/// [`UNSENT_EVERY`], so that a `--to` address that can never be reached is not lost without
+/// a word, nor said every second.
+#[derive(Default)]
+pub(super) struct Unsent {
+    /// Not said yet: the count and the latest reason, by destination.
+    recent: BTreeMap<SocketAddr, (u64, String)>,
+    /// When each destination was last said, kept for [`UNSENT_EVERY`].
+    said: BTreeMap<SocketAddr, StdInstant>,
+    /// Since the start.
+    total: u64,
+}
+
+/// How often a destination's refused datagrams are said again.
+const UNSENT_EVERY: Duration = Duration::from_secs(10);
+
+impl Unsent {
+    /// A datagram to `to` that `socket` refused with `e`.
+    fn count(&mut self, socket: &UdpSocket, to: SocketAddr, e: &io::Error) {
+        self.total += 1;
+        let entry = self.recent.entry(to).or_insert_with(|| (0, String::new()));
+        entry.0 += 1;
+        entry.1 = e.to_string();
+        // Why the kernel refuses most often, said with the remedy.
+        if let Ok(local) = socket.local_addr() {
+            if local.ip().is_loopback() && !to.ip().is_loopback() {
+                entry.1.push_str(&format!(
+                    " (listening on {local}, a loopback address: --listen 0.0.0.0:PORT reaches other hosts)"
+                ));
+            }
+        }
+        if e.kind() == ErrorKind::PermissionDenied {
+            entry.1.push_str(" (a broadcast address is not sent to)");
+        }
+    }
+
+    /// A line for each destination due to be said at `clock` (or for every one, `all`),
+    /// which then starts counting again.
+    pub(super) fn lines(&mut self, clock: StdInstant, all: bool) -> Vec<String> {
+        self.said
+            .retain(|_, at| clock.duration_since(*at) < UNSENT_EVERY);
+        let due: Vec<SocketAddr> = self
+            .recent
+            .keys()
+            .filter(|to| all || !self.said.contains_key(to))
+            .copied()
+            .collect();
+        due.into_iter()
+            .filter_map(|to| {
+                let (n, why) = self.recent.remove(&to)?;
+                self.said.insert(to, clock);
+                let datagrams = if n == 1 { "datagram" } else { "datagrams" };
+                Some(format!("{n} {datagrams} to {to} not sent: {why}"))
+            })
+            .collect()
+    }
+
+    /// Datagrams not sent since the start.
+    pub(super) fn total(&self) -> u64 {
+        self.total
+    }
 }
 
 /// Sends what the bridge has queued, one frame a datagram (as MAVLink on UDP goes), to
@@ -33,7 +101,10 @@ pub(super) fn send_udp(
     clients: &mut Clients,
 ) {
     let Clients {
-        peers, splitter, ..
+        peers,
+        splitter,
+        unsent,
+        ..
     } = clients;
     loop {
         let bytes = bridge.transmit_bytes().to_vec();
@@ -43,8 +114,11 @@ pub(super) fn send_udp(
         bridge.transmit_written(bytes.len());
         splitter.feed(&bytes, |frame| {
             for peer in peers.addrs().chain(to.iter()) {
-                // UDP: a datagram that cannot go now is lost, as on any MAVLink link.
-                let _ = socket.send_to(frame.bytes(), peer);
+                // UDP: a datagram that cannot go now is lost, as on any MAVLink link, and
+                // counted.
+                if let Err(e) = socket.send_to(frame.bytes(), peer) {
+                    unsent.count(socket, *peer, &e);
+                }
             }
             Check::Unhandled
         });
@@ -130,4 +204,47 @@ pub(super) fn receive_udp<M: Medium>(
         }
     }
     Ok(false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A destination is said at the first note after its first refusal, then at most every
+    /// `UNSENT_EVERY` with what came since; at the end (`all`) whatever is left; the total
+    /// counts every one.
+    #[test]
+    fn refusals_are_said_first_at_once_then_every_ten_seconds() {
+        let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let to: SocketAddr = "127.0.0.1:9".parse().unwrap();
+        let refused = || io::Error::from(ErrorKind::WouldBlock);
+        let t0 = StdInstant::now();
+        let mut unsent = Unsent::default();
+        assert!(unsent.lines(t0, false).is_empty());
+        for _ in 0..3 {
+            unsent.count(&socket, to, &refused());
+        }
+        let first = unsent.lines(t0, false);
+        assert_eq!(first.len(), 1);
+        assert!(
+            first[0].starts_with("3 datagrams to 127.0.0.1:9 not sent: "),
+            "{first:?}"
+        );
+        unsent.count(&socket, to, &refused());
+        unsent.count(&socket, to, &refused());
+        assert!(unsent.lines(t0 + Duration::from_secs(9), false).is_empty());
+        let again = unsent.lines(t0 + UNSENT_EVERY, false);
+        assert!(
+            again.len() == 1 && again[0].starts_with("2 datagrams to "),
+            "{again:?}"
+        );
+        unsent.count(&socket, to, &refused());
+        let last = unsent.lines(t0 + UNSENT_EVERY + Duration::from_secs(1), true);
+        assert!(
+            last.len() == 1 && last[0].starts_with("1 datagram to "),
+            "{last:?}"
+        );
+        assert_eq!(unsent.total(), 6);
+        assert!(unsent.lines(t0 + 3 * UNSENT_EVERY, true).is_empty());
+    }
 }
