@@ -140,7 +140,8 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
                     "--signing-key-file: {path} holds no key: 64 hex digits (32 bytes) expected"
                 ))
             };
-            if hex.len() != 64 || !hex.is_ascii() {
+            // Hex digits only: `from_str_radix` would take a sign (`+f`) as well.
+            if hex.len() != 64 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
                 return Err(usage());
             }
             let mut key = [0u8; 32];

@@ -51,6 +51,42 @@ fn usage_errors_name_the_argument() {
     }
 }
 
+/// A signing key file holds 64 hex digits and nothing else: one of 64 characters that are
+/// not all hex digits (a sign before each pair, a letter beyond `f`), or of 63 or 65
+/// digits, is a usage error; 64 digits with spaces around them are a key.
+#[test]
+fn a_signing_key_file_holds_64_hex_digits() {
+    let dir = std::env::temp_dir().join(format!("gimbalctl-key-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("key");
+    let path_str = path.to_str().unwrap();
+    for bad in [
+        "+f".repeat(32),
+        format!("{}g", "0".repeat(63)),
+        "0".repeat(63),
+        "0".repeat(65),
+    ] {
+        std::fs::write(&path, &bad).unwrap();
+        usage_error_naming(
+            &["mavlink", "--sim", "--signing-key-file", path_str],
+            &["--signing-key-file", "64 hex digits"],
+        );
+    }
+    std::fs::write(&path, format!("  {}\n", "a1".repeat(32))).unwrap();
+    let out = run(&[
+        "mavlink",
+        "--sim",
+        "--listen",
+        "127.0.0.1:0",
+        "--signing-key-file",
+        path_str,
+        "--exit-after-ms",
+        "100",
+    ]);
+    assert_eq!(out.code, 0, "{out:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn runtime_failures_exit_1() {
     // A UDP port already taken.
