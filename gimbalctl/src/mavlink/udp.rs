@@ -34,8 +34,8 @@ pub(super) struct Clients {
 /// a word, nor said every second.
 #[derive(Default)]
 pub(super) struct Unsent {
-    /// Not said yet: the count and the latest reason, by destination.
-    recent: BTreeMap<SocketAddr, (u64, String)>,
+    /// Not said yet: the count, the latest error's kind and the reason said, by destination.
+    recent: BTreeMap<SocketAddr, (u64, ErrorKind, String)>,
     /// When each destination was last said, kept for [`UNSENT_EVERY`].
     said: BTreeMap<SocketAddr, StdInstant>,
     /// Since the start.
@@ -49,19 +49,26 @@ impl Unsent {
     /// A datagram to `to` that `socket` refused with `e`.
     fn count(&mut self, socket: &UdpSocket, to: SocketAddr, e: &io::Error) {
         self.total += 1;
-        let entry = self.recent.entry(to).or_insert_with(|| (0, String::new()));
-        entry.0 += 1;
-        entry.1 = e.to_string();
-        // Why the kernel refuses most often, said with the remedy.
-        if let Ok(local) = socket.local_addr() {
-            if local.ip().is_loopback() && !to.ip().is_loopback() {
-                entry.1.push_str(&format!(
-                    " (listening on {local}, a loopback address: --listen 0.0.0.0:PORT reaches other hosts)"
-                ));
+        let (n, kind, why) = self
+            .recent
+            .entry(to)
+            .or_insert_with(|| (0, e.kind(), String::new()));
+        *n += 1;
+        // The reason put in words once a destination and kind of error, not per datagram.
+        if why.is_empty() || *kind != e.kind() {
+            *kind = e.kind();
+            *why = e.to_string();
+            // Why the kernel refuses most often, said with the remedy.
+            if let Ok(local) = socket.local_addr() {
+                if local.ip().is_loopback() && !to.ip().is_loopback() {
+                    why.push_str(&format!(
+                        " (listening on {local}, a loopback address: --listen 0.0.0.0:PORT reaches other hosts)"
+                    ));
+                }
             }
-        }
-        if e.kind() == ErrorKind::PermissionDenied {
-            entry.1.push_str(" (a broadcast address is not sent to)");
+            if e.kind() == ErrorKind::PermissionDenied {
+                why.push_str(" (a broadcast address is not sent to)");
+            }
         }
     }
 
@@ -78,7 +85,7 @@ impl Unsent {
             .collect();
         due.into_iter()
             .filter_map(|to| {
-                let (n, why) = self.recent.remove(&to)?;
+                let (n, _, why) = self.recent.remove(&to)?;
                 self.said.insert(to, clock);
                 let datagrams = if n == 1 { "datagram" } else { "datagrams" };
                 Some(format!("{n} {datagrams} to {to} not sent: {why}"))
@@ -246,5 +253,15 @@ mod tests {
         );
         assert_eq!(unsent.total(), 6);
         assert!(unsent.lines(t0 + 3 * UNSENT_EVERY, true).is_empty());
+        // The reason is the latest error's.
+        unsent.count(&socket, to, &refused());
+        unsent.count(&socket, to, &io::Error::from(ErrorKind::PermissionDenied));
+        let latest = unsent.lines(t0 + 4 * UNSENT_EVERY, false);
+        assert!(
+            latest.len() == 1
+                && latest[0].starts_with("2 datagrams to ")
+                && latest[0].ends_with("(a broadcast address is not sent to)"),
+            "{latest:?}"
+        );
     }
 }
