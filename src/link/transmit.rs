@@ -33,7 +33,8 @@ impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     #[cold]
     #[inline(never)]
     pub(crate) fn transmit_done_foreign(&mut self) {
-        self.stats.frames_sent = self.stats.frames_sent.wrapping_add(1);
+        // Sent, with nothing to re-queue; counted as `displaced` counts a foreign frame.
+        self.frame_done(None);
         self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
     }
 }
