@@ -77,18 +77,15 @@ impl Unsent {
     pub(super) fn lines(&mut self, clock: StdInstant, all: bool) -> Vec<String> {
         self.said
             .retain(|_, at| clock.duration_since(*at) < UNSENT_EVERY);
-        let due: Vec<SocketAddr> = self
-            .recent
-            .keys()
-            .filter(|to| all || !self.said.contains_key(to))
-            .copied()
-            .collect();
+        let (due, wait): (BTreeMap<_, _>, BTreeMap<_, _>) = std::mem::take(&mut self.recent)
+            .into_iter()
+            .partition(|(to, _)| all || !self.said.contains_key(to));
+        self.recent = wait;
         due.into_iter()
-            .filter_map(|to| {
-                let (n, _, why) = self.recent.remove(&to)?;
+            .map(|(to, (n, _, why))| {
                 self.said.insert(to, clock);
                 let datagrams = if n == 1 { "datagram" } else { "datagrams" };
-                Some(format!("{n} {datagrams} to {to} not sent: {why}"))
+                format!("{n} {datagrams} to {to} not sent: {why}")
             })
             .collect()
     }
