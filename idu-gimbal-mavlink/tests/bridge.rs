@@ -9,6 +9,7 @@ use idu_gimbal::link::{Config, Link};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
+use idu_gimbal::wire::vehicle::{Altitude, VehicleFrame};
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::{BridgeConfig, Period, AUTOPILOT_SILENCE_MS};
 use mavio::dialects::common::enums::{
@@ -219,6 +220,93 @@ fn the_vehicles_roll_pitch_and_heading_from_autopilot_state_reach_the_gimbal() {
             "roll {roll}, pitch {pitch}, yaw {yaw}"
         );
     }
+}
+
+/// A vehicle facing south: the wire's heading is in [−180°, 180°), so 180° is sent as
+/// −180.00°, and so is any yaw that rounds to it (the wire's 0.01°), not one step short.
+#[test]
+fn a_vehicle_facing_south_is_sent_at_minus_180_degrees() {
+    let mut b = fresh();
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
+    // [0, 0, 0, 1]: yaw exactly π. 179.996°: f32 trigonometry is good to about 1e-3° here,
+    // so it rounds to 180.00° on the wire, as 179.994° (kept) rounds to 179.99°.
+    for (i, (q, heading)) in [
+        ([0.0, 0.0, 0.0, 1.0], -18000),
+        (quaternion_321(0.0, 0.0, 179.996), -18000),
+        (quaternion_321(0.0, 0.0, 179.994), 17999),
+        (quaternion_321(0.0, 0.0, -179.996), -18000),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let state = AutopilotStateForGimbalDevice {
+            target_system: AP.0,
+            target_component: 154,
+            q,
+            angular_velocity_z: f32::NAN,
+            ..Default::default()
+        };
+        b.receive_all(&frame(AP, i as u8, &state), t(100 * (i as u32 + 1)));
+        let a = b.link.attitude().expect("an attitude");
+        assert_eq!(a.heading_centideg(), heading, "{q:?}");
+    }
+}
+
+/// A vehicle update the bridge cannot use is counted, never dropped without a word: a
+/// quaternion with a NaN, one whose components overflow the arithmetic (1e20 each: their
+/// products are infinite, and ∞ − ∞ is NaN), a latitude beyond ±90°. What the link held
+/// stays as it was; the position's altitude is still passed on.
+#[test]
+fn vehicle_updates_the_bridge_cannot_use_are_counted() {
+    let mut b = fresh();
+    b.receive_all(&frame(AP, 0, &heartbeat()), t(0));
+    b.receive_all(&frame(AP, 1, &autopilot_state(30.0)), t(10));
+    let held = b.link.attitude().expect("an attitude");
+    let before = b.stats();
+    assert_eq!(
+        (before.vehicle_updates, before.refused_vehicle_updates),
+        (1, 0)
+    );
+    for (i, q) in [[f32::NAN, 0.0, 0.0, 1.0], [1e20; 4]]
+        .into_iter()
+        .enumerate()
+    {
+        let mut state = autopilot_state(90.0);
+        state.q = q;
+        b.receive_all(&frame(AP, 2 + i as u8, &state), t(20));
+        assert_eq!(b.link.attitude(), Some(held), "{q:?}");
+        // Nor is its yaw taken as the vehicle's (1e20 each gives a finite 135°): the
+        // status's delta_yaw is still 30° (f32 quaternion to yaw and back: within 1e-3°).
+        let _ = sent(&mut b);
+        let c = command((0, 154), MavCmd::RequestMessage, 285.0, 0.0);
+        b.receive_all(&frame(GCS, i as u8, &c), t(20));
+        let status = of::<GimbalDeviceAttitudeStatus>(&sent(&mut b)).remove(0);
+        let d = status.delta_yaw.to_degrees();
+        assert!((d - 30.0).abs() < 1e-3, "{q:?}: {d}");
+    }
+    let pos = GlobalPositionInt {
+        lat: 900_000_001,
+        lon: 85_455_940,
+        alt: 488_123,
+        ..Default::default()
+    };
+    b.receive_all(&frame(AP, 4, &pos), t(30));
+    // What the link pushes to the gimbal: the attitude held and the altitude, no GPS.
+    b.link.poll(t(30));
+    let mut pushed = Vec::new();
+    while let Some(f) = b.link.next_transmit() {
+        b.link.transmit_done(None);
+        pushed.push(VehicleFrame::decode(f.id, &f.data).expect("a vehicle frame"));
+    }
+    assert_eq!(
+        pushed,
+        [
+            VehicleFrame::Attitude(held),
+            VehicleFrame::Altitude(Altitude::from_cm(48_812))
+        ]
+    );
+    let s = b.stats();
+    assert_eq!((s.vehicle_updates, s.refused_vehicle_updates), (1, 3));
 }
 
 #[test]

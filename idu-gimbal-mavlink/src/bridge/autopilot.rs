@@ -169,11 +169,19 @@ impl State {
         // ±90° in flight, and the frame carries roll).
         let [w, x, y, z] = state.q;
         if !state.q.iter().all(|v| v.is_finite()) {
+            bump(&mut self.stats.refused_vehicle_updates);
             return;
         }
         let roll = libm::atan2f(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y));
         let pitch = attitude::asin((2.0 * (w * y - z * x)).clamp(-1.0, 1.0));
         let yaw = libm::atan2f(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+        // atan2's π (a vehicle facing south) is normalised by `Attitude::new` into the
+        // wire's [−180°, 180°), as −180.00°. A finite quaternion far from unit length can
+        // still overflow to NaN: refused, its yaw not kept.
+        let Ok(a) = Attitude::new(pitch.to_degrees(), roll.to_degrees(), yaw.to_degrees()) else {
+            bump(&mut self.stats.refused_vehicle_updates);
+            return;
+        };
         self.vehicle.yaw = Some((yaw, now));
         // common.xml: "Z component of angular velocity in NED (North, East, Down). NaN if
         // unknown".
@@ -181,12 +189,8 @@ impl State {
             .angular_velocity_z
             .is_finite()
             .then_some((state.angular_velocity_z, now));
-        // The wire's heading is in [−180°, 180°).
-        let heading = yaw.to_degrees().min(179.99);
-        if let Ok(a) = Attitude::new(pitch.to_degrees(), roll.to_degrees(), heading) {
-            gimbal.set_attitude(a, now);
-            bump(&mut self.stats.vehicle_updates);
-        }
+        gimbal.set_attitude(a, now);
+        bump(&mut self.stats.vehicle_updates);
     }
 
     pub(super) fn position<const Q: usize, const T: usize, M: Medium>(
@@ -197,9 +201,12 @@ impl State {
     ) {
         self.position_stream.heard = Some(now);
         self.vehicle.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
-        if let Ok(g) = Gps::from_e7(pos.lat, pos.lon) {
-            gimbal.set_gps(g, now);
-            bump(&mut self.stats.vehicle_updates);
+        match Gps::from_e7(pos.lat, pos.lon) {
+            Ok(g) => {
+                gimbal.set_gps(g, now);
+                bump(&mut self.stats.vehicle_updates);
+            }
+            Err(_) => bump(&mut self.stats.refused_vehicle_updates),
         }
         // Millimetres above mean sea level to centimetres, rounded toward zero.
         gimbal.set_altitude(Altitude::from_cm(pos.alt / 10), now);
