@@ -464,6 +464,7 @@ fn serve<S: Pump>(
     let mut notes_at = start + NOTE_EVERY;
     // Said at most once a NOTE_EVERY, as the count grows.
     let mut other_autopilots = 0;
+    let mut refused_vehicle_updates = 0;
     let mut signing_turned = (0, 0, 0);
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
@@ -527,12 +528,22 @@ fn serve<S: Pump>(
             }
             let others = bridge.stats().other_autopilots;
             if others != other_autopilots {
+                let n = others.wrapping_sub(other_autopilots);
                 eprintln!(
-                    "gimbalctl mavlink: warning: {} heartbeats of another autopilot ignored: following system {} (--system-id pins it)",
-                    others.wrapping_sub(other_autopilots),
+                    "gimbalctl mavlink: warning: {n} heartbeat{} of another autopilot ignored: following system {} (--system-id pins it)",
+                    if n == 1 { "" } else { "s" },
                     bridge.system_id()
                 );
                 other_autopilots = others;
+            }
+            let refused = bridge.stats().refused_vehicle_updates;
+            if refused != refused_vehicle_updates {
+                let n = refused.wrapping_sub(refused_vehicle_updates);
+                eprintln!(
+                    "gimbalctl mavlink: warning: {n} vehicle update{} not passed to the gimbal: a quaternion that gives no finite attitude, or a latitude or longitude out of range",
+                    if n == 1 { "" } else { "s" }
+                );
+                refused_vehicle_updates = refused;
             }
             // Frames signing turned away, said as their count grows.
             if let Some(s) = bridge.signing_stats() {

@@ -24,7 +24,8 @@ use idu_gimbal_mavlink::framing::{Check, FrameReader};
 use idu_gimbal_mavlink::mavio;
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavResult, MavType};
 use mavio::dialects::common::messages::{
-    CommandAck, CommandLong, FileTransferProtocol, GimbalDeviceInformation, Heartbeat,
+    AutopilotStateForGimbalDevice, CommandAck, CommandLong, FileTransferProtocol,
+    GimbalDeviceInformation, GlobalPositionInt, Heartbeat,
 };
 use mavio::dialects::common::Common;
 use mavio::protocol::{Frame, V2};
@@ -678,5 +679,52 @@ fn datagrams_the_socket_refuses_are_counted_and_said() {
             .contains(&format!("{} datagrams not sent in all", 2 * received)),
         "the total\n{}",
         out.stderr
+    );
+}
+
+/// What the bridge does not act on from an autopilot is said, never ignored without a
+/// word: a state whose quaternion is not finite and a position whose latitude is beyond
+/// 90° (two vehicle updates not passed on), and the heartbeat of a second autopilot
+/// while the first is followed.
+#[test]
+fn vehicle_updates_and_autopilots_not_followed_are_said() {
+    let bridge = Bridge::start();
+    let client = socket();
+    const AUTOPILOT: (u8, u8) = (1, 1);
+    let state = AutopilotStateForGimbalDevice {
+        target_system: AUTOPILOT.0,
+        target_component: GIMBAL,
+        q: [f32::NAN, 0.0, 0.0, 1.0],
+        angular_velocity_z: f32::NAN,
+        ..Default::default()
+    };
+    let position = GlobalPositionInt {
+        lat: 900_000_001,
+        lon: 85_455_940,
+        ..Default::default()
+    };
+    let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
+    let datagrams = [
+        frame(AUTOPILOT, 0, &quadrotor),
+        frame(AUTOPILOT, 1, &state),
+        frame(AUTOPILOT, 2, &position),
+        frame((2, 1), 0, &quadrotor),
+    ];
+    for d in &datagrams {
+        client.send_to(d, bridge.addr).expect("send");
+    }
+    // Said at the next once-a-second note.
+    let since = Instant::now();
+    for line in [
+        "warning: 2 vehicle updates not passed to the gimbal: a quaternion that gives no finite attitude, or a latitude or longitude out of range",
+        "warning: 1 heartbeat of another autopilot ignored: following system 1 (--system-id pins it)",
+    ] {
+        bridge.stderr.wait_after(line, since, Duration::from_secs(5));
+    }
+    let stderr = bridge.stop();
+    assert_eq!(
+        stderr.matches("not passed to the gimbal").count(),
+        1,
+        "{stderr}"
     );
 }
