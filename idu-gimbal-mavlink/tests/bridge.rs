@@ -284,13 +284,10 @@ fn vehicle_updates_the_bridge_cannot_use_are_counted() {
         let d = status.delta_yaw.to_degrees();
         assert!((d - 30.0).abs() < 1e-3, "{q:?}: {d}");
     }
-    let pos = GlobalPositionInt {
-        lat: 900_000_001,
-        lon: 85_455_940,
-        alt: 488_123,
-        ..Default::default()
-    };
-    b.receive_all(&frame(AP, 4, &pos), t(30));
+    b.receive_all(
+        &frame(AP, 4, &position(900_000_001, 85_455_940, 488_123, 0)),
+        t(30),
+    );
     // What the link pushes to the gimbal: the attitude held and the altitude, no GPS.
     b.link.poll(t(30));
     let mut pushed = Vec::new();
@@ -307,6 +304,37 @@ fn vehicle_updates_the_bridge_cannot_use_are_counted() {
     );
     let s = b.stats();
     assert_eq!((s.vehicle_updates, s.refused_vehicle_updates), (1, 3));
+}
+
+/// `GLOBAL_POSITION_INT` is broadcast: only the followed autopilot's moves the GPS the link
+/// pushes. Another vehicle's on a shared link, and any before an autopilot is heard, are
+/// counted as not for us.
+#[test]
+fn only_the_followed_autopilots_position_is_taken() {
+    let gps_pushed = |b: &mut Firmware, ms: u32| {
+        b.link.poll(t(ms));
+        let mut gps = Vec::new();
+        while let Some(f) = b.link.next_transmit() {
+            b.link.transmit_done(None);
+            if let Ok(VehicleFrame::Gps(g)) = VehicleFrame::decode(f.id, &f.data) {
+                gps.push((g.lat_e7(), g.lon_e7()));
+            }
+        }
+        gps
+    };
+    let mut b = fresh();
+    b.receive_all(&frame(AP, 0, &position(10, 20, 0, 0)), t(0));
+    assert_eq!(b.stats().not_for_us, 1, "before any heartbeat");
+    assert!(gps_pushed(&mut b, 0).is_empty());
+    b.receive_all(&frame(AP, 1, &heartbeat()), t(10));
+    b.receive_all(&frame(AP, 2, &position(30, 40, 0, 0)), t(20));
+    assert_eq!(gps_pushed(&mut b, 20), [(30, 40)]);
+    // Another vehicle's autopilot, and another component of this one.
+    b.receive_all(&frame((AP.0 + 1, 1), 0, &position(50, 60, 0, 0)), t(30));
+    b.receive_all(&frame((AP.0, 2), 0, &position(70, 80, 0, 0)), t(30));
+    assert_eq!(b.stats().not_for_us, 3);
+    // Pushed again at its period (1 s): still the followed autopilot's.
+    assert_eq!(gps_pushed(&mut b, 1_020), [(30, 40)]);
 }
 
 #[test]

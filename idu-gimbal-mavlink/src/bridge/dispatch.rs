@@ -16,7 +16,7 @@ use mavio::dialects::common::messages::{
 };
 use mavio::mavspec::rust::spec::MessageSpecStatic;
 
-use super::{State, ANSWER_ROOM, AUTOPILOT_COMPONENT};
+use super::{State, ANSWER_ROOM};
 use crate::camera;
 use crate::codec;
 use crate::command::{Command, Interval, Xy};
@@ -117,8 +117,12 @@ impl State {
                 return Check::Bad;
             }
             let pos = codec::global_position::decode(frame.payload());
-            if from.1 == AUTOPILOT_COMPONENT {
+            // Broadcast: the followed autopilot's only (another vehicle's, on a shared
+            // link, would move this one's GPS).
+            if self.autopilot == Some(from) {
                 self.position(gimbal, &pos, now);
+            } else {
+                bump(&mut self.stats.not_for_us);
             }
         } else if camera::handles(id) {
             return self.camera_message(gimbal, frame, from, now);

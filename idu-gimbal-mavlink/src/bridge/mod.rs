@@ -136,7 +136,9 @@ impl Default for BridgeConfig {
 pub struct BridgeStats {
     /// The frame reader's counters.
     pub reader: ReaderStats,
-    /// Messages for another system or component, not acted on.
+    /// Messages for another system or component, not acted on; and `GLOBAL_POSITION_INT`
+    /// (broadcast) from any but the autopilot followed (another vehicle's, or before an
+    /// autopilot's heartbeat is heard).
     pub not_for_us: u32,
     /// Commands answered (every COMMAND_LONG and COMMAND_INT for us gets exactly one ACK).
     pub acks: u32,

@@ -325,7 +325,8 @@ mod fw {
         let mut t = 0u32;
         // The bridge's receive path short of acting: the same second addressed to another
         // gimbal from another component, so that every frame is found, checksummed with its
-        // message's CRC_EXTRA, dispatched and decoded, then left (counted as not for us).
+        // message's CRC_EXTRA, dispatched and decoded, then left (counted as not for us; the
+        // heartbeat, of a component that is no autopilot, ignored).
         // The same work as the C library's parse and decode.
         let before = bridge.stats();
         // Every byte is taken at once (the outbox never runs short here): summed, checked
@@ -345,7 +346,9 @@ mod fw {
         if after.reader.bad_frames != 0
             || runs == 0
             || after.reader.frames - before.reader.frames != runs * FRAMES_A_SECOND
-            || after.not_for_us - before.not_for_us != runs * 100
+            // The states and setpoints addressed elsewhere, and the positions (broadcast)
+            // from a component that is not the autopilot's.
+            || after.not_for_us - before.not_for_us != runs * (50 + 50 + 5)
             || after.angle_setpoints != before.angle_setpoints
             || after.vehicle_updates != before.vehicle_updates
         {
