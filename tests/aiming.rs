@@ -1088,6 +1088,40 @@ fn a_point_at_waits_for_both_the_position_and_the_altitude() {
     }
 }
 
+#[test]
+fn a_point_at_with_no_bearing_or_beyond_the_geodesys_altitude_sends_nothing() {
+    // The target at the vehicle (no bearing), and a vehicle above ALT_MAX_M: no aim, no
+    // command, whatever is fresh; a target 200 m north then aims at once.
+    let gps = Gps::new(47.0, 8.0).unwrap();
+    for (what, target, altitude) in [
+        (
+            "target at the vehicle",
+            Position::new(47.0, 8.0, 500.0).unwrap(),
+            Altitude::new(500.0).unwrap(),
+        ),
+        (
+            "vehicle above the geodesy's range",
+            Position::new(47.0018, 8.0, 400.0).unwrap(),
+            Altitude::from_cm(10_000_001),
+        ),
+    ] {
+        let mut link = alone();
+        link.point_at(target);
+        let mut sent = Vec::new();
+        for ms in (0..=1000).step_by(10) {
+            set_heading(&mut link, 0.0, ms);
+            link.set_gps(gps, at(ms));
+            link.set_altitude(altitude, at(ms));
+            sent.extend(poll_headings(&mut link, ms));
+        }
+        assert_eq!(sent, [], "{what}");
+        assert_eq!(link.aim_state(), None, "{what}");
+        link.point_at(Position::new(47.0018, 8.0, 400.0).unwrap());
+        link.set_altitude(Altitude::new(500.0).unwrap(), at(1010));
+        assert_eq!(poll_headings(&mut link, 1010), [0], "{what}");
+    }
+}
+
 /// The vehicle's heading `deg` from north, measured at `ms`, level.
 fn set_heading(link: &mut Link, deg: f32, ms: u32) {
     link.set_attitude(Attitude::new(0.0, 0.0, deg).unwrap(), at(ms));

@@ -144,6 +144,12 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// [`aim`]); a target out of the pitch range raises
     /// [`Event::TargetUnreachable`] once. Ends a rate hold or an aim (the heading and pitch
     /// commands that follow replace it).
+    ///
+    /// No aim is computed while the vehicle's GPS or altitude is stale, while its altitude
+    /// is outside the geodesy's range ([`ALT_MIN_M`](crate::geo::ALT_MIN_M) to
+    /// [`ALT_MAX_M`](crate::geo::ALT_MAX_M)), or while the target is within
+    /// [`MIN_RANGE_M`](crate::geo::MIN_RANGE_M) of the vehicle (no bearing): the aim held
+    /// before stays, and until the first one [`Link::aim_state`] is `None`.
     pub fn point_at(&mut self, target: Position) {
         self.quiet = quiet::Quiet::NONE;
         // A zero-rate frame still waiting would arrive after the aim and could undo it.
