@@ -156,6 +156,18 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
     }
 }
 
+/// `n` `noun`s in words, the noun in the singular for one: "1 datagram", "2 datagrams".
+fn counted(n: u64, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
+/// How much `count` grew since `said`, which then holds it; `None` if it did not.
+fn growth(count: u32, said: &mut u32) -> Option<u32> {
+    let n = count.wrapping_sub(*said);
+    *said = count;
+    (n != 0).then_some(n)
+}
+
 /// What signing let through and turned away, for stderr.
 fn signing_line(s: &SigningStats) -> String {
     format!(
@@ -474,10 +486,12 @@ fn serve<S: Pump>(
             for line in clients.unsent.lines(StdInstant::now(), true) {
                 eprintln!("gimbalctl mavlink: warning: {line}");
             }
-            match clients.unsent.total() {
-                0 => {}
-                1 => eprintln!("gimbalctl mavlink: 1 datagram not sent in all"),
-                n => eprintln!("gimbalctl mavlink: {n} datagrams not sent in all"),
+            let unsent = clients.unsent.total();
+            if unsent != 0 {
+                eprintln!(
+                    "gimbalctl mavlink: {} not sent in all",
+                    counted(unsent, "datagram")
+                );
             }
             eprintln!(
                 "gimbalctl mavlink: exiting after {} ms",
@@ -526,24 +540,19 @@ fn serve<S: Pump>(
             {
                 eprintln!("gimbalctl mavlink: warning: {note}");
             }
-            let others = bridge.stats().other_autopilots;
-            if others != other_autopilots {
-                let n = others.wrapping_sub(other_autopilots);
+            let stats = bridge.stats();
+            if let Some(n) = growth(stats.other_autopilots, &mut other_autopilots) {
                 eprintln!(
-                    "gimbalctl mavlink: warning: {n} heartbeat{} of another autopilot ignored: following system {} (--system-id pins it)",
-                    if n == 1 { "" } else { "s" },
+                    "gimbalctl mavlink: warning: {} of another autopilot ignored: following system {} (--system-id pins it)",
+                    counted(n.into(), "heartbeat"),
                     bridge.system_id()
                 );
-                other_autopilots = others;
             }
-            let refused = bridge.stats().refused_vehicle_updates;
-            if refused != refused_vehicle_updates {
-                let n = refused.wrapping_sub(refused_vehicle_updates);
+            if let Some(n) = growth(stats.refused_vehicle_updates, &mut refused_vehicle_updates) {
                 eprintln!(
-                    "gimbalctl mavlink: warning: {n} vehicle update{} not passed to the gimbal: a quaternion that gives no finite attitude, or a latitude or longitude out of range",
-                    if n == 1 { "" } else { "s" }
+                    "gimbalctl mavlink: warning: {} not passed to the gimbal: a quaternion that gives no finite attitude, or a latitude or longitude out of range",
+                    counted(n.into(), "vehicle update")
                 );
-                refused_vehicle_updates = refused;
             }
             // Frames signing turned away, said as their count grows.
             if let Some(s) = bridge.signing_stats() {

@@ -84,8 +84,7 @@ impl Unsent {
         due.into_iter()
             .map(|(to, (n, _, why))| {
                 self.said.insert(to, clock);
-                let datagrams = if n == 1 { "datagram" } else { "datagrams" };
-                format!("{n} {datagrams} to {to} not sent: {why}")
+                format!("{} to {to} not sent: {why}", super::counted(n, "datagram"))
             })
             .collect()
     }
