@@ -290,13 +290,8 @@ fn vehicle_updates_the_bridge_cannot_use_are_counted() {
     );
     // What the link pushes to the gimbal: the attitude held and the altitude, no GPS.
     b.link.poll(t(30));
-    let mut pushed = Vec::new();
-    while let Some(f) = b.link.next_transmit() {
-        b.link.transmit_done(None);
-        pushed.push(VehicleFrame::decode(f.id, &f.data).expect("a vehicle frame"));
-    }
     assert_eq!(
-        pushed,
+        queued_vehicle_frames(&mut b.link),
         [
             VehicleFrame::Attitude(held),
             VehicleFrame::Altitude(Altitude::from_cm(48_812))
@@ -313,14 +308,13 @@ fn vehicle_updates_the_bridge_cannot_use_are_counted() {
 fn only_the_followed_autopilots_position_is_taken() {
     let gps_pushed = |b: &mut Firmware, ms: u32| {
         b.link.poll(t(ms));
-        let mut gps = Vec::new();
-        while let Some(f) = b.link.next_transmit() {
-            b.link.transmit_done(None);
-            if let Ok(VehicleFrame::Gps(g)) = VehicleFrame::decode(f.id, &f.data) {
-                gps.push((g.lat_e7(), g.lon_e7()));
-            }
-        }
-        gps
+        queued_vehicle_frames(&mut b.link)
+            .into_iter()
+            .filter_map(|f| match f {
+                VehicleFrame::Gps(g) => Some((g.lat_e7(), g.lon_e7())),
+                _ => None,
+            })
+            .collect::<Vec<_>>()
     };
     let mut b = fresh();
     b.receive_all(&frame(AP, 0, &position(10, 20, 0, 0)), t(0));

@@ -5,6 +5,7 @@
 use idu_gimbal::link::{Can, Config, Link, Medium};
 use idu_gimbal::wire::control::{Command, GimbalCommand};
 use idu_gimbal::wire::ids;
+use idu_gimbal::wire::vehicle::VehicleFrame;
 use idu_gimbal::Instant;
 use idu_gimbal_mavlink::attitude::YawPitch;
 use idu_gimbal_mavlink::camera::CameraConfig;
@@ -223,6 +224,19 @@ pub fn queued_all<const Q: usize, const T: usize>(link: &mut Link<Q, T>) -> Vec<
         if f.id == ids::CONTROL {
             out.push(Command::decode(&f.data).expect("the bridge queues valid commands"));
         }
+    }
+    out
+}
+
+/// Every vehicle frame the link queued (attitude, GPS, altitude), in order, each taken as
+/// sent; a frame of any other kind fails the test.
+pub fn queued_vehicle_frames<const Q: usize, const T: usize>(
+    link: &mut Link<Q, T>,
+) -> Vec<VehicleFrame> {
+    let mut out = Vec::new();
+    while let Some(f) = link.next_transmit() {
+        link.transmit_done(None);
+        out.push(VehicleFrame::decode(f.id, &f.data).expect("a vehicle frame"));
     }
     out
 }
