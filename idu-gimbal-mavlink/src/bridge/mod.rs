@@ -159,8 +159,9 @@ pub struct BridgeStats {
     /// Vehicle attitude and position updates passed to the core.
     pub vehicle_updates: u32,
     /// Vehicle updates for us not passed to the core: an `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE`
-    /// whose quaternion is not finite, a `GLOBAL_POSITION_INT` whose latitude is beyond
-    /// ±90° or longitude beyond ±180° (its altitude is still passed on).
+    /// whose quaternion is not finite or gives no finite attitude (one far from unit length
+    /// overflows), a `GLOBAL_POSITION_INT` whose latitude is beyond ±90° or longitude
+    /// beyond ±180° (its altitude is still passed on).
     pub refused_vehicle_updates: u32,
     /// Component-1 heartbeats not taken as the autopilot's: another autopilot's while the
     /// one followed is heard ([`AUTOPILOT_SILENCE_MS`]), another system's than the
