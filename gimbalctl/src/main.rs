@@ -143,10 +143,10 @@ enum Top {
         #[command(flatten)]
         gimbal: GimbalArgs,
         /// UDP address to listen on (port 0: any free port; the first stdout line says which)
-        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:14560")]
+        #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:14560")]
         listen: String,
         /// Also send to this UDP peer (repeatable); peers heard from are always sent to
-        #[arg(long, value_name = "ADDR")]
+        #[arg(long, value_name = "HOST:PORT")]
         to: Vec<String>,
         /// The autopilot on a serial port instead of UDP (a TELEM port): PATH, or PATH:BAUD (921600 8N1 when BAUD is omitted)
         #[arg(long, value_name = "PATH[:BAUD]", conflicts_with_all = ["listen", "to"])]
@@ -169,9 +169,9 @@ enum Top {
         /// Sign MAVLink 2 with the 32-byte key in this file, as 64 hex digits
         #[arg(long, value_name = "PATH")]
         signing_key_file: Option<String>,
-        /// With --sim: what the simulated gimbal holds in lock while the vehicle turns, its north heading or its motor angle (the vendor document does not say)
-        #[arg(long, value_name = "WHAT", value_enum, default_value_t = mavlink::SimLock::North)]
-        sim_lock_holds: mavlink::SimLock,
+        /// With --sim: what the simulated gimbal holds in lock while the vehicle turns, its north heading (the default) or its motor angle (the vendor document does not say)
+        #[arg(long, value_name = "WHAT", value_enum)]
+        sim_lock_holds: Option<mavlink::SimLock>,
         /// Exit after MS milliseconds (for scripted tests)
         #[arg(long, value_name = "MS")]
         exit_after_ms: Option<u64>,
@@ -284,6 +284,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let target = if sim {
                 None
             } else {
+                // clap's `requires` counts `--sim` present by its default (false).
+                if sim_lock_holds.is_some() {
+                    return Err(Failure::Usage(
+                        "--sim-lock-holds: only with --sim (it sets the simulated gimbal)".into(),
+                    ));
+                }
                 Some(Target::from_args(&gimbal)?)
             };
             let serial = autopilot_serial
@@ -310,7 +316,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     (None, Some(path)) => Some(mavlink::SigningKey::File(path)),
                     (None, None) => None,
                 },
-                sim_lock_holds,
+                sim_lock_holds: sim_lock_holds.unwrap_or(mavlink::SimLock::North),
                 exit_after_ms,
             })
         }

@@ -58,6 +58,7 @@ use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::error::Failure;
+use crate::tcp::{address, resolve, DefaultPort};
 use crate::transport::{
     self, clock, Job, Mode, SerialSpec, Session, StreamPort, Target, Transport,
 };
@@ -295,7 +296,7 @@ enum Port {
 }
 
 /// `gimbalctl mavlink (--sim | --tcp HOST:PORT | --can IFACE | --serial PATH[:BAUD])
-/// [--listen ADDR] [--to ADDR]... | --autopilot-serial PATH[:BAUD]`.
+/// [--listen HOST:PORT] [--to HOST:PORT]... | --autopilot-serial PATH[:BAUD]`.
 pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let family =
         Family::from_name(opts.camera).map_err(|e| Failure::Usage(format!("--camera: {e}")))?;
@@ -312,16 +313,17 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     // Every argument checked (exit 2) before anything is opened.
     let udp = match opts.autopilot {
         Autopilot::Udp { listen, to: tos } => {
+            // Each address's form first (exit 2), then the lookups (exit 1).
+            address("--listen", listen, DefaultPort::None)?;
+            for t in tos {
+                address("--to", t, DefaultPort::None)?;
+            }
             let mut to = Vec::new();
             for t in tos {
-                let addrs = crate::tcp::resolve(t).map_err(|_| {
-                    Failure::Usage(format!("--to: {t:?} is not a HOST:PORT address"))
-                })?;
+                let addrs = resolve("--to", t, DefaultPort::None)?;
                 to.extend(addrs.into_iter().take(1));
             }
-            let addrs = crate::tcp::resolve(listen).map_err(|_| {
-                Failure::Usage(format!("--listen: {listen:?} is not a HOST:PORT address"))
-            })?;
+            let addrs = resolve("--listen", listen, DefaultPort::None)?;
             Some((listen, addrs, to))
         }
         Autopilot::Serial(_) => None,

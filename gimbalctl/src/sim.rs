@@ -30,6 +30,7 @@ use idu_gimbal::Instant;
 
 use crate::error::Failure;
 use crate::spec;
+use crate::tcp::DefaultPort;
 
 /// How often the loop runs.
 const TICK: Duration = Duration::from_millis(5);
@@ -53,7 +54,7 @@ pub fn run(
     exit_after_ms: Option<u64>,
     max_clients: NonZeroUsize,
 ) -> Result<(), Failure> {
-    let addrs = crate::tcp::resolve(listen)?;
+    let addrs = crate::tcp::resolve("--listen", listen, DefaultPort::SerialServer)?;
     let listener = TcpListener::bind(&addrs[..])
         .map_err(|e| Failure::Runtime(format!("cannot listen on {listen}: {e}")))?;
     listener

@@ -14,29 +14,63 @@ pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
 /// How long a write may block before the server is taken to be gone.
 const WRITE_TIMEOUT: Duration = Duration::from_secs(3);
 
-/// `HOST:PORT`, `HOST` (port 2000, the serial server's) or `[v6]:PORT` to addresses.
-pub fn resolve(target: &str) -> Result<Vec<SocketAddr>, Failure> {
-    if let Ok(addr) = target.parse::<SocketAddr>() {
-        return Ok(vec![addr]);
+/// What a `HOST` with no port means for an option: the serial server's port (2000) for
+/// the serial server's addresses (`--tcp`, the simulator's `--listen`), nothing for a
+/// MAVLink address, whose port differs between autopilots and ground stations.
+#[derive(Clone, Copy, Debug)]
+pub enum DefaultPort {
+    /// A missing port is [`SERIAL_SERVER_PORT`].
+    SerialServer,
+    /// A missing port is a usage error.
+    None,
+}
+
+/// Checks the form of `target`, the value of `option`: `HOST:PORT`, `[v6]:PORT`, or with
+/// [`DefaultPort::SerialServer`] a `HOST` or bare IPv6 address alone. Returns it with its
+/// port, ready to resolve; a usage error names the option and the form. Nothing is looked
+/// up, so every argument can be checked before a slow or failing name lookup.
+pub fn address(option: &str, target: &str, default: DefaultPort) -> Result<String, Failure> {
+    if target.parse::<SocketAddr>().is_ok() {
+        return Ok(target.to_owned());
     }
-    let with_port = match target.rsplit_once(':') {
-        // A bare IPv6 address has colons but no port.
-        Some((host, _)) if host.contains(':') && !host.starts_with('[') => {
-            format!("[{target}]:{SERIAL_SERVER_PORT}")
-        }
-        Some((host, port)) => {
-            if host.is_empty() || port.parse::<u16>().is_err() {
-                return Err(Failure::Usage(format!(
-                    "--tcp {target}: expected HOST:PORT with PORT in [0, 65535]"
-                )));
-            }
-            target.to_owned()
-        }
-        None if target.is_empty() => {
-            return Err(Failure::Usage("--tcp: expected HOST:PORT".into()));
-        }
-        None => format!("{target}:{SERIAL_SERVER_PORT}"),
+    let form = match default {
+        DefaultPort::SerialServer => "HOST:PORT or HOST (port 2000)",
+        DefaultPort::None => "HOST:PORT",
     };
+    let usage = || {
+        Failure::Usage(format!(
+            "{option} {target:?}: expected {form} with PORT in [0, 65535]"
+        ))
+    };
+    match (target.rsplit_once(':'), default) {
+        // A bare IPv6 address has colons but no port.
+        (Some((host, _)), DefaultPort::SerialServer)
+            if host.contains(':') && !host.starts_with('[') =>
+        {
+            Ok(format!("[{target}]:{SERIAL_SERVER_PORT}"))
+        }
+        (Some((host, port)), _) => {
+            if host.is_empty() || host.contains(':') && !host.starts_with('[') {
+                return Err(usage());
+            }
+            port.parse::<u16>().map_err(|_| usage())?;
+            Ok(target.to_owned())
+        }
+        (None, DefaultPort::SerialServer) if !target.is_empty() => {
+            Ok(format!("{target}:{SERIAL_SERVER_PORT}"))
+        }
+        (None, _) => Err(usage()),
+    }
+}
+
+/// Looks up an [`address`]'s form of `target` (a runtime failure when the name has no
+/// address).
+pub fn resolve(
+    option: &str,
+    target: &str,
+    default: DefaultPort,
+) -> Result<Vec<SocketAddr>, Failure> {
+    let with_port = address(option, target, default)?;
     let addrs: Vec<SocketAddr> = with_port
         .to_socket_addrs()
         .map_err(|e| Failure::Runtime(format!("cannot resolve {target}: {e}")))?
@@ -50,7 +84,7 @@ pub fn resolve(target: &str) -> Result<Vec<SocketAddr>, Failure> {
 /// Connects with [`CONNECT_TIMEOUT`], trying each address in turn.
 pub fn connect(target: &str) -> Result<TcpStream, Failure> {
     let mut last = None;
-    for addr in resolve(target)? {
+    for addr in resolve("--tcp", target, DefaultPort::SerialServer)? {
         match TcpStream::connect_timeout(&addr, CONNECT_TIMEOUT) {
             Ok(s) => {
                 let _ = s.set_nodelay(true);

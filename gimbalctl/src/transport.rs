@@ -29,6 +29,7 @@ use idu_gimbal::link::{Config, Link, LinkStats, Medium};
 use idu_gimbal::Instant;
 
 use crate::error::Failure;
+use crate::tcp::DefaultPort;
 
 pub mod can;
 pub mod stream;
@@ -116,7 +117,9 @@ impl Target {
     pub fn from_args(args: &GimbalArgs) -> Result<Target, Failure> {
         match (&args.tcp, &args.can, &args.serial) {
             (Some(tcp), None, None) => {
-                crate::tcp::resolve(tcp)?;
+                // Its form only: the name is looked up when the connection is opened, after
+                // every other argument is checked.
+                crate::tcp::address("--tcp", tcp, DefaultPort::SerialServer)?;
                 Ok(Target::Tcp(tcp.clone()))
             }
             (None, Some(iface), None) => {

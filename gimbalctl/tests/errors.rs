@@ -105,6 +105,17 @@ const OUT_OF_RANGE: &[(&[&str], &[&str])] = &[
         &["send", "--tcp", "127.0.0.1:9", "pitch", "70"],
         &["pitch", "-100", "60"],
     ),
+    // Every argument is checked before the server's name is looked up: `.invalid` has no
+    // address (RFC 6761), and the out-of-range pitch is still what is said.
+    (
+        &["send", "--tcp", "nosuch.invalid", "pitch", "70"],
+        &["pitch", "-100", "60"],
+    ),
+    // The simulator's address is its own option's, not `--tcp`'s.
+    (
+        &["sim", "--listen", "127.0.0.1:65536"],
+        &["--listen", "127.0.0.1:65536", "[0, 65535]"],
+    ),
     // A server that serves nobody is no server.
     (
         &["sim", "--max-clients", "0"],
@@ -239,6 +250,12 @@ fn runtime_failures_exit_1() {
     ] {
         failure_naming(&args, &[target.as_str()]);
     }
+
+    // A name with no address is a failure at run time, not a usage error.
+    failure_naming(
+        &["send", "--tcp", "nosuch.invalid", "pitch", "-30"],
+        &["cannot resolve", "nosuch.invalid"],
+    );
 
     // sim cannot listen on a port that is taken.
     let taken = TcpListener::bind("127.0.0.1:0").unwrap();

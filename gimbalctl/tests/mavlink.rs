@@ -29,6 +29,44 @@ fn usage_errors_name_the_argument() {
         ),
         (&["mavlink", "--sim", "--listen", "nowhere"], &["--listen"]),
         (&["mavlink", "--sim", "--to", "nowhere"], &["--to"]),
+        // A MAVLink address has no default port (the serial server's 2000 is not one): a
+        // host alone is refused, not sent to port 2000. `--exit-after-ms` ends a run that
+        // would take it.
+        (
+            &[
+                "mavlink",
+                "--sim",
+                "--listen",
+                "127.0.0.1:0",
+                "--to",
+                "127.0.0.1",
+                "--exit-after-ms",
+                "100",
+            ],
+            &["--to", "\"127.0.0.1\"", "HOST:PORT"],
+        ),
+        (
+            &[
+                "mavlink",
+                "--sim",
+                "--listen",
+                "127.0.0.1",
+                "--exit-after-ms",
+                "100",
+            ],
+            &["--listen", "\"127.0.0.1\"", "HOST:PORT"],
+        ),
+        // The simulated gimbal's option, given for a real one: refused, not ignored.
+        (
+            &[
+                "mavlink",
+                "--tcp",
+                "127.0.0.1:9",
+                "--sim-lock-holds",
+                "motor",
+            ],
+            &["--sim-lock-holds", "--sim"],
+        ),
         (
             &["mavlink", "--sim", "--camera-fov", "60"],
             &["--camera-fov", "HFOV,VFOV", "less than 180"],
@@ -99,6 +137,19 @@ fn runtime_failures_exit_1() {
     // No serial server there.
     let addr = format!("127.0.0.1:{}", closed_port());
     failure_naming(&["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"], &[]);
+    // A peer's name with no address (`.invalid`, RFC 6761): a failure at run time, not a
+    // usage error.
+    failure_naming(
+        &[
+            "mavlink",
+            "--sim",
+            "--listen",
+            "127.0.0.1:0",
+            "--to",
+            "nosuch.invalid:14550",
+        ],
+        &["cannot resolve", "nosuch.invalid:14550"],
+    );
 }
 
 #[test]
