@@ -1089,6 +1089,59 @@ fn a_point_at_waits_for_both_the_position_and_the_altitude() {
 }
 
 #[test]
+fn a_point_at_that_cannot_send_its_first_aim_sends_it_when_it_can_wherever_the_clock_is() {
+    // The link alone, at a clock near 0 and at one more than 2^31 ms past 0 (a firmware's
+    // clock may start anywhere, and runs past 2^31 ms after 24.8 days): the first aim is
+    // computed but cannot go, once for want of the vehicle's heading (no attitude yet, the
+    // gimbal nose-referenced), once for want of room in the queue. It goes at the first
+    // look that can send it: within one point-at period (100 ms) of the heading, or at the
+    // first poll after the queue drains.
+    let target = Position::new(47.0018, 8.0, 400.0).unwrap();
+    let gps = Gps::new(47.0, 8.0).unwrap();
+    let altitude = Altitude::new(500.0).unwrap();
+    for base in [1_000u32, 3_000_000_000] {
+        let ms = |offset: u32| base.wrapping_add(offset);
+
+        // No heading yet.
+        let mut link = alone();
+        link.point_at(target);
+        link.set_gps(gps, at(ms(0)));
+        link.set_altitude(altitude, at(ms(0)));
+        assert_eq!(poll_headings(&mut link, ms(0)), [], "base {base}");
+        assert!(link.aim_state().unwrap().waiting_for_heading, "base {base}");
+        let mut sent = Vec::new();
+        for offset in (10..=200).step_by(10) {
+            set_heading(&mut link, 0.0, ms(offset));
+            link.set_gps(gps, at(ms(offset)));
+            link.set_altitude(altitude, at(ms(offset)));
+            sent.extend(
+                poll_headings(&mut link, ms(offset))
+                    .into_iter()
+                    .map(|h| (offset, h)),
+            );
+        }
+        // Due north of the vehicle, its heading 0: a heading command of 0, at the look
+        // 100 ms after the first.
+        assert_eq!(sent, [(100, 0)], "base {base}");
+
+        // No room in the queue.
+        let mut link = alone();
+        set_heading(&mut link, 0.0, ms(0));
+        link.set_gps(gps, at(ms(0)));
+        link.set_altitude(altitude, at(ms(0)));
+        poll_headings(&mut link, ms(0));
+        while link.send(GimbalCommand::LookDown).is_ok() {}
+        link.point_at(target);
+        let full = link.stats().queue_full;
+        link.poll(at(ms(10)));
+        assert!(link.stats().queue_full > full, "base {base}");
+        let mut sent = poll_headings(&mut link, ms(20));
+        sent.extend(poll_headings(&mut link, ms(30)));
+        assert_eq!(sent, [0], "base {base}");
+    }
+}
+
+#[test]
 fn a_point_at_with_no_bearing_or_beyond_the_geodesys_altitude_sends_nothing() {
     // The target at the vehicle (no bearing), and a vehicle above ALT_MAX_M: no aim, no
     // command, whatever is fresh; a target 200 m north then aims at once.

@@ -198,7 +198,13 @@ pub(crate) struct Hold<const Q: usize, const T: usize, M: Medium> {
 }
 
 impl<const Q: usize, const T: usize, M: Medium> Hold<Q, T, M> {
-    pub(crate) fn new(aim: Aim, step: fn(&mut Link<Q, T, M>, Instant, &mut Earliest)) -> Self {
+    /// A hold of `aim` started at `now`: its first look is `now` (a deadline taken from
+    /// any other instant could read as up to 2^31 ms ahead of a clock far from it).
+    pub(crate) fn new(
+        aim: Aim,
+        step: fn(&mut Link<Q, T, M>, Instant, &mut Earliest),
+        now: Instant,
+    ) -> Self {
         let mut hold = Hold {
             yaw: aim.yaw.heading(),
             pitch: aim.pitch,
@@ -207,7 +213,7 @@ impl<const Q: usize, const T: usize, M: Medium> Hold<Q, T, M> {
             state: 0,
             sent_vehicle_cdeg: NO_HEADING,
             prev_err_cdeg: NO_ERROR,
-            next: Instant::from_millis(0),
+            next: now,
             step,
         };
         hold.set_aim(aim);
@@ -327,7 +333,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.tx.cancel_zero_rate();
         // A new hold: a new aim takes the gimbal back from a tracker, as any manual
         // pointing does, and starts the loop's judgement afresh.
-        let mut hold = Hold::new(aim, Self::aim_step);
+        let mut hold = Hold::new(aim, Self::aim_step, now);
         // Commanded now rather than at the next poll: a setpoint's latency.
         let mut earliest = Earliest {
             now,

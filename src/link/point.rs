@@ -113,7 +113,12 @@ impl<const Q: usize, const T: usize, M: Medium> PointAt<Q, T, M> {
             target: Target::new(&target),
             due: true,
             unreachable: false,
-            hold: Hold::new(placeholder, super::Link::point_step),
+            // Its first look is unread: the first step (`due`) sets it.
+            hold: Hold::new(
+                placeholder,
+                super::Link::point_step,
+                Instant::from_millis(0),
+            ),
             aiming: false,
         }
     }
@@ -194,7 +199,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             p.due = false;
             if self.is_fresh(GPS, now) && self.is_fresh(ALTITUDE, now) {
                 let solution = solve(&p.target, &self.vehicle.gps, &self.vehicle.altitude);
-                self.aim_at(&mut p, solution);
+                self.aim_at(&mut p, solution, now);
             }
             if p.aiming {
                 // The loop looks on the point-at's grid (it sets the next look).
@@ -214,7 +219,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.steering = Steering::Point(p);
     }
 
-    pub(super) fn aim_at(&mut self, p: &mut PointAt<Q, T, M>, solution: Solution) {
+    pub(super) fn aim_at(&mut self, p: &mut PointAt<Q, T, M>, solution: Solution, now: Instant) {
         match solution {
             Solution::Unknown => {}
             Solution::Unreachable { elevation_cdeg } => {
@@ -234,7 +239,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
                     p.hold
                         .update(aim, i32::from(self.config.aim_deadband_mdeg) / 10);
                 } else {
-                    p.hold = Hold::new(aim, Self::point_step);
+                    p.hold = Hold::new(aim, Self::point_step, now);
                     p.aiming = true;
                 }
             }
