@@ -49,6 +49,39 @@ impl Instant {
         // The wrapping difference read as signed: non-negative means "not before".
         (self.0.wrapping_sub(other.0) as i32) >= 0
     }
+
+    /// Whether `self` is more than `millis` after `stamp`, the two read as less than 2^31 ms
+    /// apart (as [`Instant::is_at_or_after`] reads them): an instant before `stamp` (a
+    /// stamp taken from a clock read a little after `self`) is not. For a deadline the
+    /// caller's polls keep within 2^31 ms of the clock.
+    ///
+    /// ```
+    /// use idu_gimbal::Instant;
+    /// let stamp = Instant::from_millis(u32::MAX - 99);
+    /// assert!(!Instant::from_millis(400).is_later_than(stamp, 500)); // 500 after
+    /// assert!(Instant::from_millis(401).is_later_than(stamp, 500)); // 501 after
+    /// assert!(!Instant::from_millis(u32::MAX - 100).is_later_than(stamp, 500)); // before
+    /// ```
+    pub const fn is_later_than(self, stamp: Instant, millis: u16) -> bool {
+        (self.0.wrapping_sub(stamp.0) as i32) > millis as i32
+    }
+
+    /// Whether `self` and `other` are at most `millis` apart, whichever is later: how a
+    /// stamp is told fresh at `now` when it may be a little ahead of it (a stamp taken from
+    /// a clock read after the caller's `now`). A stamp older than 2^31 ms is not taken for
+    /// one ahead, as [`Instant::is_at_or_after`] would: it is within `millis` again only in
+    /// the `millis` either side of a whole 2^32 ms (49.7 days).
+    ///
+    /// ```
+    /// use idu_gimbal::Instant;
+    /// let now = Instant::from_millis(5);
+    /// assert!(now.is_within(Instant::from_millis(u32::MAX - 994), 1000)); // 1000 ago
+    /// assert!(now.is_within(Instant::from_millis(7), 1000)); // 2 ahead
+    /// assert!(!now.is_within(Instant::from_millis(5 + (1 << 31)), 1000)); // 2^31 ago
+    /// ```
+    pub const fn is_within(self, other: Instant, millis: u32) -> bool {
+        self.millis_since(other) <= millis || other.millis_since(self) <= millis
+    }
 }
 
 #[cfg(test)]
@@ -66,6 +99,22 @@ mod tests {
             if delta != 0 {
                 prop_assert!(!a.is_at_or_after(b));
             }
+        }
+
+        #[test]
+        fn later_than_is_the_signed_difference(start: u32, delta in -(1i32 << 30)..(1 << 30), limit: u16) {
+            let stamp = Instant::from_millis(start);
+            let now = Instant::from_millis(start.wrapping_add_signed(delta));
+            prop_assert_eq!(now.is_later_than(stamp, limit), delta > i32::from(limit));
+        }
+
+        #[test]
+        fn within_is_the_distance_either_way_round(start: u32, delta: u32, limit: u32) {
+            let a = Instant::from_millis(start);
+            let b = a.add_millis(delta);
+            let distance = delta.min(delta.wrapping_neg());
+            prop_assert_eq!(a.is_within(b, limit), distance <= limit);
+            prop_assert_eq!(b.is_within(a, limit), distance <= limit);
         }
     }
 }

@@ -179,7 +179,7 @@ impl PostbackAssembler {
     #[inline]
     pub(crate) fn push(&mut self, data: &[u8; 8], now: Instant) -> bool {
         let mut count = self.count;
-        if count != 0 && now.millis_since(self.last) > u32::from(self.max_gap_ms) {
+        if count != 0 && now.is_later_than(self.last, self.max_gap_ms) {
             self.discard(0);
             count = 0;
         }
@@ -269,11 +269,12 @@ impl PostbackAssembler {
         (self.count != 0).then(|| self.last.add_millis(u32::from(self.max_gap_ms) + 1))
     }
 
-    /// Discards a partial message whose last frame is more than the gap bound before `now`.
+    /// Discards a partial message whose last frame is more than the gap bound before `now`
+    /// (one stamped after it is kept: [`Instant::is_later_than`]).
     /// Call it periodically so that a message cut short is counted when it is, not when the
     /// next frame happens to arrive.
     pub fn expire(&mut self, now: Instant) {
-        if self.count != 0 && now.millis_since(self.last) > u32::from(self.max_gap_ms) {
+        if self.count != 0 && now.is_later_than(self.last, self.max_gap_ms) {
             self.discard(0);
         }
     }

@@ -71,7 +71,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             return;
         };
         let deadman = u32::from(self.config.rate_deadman_ms);
-        if now.millis_since(hold.refreshed) > deadman {
+        if now.is_later_than(hold.refreshed, self.config.rate_deadman_ms) {
             self.end_rate_hold();
             self.status.raise(Event::RateHoldExpired);
             return;

@@ -119,7 +119,8 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.status.is_up()
     }
 
-    /// The latest valid postback and its age in milliseconds.
+    /// The latest valid postback and its age in milliseconds at `now`, the wrapping
+    /// [`Instant::millis_since`] its stamp (so `now` at or after the receive that took it).
     pub fn latest_postback(&self, now: Instant) -> Option<(Postback, u32)> {
         self.latest.map(|(p, at)| (p, now.millis_since(at)))
     }

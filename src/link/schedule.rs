@@ -133,8 +133,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.poll_vehicle(now, &mut earliest);
         self.poll_steering(now, &mut earliest);
         if let Some((_, at)) = self.latest {
-            if self.status.is_up() && now.millis_since(at) > u32::from(self.config.link_timeout_ms)
-            {
+            if self.status.is_up() && now.is_later_than(at, self.config.link_timeout_ms) {
                 self.status.set_up(false);
             }
             if self.status.is_up() {

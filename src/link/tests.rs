@@ -83,6 +83,40 @@ fn stale_data_is_not_pushed_and_fresh_data_resumes_at_once() {
 }
 
 #[test]
+fn data_stale_for_more_than_half_the_clocks_range_stays_stale() {
+    // Data set once and never again, polled every 10 s: stale from 1,000 ms on, and still
+    // stale when its stamp is more than 2^31 ms behind (where a wrapping difference reads
+    // it as ahead of the clock). Fresh again only with a new value.
+    let mut link: Link = Link::new(Config::default());
+    feed_vehicle(&mut link, 0);
+    assert_eq!(run(&mut link, 0, 1, 1).len(), 3);
+    assert!(link.north_referenced(Instant::from_millis(500)));
+    let half = 1u32 << 31;
+    for at in [
+        2_000,
+        half - 1_000,
+        half,
+        half + 1,
+        half + 500,
+        half + 600_000,
+    ] {
+        let log = run(&mut link, at, at + 1, 1);
+        assert_eq!(log.len(), 0, "pushed at {at}: {log:?}");
+        assert!(!link.north_referenced(Instant::from_millis(at)), "at {at}");
+    }
+    let mut t = 2_000u32;
+    let mut pushed = Vec::new();
+    while t < half + 600_000 {
+        pushed.extend(run(&mut link, t, t + 1, 1));
+        t += 10_000;
+    }
+    assert_eq!(pushed, []);
+    feed_vehicle(&mut link, t);
+    assert_eq!(run(&mut link, t, t + 1, 1).len(), 3);
+    assert!(link.north_referenced(Instant::from_millis(t)));
+}
+
+#[test]
 fn a_long_gap_between_polls_yields_one_push_not_a_burst() {
     let mut link: Link = Link::new(Config::default());
     feed_vehicle(&mut link, 0);
@@ -349,6 +383,46 @@ fn link_up_down_and_latest_postback() {
     link.receive_ignored();
     assert_eq!(link.stats().ignored_frames, 2);
     assert_eq!(link.stats().postbacks, 2);
+}
+
+#[test]
+fn a_poll_a_little_behind_the_stamps_it_finds_takes_nothing_for_old() {
+    // A caller that read its clock, then waited for the link while a frame was taken with
+    // a later reading: the poll's `now` is behind the stamps, by much less than any of the
+    // link's limits. The partial postback, the rate hold and the link stay as they are.
+    let at = Instant::from_millis;
+    let mut link: Link = Link::new(Config::default());
+    postback_frames(&mut link, 1000, -100);
+    link.poll(at(1000));
+    let next = Postback {
+        pitch: -200,
+        ..Postback::default()
+    }
+    .to_can_frames();
+    for d in &next[..3] {
+        link.receive(ids::POSTBACK, d, at(1501));
+    }
+    let r = Rate::new(10.0, 0.0).unwrap();
+    link.set_rate(r, at(1501)).unwrap();
+    link.poll(at(1500));
+    assert!(link.is_rate_holding());
+    link.receive(ids::POSTBACK, &next[3], at(1502));
+    assert_eq!(link.stats().postbacks, 2);
+    assert_eq!(link.stats().dropped_partials, 0);
+    assert_eq!(
+        link.latest_postback(at(1502))
+            .map(|(p, age)| (p.pitch, age)),
+        Some((-200, 0))
+    );
+    // The postback taken at 1502, a poll at 1501: the link stays up.
+    link.poll(at(1501));
+    assert!(link.is_link_up());
+    let mut events = Vec::new();
+    while let Some(e) = link.next_event() {
+        events.push(e);
+    }
+    // A set: no `LinkDown`, no `RateHoldExpired` among them.
+    assert_eq!(events, [Event::LinkUp, Event::Postback]);
 }
 
 #[test]

@@ -131,20 +131,13 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         self.vehicle.altitude = altitude;
     }
 
-    pub(super) fn age(stamp: Instant, now: Instant) -> u32 {
-        // A stamp slightly ahead of `now` (clock skew between producer and poller) is fresh.
-        if now.is_at_or_after(stamp) {
-            now.millis_since(stamp)
-        } else {
-            0
-        }
-    }
-
-    /// Whether vehicle slot `slot` holds data that is fresh at `now`.
+    /// Whether vehicle slot `slot` holds data that is fresh at `now`: measured at most
+    /// `vehicle_stale_ms` before it, or as far after it (clock skew between producer and
+    /// poller), never more than 2^31 ms before ([`Instant::is_within`]).
     pub(super) fn is_fresh(&self, slot: VehicleSlot, now: Instant) -> bool {
         self.vehicle
             .stamp(slot)
-            .is_some_and(|stamp| Self::age(stamp, now) <= u32::from(self.config.vehicle_stale_ms))
+            .is_some_and(|stamp| now.is_within(stamp, u32::from(self.config.vehicle_stale_ms)))
     }
 
     /// Whether the gimbal references headings to north now rather than to the nose: its
@@ -166,7 +159,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         M::VEHICLE_FRAMES
             && self.config.attitude_period_ms != 0
             && self.vehicle.has & ATTITUDE_SENT != 0
-            && Self::age(self.vehicle.attitude_sent_stamp, now) <= stale
+            && now.is_within(self.vehicle.attitude_sent_stamp, stale)
             && self.is_fresh(ATTITUDE, now)
     }
 
@@ -219,7 +212,7 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
             if period == 0 {
                 continue;
             }
-            if Self::age(stamp, now) > stale {
+            if !now.is_within(stamp, stale) {
                 // Push again as soon as fresh data arrives (which marks the link dirty).
                 self.vehicle.set_due(slot, true);
                 continue;
