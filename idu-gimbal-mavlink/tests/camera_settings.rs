@@ -547,8 +547,12 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     let mut m = ftp(2, 0, BURST, 0, &[]);
     m.payload[4] = 80;
     b.receive_all(&frame(GCS, 1, &m), t(10));
-    // ... and another client asks something before the rest is sent.
+    // ... and another client asks something before the rest is sent, then asks for a
+    // burst of its own that is refused (a size past 239): GCS's burst goes on, to GCS.
     b.receive_all(&frame(other, 0, &ftp(7, 0, 0, 0, &[])), t(10));
+    let mut refused = ftp(8, 0, BURST, 0, &[]);
+    refused.payload[4] = 240;
+    b.receive_all(&frame(other, 1, &refused), t(10));
     let mut frames = sent(&mut b);
     for ms in 11..40 {
         b.poll(t(ms));
@@ -559,9 +563,21 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
         .iter()
         .filter(|r| (r.target_system, r.target_component) == other)
         .collect();
-    assert_eq!(to_other.len(), 1);
+    assert_eq!(to_other.len(), 2);
     assert_eq!(to_other[0].payload[5], 0, "the None request's ACK");
-    let burst: Vec<_> = replies.iter().filter(|r| r.payload[5] == BURST).collect();
+    // NAK (129) of the burst request, InvalidDataSize (3).
+    assert_eq!(
+        (
+            to_other[1].payload[3],
+            to_other[1].payload[5],
+            to_other[1].payload[12]
+        ),
+        (129, BURST, 3)
+    );
+    let burst: Vec<_> = replies
+        .iter()
+        .filter(|r| r.payload[5] == BURST && r.payload[3] == 128)
+        .collect();
     let file = served(definition::DUAL_LIGHT, "IDU camera");
     assert_eq!(burst.len(), file.len().div_ceil(80));
     assert!(burst

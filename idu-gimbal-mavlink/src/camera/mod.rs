@@ -58,7 +58,7 @@ use mavio::dialects::common::messages::{
 use crate::capture::{Capture, Image, Request, Vantage};
 use crate::command::Command;
 use crate::framing::MAX_FRAME_LEN;
-use crate::ftp::{FtpServer, BURST_READ_FILE, PAYLOAD_LEN};
+use crate::ftp::{FtpServer, PAYLOAD_LEN};
 use crate::tx::{id_of, name, Tx};
 use config::UNKNOWN_MODEL;
 use idu_gimbal::link::{Link, Medium};
@@ -118,8 +118,6 @@ pub(crate) struct CameraComponent {
     recording_status: Periodic,
     settings: Settings,
     ftp: FtpServer<FTP_SESSIONS>,
-    /// Who the burst read in progress is for.
-    burst_client: (u8, u8),
 }
 
 /// A mask of the lowest `n` bits (of streams, of parameters); all eight for `n` >= 8.
@@ -217,7 +215,6 @@ impl CameraComponent {
             recording_status: Periodic::default(),
             settings: Settings::new(config.has_thermal()),
             ftp: FtpServer::new(),
-            burst_client: (0, 0),
         }
     }
 
@@ -544,10 +541,10 @@ impl CameraComponent {
         while self.ftp.burst_pending() && tx.out.room() >= MAX_FRAME_LEN {
             let mut payload = [0u8; PAYLOAD_LEN];
             let files = [self.definition(config, tx)];
-            if !self.ftp.burst_next(&files, now, &mut payload) {
+            let Some(client) = self.ftp.burst_next(&files, now, &mut payload) else {
                 break;
-            }
-            self.send_ftp(config, payload, self.burst_client, tx);
+            };
+            self.send_ftp(config, payload, client, tx);
         }
         if self.tracking.due(now) && tx.out.room() >= MAX_FRAME_LEN {
             self.tracking.send_status(gimbal, config.component, now, tx);
@@ -588,11 +585,6 @@ impl CameraComponent {
                 let mut reply = [0u8; PAYLOAD_LEN];
                 let files = [self.definition(config, tx)];
                 if self.ftp.request(&files, from, &request, now, &mut reply) {
-                    // The burst's packets go to whoever asked for it, even with another
-                    // client's requests answered between them.
-                    if request.get(3) == Some(&BURST_READ_FILE) {
-                        self.burst_client = from;
-                    }
                     self.send_ftp(config, reply, from, tx);
                 }
             }

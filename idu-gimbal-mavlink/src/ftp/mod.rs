@@ -458,20 +458,20 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
     }
 
     /// Writes the next packet of the burst in progress at `now`, over the files
-    /// [`FtpServer::request`] was given; `false` (and `reply` untouched) when there is none.
+    /// [`FtpServer::request`] was given, and returns the client it goes to: the one whose
+    /// session the burst reads, whoever sent the requests answered since. `None` (and
+    /// `reply` untouched) when there is none.
     pub fn burst_next(
         &mut self,
         files: &[File<'_>],
         now: Instant,
         reply: &mut [u8; PAYLOAD_LEN],
-    ) -> bool {
-        let Some(burst) = self.burst else {
-            return false;
-        };
-        let Ok(file) = self.slot_file(files, burst.slot, now) else {
+    ) -> Option<Client> {
+        let burst = self.burst?;
+        let Ok((file, client)) = self.slot_file(files, burst.slot, now) else {
             // Not reached: whatever closes the session ends its burst.
             self.burst = None;
-            return false;
+            return None;
         };
         let mut packet = [0; PAYLOAD_LEN];
         let Some((size, complete)) =
@@ -479,7 +479,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         else {
             // Not reached: a burst is kept only while its offset is inside the file.
             self.burst = None;
-            return false;
+            return None;
         };
         *reply = packet;
         write_header(
@@ -498,7 +498,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
             seq_number: burst.seq_number.wrapping_add(1),
             ..burst
         });
-        true
+        Some(client)
     }
 
     /// Executes a request whose `size` is valid; writes the reply's data. Returns the
@@ -668,17 +668,18 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         files: &[File<'f>],
         slot: usize,
         now: Instant,
-    ) -> Result<File<'f>, ErrorCode> {
+    ) -> Result<(File<'f>, Client), ErrorCode> {
         let session = self
             .sessions
             .get_mut(slot)
             .and_then(Option::as_mut)
             .ok_or(ErrorCode::InvalidSession)?;
         session.last_used = now;
-        Ok(files
+        let file = files
             .get(session.file)
             .copied()
-            .unwrap_or(File::new("", &[])))
+            .unwrap_or(File::new("", &[]));
+        Ok((file, session.client))
     }
 
     /// `client`'s session `id`'s slot and file, marked used at `now`.
@@ -690,7 +691,7 @@ impl<const SESSIONS: usize> FtpServer<SESSIONS> {
         now: Instant,
     ) -> Result<(usize, File<'f>), ErrorCode> {
         let slot = self.slot_of(client, id).ok_or(ErrorCode::InvalidSession)?;
-        Ok((slot, self.slot_file(files, slot, now)?))
+        Ok((slot, self.slot_file(files, slot, now)?.0))
     }
 
     fn read(

@@ -64,7 +64,7 @@ impl<const S: usize> Served<S> {
         self.server.request(self.files, client, request, now, reply)
     }
 
-    fn burst_next(&mut self, now: Instant, reply: &mut [u8; 251]) -> bool {
+    fn burst_next(&mut self, now: Instant, reply: &mut [u8; 251]) -> Option<Client> {
         self.server.burst_next(self.files, now, reply)
     }
 }
@@ -182,10 +182,10 @@ fn burst(s: &mut Served, request: &[u8; 251], now: u32) -> Vec<Reply> {
     let mut packets = vec![send(s, request, now)];
     let mut reply = [0; 251];
     while s.burst_pending() {
-        assert!(s.burst_next(at(now), &mut reply));
+        assert!(s.burst_next(at(now), &mut reply).is_some());
         packets.push(parse(&reply));
     }
-    assert!(!s.burst_next(at(now), &mut reply));
+    assert!(s.burst_next(at(now), &mut reply).is_none());
     packets
 }
 
@@ -689,7 +689,7 @@ fn reads_between_burst_packets_leave_the_burst_running() {
             0,
         ));
         seq += 3;
-        assert!(s.burst_next(at(0), &mut reply));
+        assert!(s.burst_next(at(0), &mut reply).is_some());
         let p = parse(&reply);
         assert_eq!(p.offset as usize, got.len());
         got.extend_from_slice(&p.data);
@@ -711,7 +711,7 @@ fn burst_ended_by_terminate_reset_or_another_burst() {
     assert!(s.burst_pending());
     assert_ack(&send(&mut s, &packet(4, 0, 1, 0, 0, &[]), 0));
     assert!(!s.burst_pending());
-    assert!(!s.burst_next(at(0), &mut reply));
+    assert!(s.burst_next(at(0), &mut reply).is_none());
     assert_eq!(s.stats().bursts_cut, 1);
 
     // Another burst replaces it, numbered from its own request.
@@ -722,7 +722,7 @@ fn burst_ended_by_terminate_reset_or_another_burst() {
         (r.offset, &r.data[..], r.burst_complete),
         (500, &BIG[500..600], 0)
     );
-    assert!(s.burst_next(at(0), &mut reply));
+    assert!(s.burst_next(at(0), &mut reply).is_some());
     let p = parse(&reply);
     assert_eq!((p.seq, p.offset), (22, 600));
     assert_eq!(s.stats().bursts_cut, 2);
@@ -1095,7 +1095,7 @@ proptest! {
             }
             let mut last_seq = None;
             for _ in 0..pulls {
-                if !s.burst_next(at(now), &mut reply) {
+                if s.burst_next(at(now), &mut reply).is_none() {
                     prop_assert!(!s.burst_pending());
                     break;
                 }
@@ -1119,7 +1119,7 @@ proptest! {
             if s.request(GCS, &request, at(i as u32), &mut reply) {
                 parse(&reply);
             }
-            while s.burst_next(at(i as u32), &mut reply) {
+            while s.burst_next(at(i as u32), &mut reply).is_some() {
                 parse(&reply);
             }
         }
@@ -1166,7 +1166,7 @@ fn sessions_are_the_clients_numbers_and_each_clients_own() {
         &mut reply
     ));
     assert_eq!(parse(&reply).session, 173);
-    assert!(s.burst_next(at(0), &mut reply));
+    assert!(s.burst_next(at(0), &mut reply).is_some());
     assert_eq!(parse(&reply).session, 173);
     // A retried open (another seq, same session) after another request re-opens the
     // same session: no second slot.
