@@ -13,8 +13,10 @@
 //!   the gimbal does not report, so their images could not be reported when taken. Each
 //!   image is the gimbal's single shot, commanded on the bridge's schedule (the first at
 //!   once), and reported with `CAMERA_IMAGE_CAPTURED` when that command is queued;
-//! - a single capture whose sequence number is the last one seen is a re-transmission:
-//!   it is acknowledged again and takes no picture;
+//! - a single capture from the client whose last single capture had the same sequence
+//!   number, within [`REPEAT_WINDOW_MS`] of it, is a re-transmission: it is acknowledged
+//!   again and takes no picture (another client's, or one that starts numbering again
+//!   later, is a new picture);
 //! - the last [`HISTORY`] images are kept, so `MAV_CMD_REQUEST_MESSAGE` for
 //!   `CAMERA_IMAGE_CAPTURED` (param2 the first index or −1 for all, param3 0, −1 or the
 //!   last index) is answered for them (MAVSDK asks again for indexes it missed).
@@ -31,6 +33,13 @@ pub const HISTORY: usize = 16;
 pub const MIN_INTERVAL_MS: u32 = 100;
 /// The longest interval, ms (an hour): longer is taken as a mistake.
 pub const MAX_INTERVAL_MS: u32 = 3_600_000;
+/// How long after a single capture the same client's same sequence number is taken for
+/// its re-transmission, ms: the command protocol re-sends within its timeouts, seconds
+/// (a client that restarts and numbers from 1 again takes longer than that to come back).
+pub const REPEAT_WINDOW_MS: u32 = 10_000;
+/// The largest sequence number, 2^24: every whole number up to it is exact in param4's
+/// `f32`.
+pub const MAX_SEQUENCE: u32 = 1 << 24;
 
 /// Why a capture command was refused.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -41,6 +50,9 @@ pub enum CaptureError {
     /// param2 (interval) is not finite or, for more than one image, outside
     /// [[`MIN_INTERVAL_MS`], [`MAX_INTERVAL_MS`]].
     Interval,
+    /// param4 (sequence number) of a single capture is not a whole number in
+    /// [0, [`MAX_SEQUENCE`]] (0: none given).
+    Sequence,
 }
 
 /// Where an image is taken from: the vehicle's position and the camera's attitude.
@@ -89,7 +101,8 @@ pub struct Request {
     pub interval_ms: u32,
     /// Images to take; 0 until stopped.
     pub count: u16,
-    /// The single capture's sequence number (0: none given).
+    /// The single capture's sequence number (0: none given; always 0 for more than one
+    /// image, whose param4 common.xml leaves unused).
     pub sequence: u32,
 }
 
@@ -104,11 +117,11 @@ impl Request {
         }
         // In range and whole: exact.
         let count = count as u16;
-        let sequence = if count == 1 && whole(sequence, 16_777_216.0) {
-            // Exact up to 2^24, all an f32 holds of whole numbers.
-            sequence as u32
-        } else {
-            0
+        let sequence = match count {
+            // In range and whole: exact.
+            1 if whole(sequence, MAX_SEQUENCE as f32) => sequence as u32,
+            1 => return Err(CaptureError::Sequence),
+            _ => 0,
         };
         if count == 1 {
             // One image: the interval does not matter (common.xml), but must be a number.
@@ -144,11 +157,19 @@ struct Schedule {
     next: Instant,
 }
 
+/// The last single capture with a sequence number: who asked, the number, when.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Single {
+    client: (u8, u8),
+    sequence: u32,
+    at: Instant,
+}
+
 /// The capture state: schedule, sequence, history.
 #[derive(Clone, Debug)]
 pub struct Capture {
     schedule: Option<Schedule>,
-    last_sequence: u32,
+    last_single: Option<Single>,
     next_index: i32,
     history: heapless::Deque<Image, HISTORY>,
 }
@@ -174,26 +195,36 @@ impl Capture {
     pub const fn new() -> Self {
         Capture {
             schedule: None,
-            last_sequence: 0,
+            last_single: None,
             next_index: 0,
             history: heapless::Deque::new(),
         }
     }
 
-    /// Whether `request` repeats the last single capture (same sequence number, not 0):
-    /// a re-transmission, to acknowledge without taking a picture.
-    pub fn is_repeat(&self, request: &Request) -> bool {
-        request.sequence != 0 && request.sequence == self.last_sequence
+    /// Whether `request` from `client` at `now` repeats the last single capture: the same
+    /// client's same sequence number (not 0), within [`REPEAT_WINDOW_MS`]. A
+    /// re-transmission, to acknowledge without taking a picture.
+    pub fn is_repeat(&self, request: &Request, client: (u8, u8), now: Instant) -> bool {
+        request.sequence != 0
+            && self.last_single.is_some_and(|last| {
+                last.client == client
+                    && last.sequence == request.sequence
+                    && now.is_within(last.at, REPEAT_WINDOW_MS)
+            })
     }
 
-    /// Starts a capture (replacing one in progress); the first image is due at once.
-    /// A repeat ([`Capture::is_repeat`]) starts nothing.
-    pub fn start(&mut self, request: Request, now: Instant) -> Start {
-        if self.is_repeat(&request) {
+    /// Starts a capture from `client` (replacing one in progress); the first image is due
+    /// at once. A repeat ([`Capture::is_repeat`]) starts nothing.
+    pub fn start(&mut self, request: Request, client: (u8, u8), now: Instant) -> Start {
+        if self.is_repeat(&request, client, now) {
             return Start::Repeated;
         }
         if request.sequence != 0 {
-            self.last_sequence = request.sequence;
+            self.last_single = Some(Single {
+                client,
+                sequence: request.sequence,
+                at: now,
+            });
         }
         self.schedule = Some(Schedule {
             interval_ms: request.interval_ms,
@@ -275,6 +306,9 @@ impl Capture {
 mod tests {
     use super::*;
 
+    /// A ground station's (system, component).
+    const GCS: (u8, u8) = (255, 190);
+
     fn t(ms: u32) -> Instant {
         Instant::from_millis(ms)
     }
@@ -338,7 +372,7 @@ mod tests {
     fn a_count_at_an_interval_takes_each_image_on_time_with_consecutive_indexes() {
         let mut c = Capture::new();
         let r = Request::from_params(0.5, 3.0, 0.0).unwrap();
-        assert_eq!(c.start(r, t(1_000)), Start::Started);
+        assert_eq!(c.start(r, GCS, t(1_000)), Start::Started);
         let mut taken = Vec::new();
         for ms in 1_000..5_000 {
             if c.due(t(ms)) {
@@ -354,7 +388,7 @@ mod tests {
     fn a_late_poll_does_not_shift_the_schedule_and_it_runs_across_the_tick_wrap() {
         let mut c = Capture::new();
         let start = u32::MAX - 700;
-        c.start(Request::from_params(1.0, 0.0, 0.0).unwrap(), t(start));
+        c.start(Request::from_params(1.0, 0.0, 0.0).unwrap(), GCS, t(start));
         let mut times = Vec::new();
         // Polled every 7 ms: each image within 7 ms of its slot, slots 1 s apart.
         let mut ms = start;
@@ -377,7 +411,7 @@ mod tests {
     #[test]
     fn a_late_image_keeps_its_slots_until_it_is_an_interval_behind() {
         let mut c = Capture::new();
-        c.start(Request::from_params(1.0, 0.0, 0.0).unwrap(), t(0));
+        c.start(Request::from_params(1.0, 0.0, 0.0).unwrap(), GCS, t(0));
         let v = Vantage::default();
         c.taken(t(0), v);
         assert!(!c.due(t(999)) && c.due(t(1_000)));
@@ -395,13 +429,15 @@ mod tests {
     #[test]
     fn a_single_capture_has_no_interval_nor_a_sequence_that_is_not_whole() {
         let mut c = Capture::new();
-        c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), t(0));
+        c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), GCS, t(0));
         assert!(c.due(t(0)));
         assert_eq!(c.interval(), None);
-        for sequence in [2.5, f32::NAN, -1.0, 16_777_218.0] {
+        // A sequence number that is no whole number in [0, 2^24] is refused, not read
+        // as "none".
+        for sequence in [2.5, f32::NAN, f32::INFINITY, -1.0, 16_777_218.0] {
             assert_eq!(
-                Request::from_params(0.0, 1.0, sequence).map(|r| r.sequence),
-                Ok(0),
+                Request::from_params(0.0, 1.0, sequence),
+                Err(CaptureError::Sequence),
                 "{sequence}"
             );
         }
@@ -415,26 +451,46 @@ mod tests {
     fn a_retransmitted_single_capture_takes_no_second_picture() {
         let mut c = Capture::new();
         let once = Request::from_params(0.0, 1.0, 1.0).unwrap();
-        assert_eq!(c.start(once, t(0)), Start::Started);
+        assert_eq!(c.start(once, GCS, t(0)), Start::Started);
         c.taken(t(0), Vantage::default());
         assert!(!c.due(t(1)));
-        assert_eq!(c.start(once, t(5)), Start::Repeated);
+        assert_eq!(c.start(once, GCS, t(5)), Start::Repeated);
         assert!(!c.due(t(6)));
         let next = Request::from_params(0.0, 1.0, 2.0).unwrap();
-        assert_eq!(c.start(next, t(10)), Start::Started);
+        assert_eq!(c.start(next, GCS, t(10)), Start::Started);
         // Sequence 0 means "none given": never taken for a repeat.
         let plain = Request::from_params(0.0, 1.0, 0.0).unwrap();
         c.taken(t(10), Vantage::default());
-        assert_eq!(c.start(plain, t(20)), Start::Started);
+        assert_eq!(c.start(plain, GCS, t(20)), Start::Started);
         c.taken(t(20), Vantage::default());
-        assert_eq!(c.start(plain, t(30)), Start::Started);
+        assert_eq!(c.start(plain, GCS, t(30)), Start::Started);
+    }
+
+    #[test]
+    fn only_the_same_clients_number_soon_after_is_a_repeat() {
+        let mut c = Capture::new();
+        let one = Request::from_params(0.0, 1.0, 1.0).unwrap();
+        assert_eq!(c.start(one, GCS, t(0)), Start::Started);
+        // Another client's 1 is its own first picture.
+        assert_eq!(c.start(one, (1, 1), t(100)), Start::Started);
+        // The first client's 1 again: a repeat within the window, a new picture after it
+        // (a client that restarted and numbers from 1 again).
+        assert_eq!(c.start(one, GCS, t(200)), Start::Started);
+        assert_eq!(
+            c.start(one, GCS, t(200 + REPEAT_WINDOW_MS)),
+            Start::Repeated
+        );
+        assert_eq!(
+            c.start(one, GCS, t(200 + 2 * REPEAT_WINDOW_MS + 1)),
+            Start::Started
+        );
     }
 
     #[test]
     fn the_history_keeps_the_latest_images() {
         let mut c = Capture::new();
         for k in 0..20u32 {
-            c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), t(k));
+            c.start(Request::from_params(0.0, 1.0, 0.0).unwrap(), GCS, t(k));
             c.taken(
                 t(k),
                 Vantage {

@@ -251,6 +251,48 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
 }
 
 #[test]
+fn a_capture_number_is_whole_and_its_repeat_the_same_clients_soon_after() {
+    let mut b = bridge();
+    // A sequence number that is no whole number: refused, no picture.
+    let (ack, _) = ask4(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.0, 1.0, 1.5],
+        10,
+    );
+    assert_eq!(ack.result, MavResult::Denied);
+    assert!(queued(&mut b.link).is_empty());
+    // GCS's number 1, then another ground station's number 1: two pictures.
+    let (ack, _) = ask4(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.0, 1.0, 1.0],
+        20,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
+    let other = (GCS.0, GCS.1 + 1);
+    let mut c = command((AP.0, 100), MavCmd::ImageStartCapture, 0.0, 0.0);
+    (c.param3, c.param4) = (1.0, 1.0);
+    b.receive_all(&frame(other, 0, &c), t(30));
+    let acks: Vec<CommandAck> = of(&sent(&mut b));
+    assert_eq!(acks[0].result, MavResult::Accepted);
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
+    // GCS's number 1 again a minute on (a restarted client numbering from 1): a picture.
+    let (ack, _) = ask4(
+        &mut b,
+        100,
+        MavCmd::ImageStartCapture,
+        [0.0, 0.0, 1.0, 1.0],
+        60_020,
+    );
+    assert_eq!(ack.result, MavResult::Accepted);
+    assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
+}
+
+#[test]
 fn images_at_an_interval_are_taken_and_reported_one_by_one_on_time() {
     let mut b = bridge();
     // Three images 0.5 s apart (under a second: the gimbal's single shot on the bridge's

@@ -267,7 +267,7 @@ impl State {
         } else {
             let vantage = self.vantage(gimbal, now);
             let acked = self.with_camera(gimbal, now, |camera, config, gimbal, tx| {
-                let (result, reply) = camera.command(config, gimbal, cmd, now, vantage);
+                let (result, reply) = camera.command(config, gimbal, cmd, from, now, vantage);
                 // The ACK first, then what the command produced.
                 tx.out.ack(me, cmd.command as u16, result, from);
                 camera.reply(config, gimbal, reply, now, tx);

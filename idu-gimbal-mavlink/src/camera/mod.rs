@@ -229,6 +229,7 @@ impl CameraComponent {
         config: &CameraConfig,
         gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
+        from: (u8, u8),
         now: Instant,
         vantage: Vantage,
     ) -> (MavResult, Reply) {
@@ -298,7 +299,9 @@ impl CameraComponent {
                 };
                 return (result, Reply::Nothing);
             }
-            MavCmd::ImageStartCapture => return self.start_capture(gimbal, cmd, now, vantage),
+            MavCmd::ImageStartCapture => {
+                return self.start_capture(gimbal, cmd, from, now, vantage)
+            }
             MavCmd::ImageStopCapture => {
                 self.capture.stop();
                 Reply::CaptureStatus
@@ -438,6 +441,7 @@ impl CameraComponent {
         &mut self,
         gimbal: &mut Link<Q, T, M>,
         cmd: &Command,
+        from: (u8, u8),
         now: Instant,
         vantage: Vantage,
     ) -> (MavResult, Reply) {
@@ -445,7 +449,7 @@ impl CameraComponent {
         let Ok(request) = Request::from_params(interval, count, sequence) else {
             return (MavResult::Denied, Reply::Nothing);
         };
-        if self.capture.is_repeat(&request) {
+        if self.capture.is_repeat(&request, from, now) {
             // The same capture again (its ACK was lost): acknowledge, take nothing.
             return (MavResult::Accepted, Reply::Nothing);
         }
@@ -456,7 +460,7 @@ impl CameraComponent {
         {
             return (MavResult::TemporarilyRejected, Reply::Nothing);
         }
-        self.capture.start(request, now);
+        self.capture.start(request, from, now);
         let image = self.capture.taken(now, vantage);
         (MavResult::Accepted, Reply::Captured(image))
     }
