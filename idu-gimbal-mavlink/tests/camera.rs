@@ -511,7 +511,19 @@ fn while_recording_the_capture_status_comes_at_the_rate_asked() {
         let (ack, _) = ask_camera(&mut b, MavCmd::VideoStartCapture, [0.0, hz, 0.0], 7_000);
         assert_eq!(ack.result, MavResult::Denied, "{hz}");
     }
+    // param1, the stream: 0 (all), NaN (left out) or the id of one of ours; the bridge's
+    // camera here has one, id 1. Another id is refused, to start and to stop.
+    for cmd in [MavCmd::VideoStartCapture, MavCmd::VideoStopCapture] {
+        for stream in [2.0, -1.0, 1.5, f32::INFINITY] {
+            let (ack, _) = ask_camera(&mut b, cmd, [stream, 0.0, 0.0], 7_000);
+            assert_eq!(ack.result, MavResult::Denied, "{cmd:?} stream {stream}");
+        }
+    }
     assert!(queued(&mut b.link).is_empty());
+    for stream in [0.0, f32::NAN, 1.0] {
+        let (ack, _) = ask_camera(&mut b, MavCmd::VideoStartCapture, [stream, 0.0, 0.0], 7_000);
+        assert_eq!(ack.result, MavResult::Accepted, "stream {stream}");
+    }
 }
 
 /// A postback from a gimbal of type `gimbal_type` into the bridge's link.

@@ -13,7 +13,7 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::{GimbalType, Postback};
 use idu_gimbal_mavlink::camera::{definition, CameraConfig};
 use mavio::dialects::common::enums::{
-    MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
+    CameraMode, MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
 };
 use mavio::dialects::common::messages::{
     CameraSettings, CommandAck, FileTransferProtocol, ParamExtAck, ParamExtRequestList,
@@ -324,12 +324,17 @@ fn reset_camera_settings_puts_every_setting_back_to_its_default() {
     // QGroundControl also lets go of, and nothing sent or changed (all or none).
     let ack = set(&mut b, "IR_PALETTE", value_of(9), MavParamExtType::Uint8);
     assert_eq!(ack.param_result, ParamAck::Accepted);
+    let (result, _) = ask(&mut b, MavCmd::SetCameraMode, 0.0, 1.0);
+    assert_eq!(result, MavResult::Accepted);
     let _ = queued_all(&mut b.link);
     while b.link.command_room() > 2 {
         b.link.send(GimbalCommand::Recenter).unwrap();
     }
     let (result, _) = ask(&mut b, MavCmd::ResetCameraSettings, 1.0, 0.0);
     assert_eq!(result, MavResult::TemporarilyRejected);
+    // The mode too stays (a reset would put the image mode back).
+    let (_, frames) = ask(&mut b, MavCmd::RequestMessage, 260.0, 0.0);
+    assert_eq!(of::<CameraSettings>(&frames)[0].mode_id, CameraMode::Video);
     assert_eq!(
         queued_all(&mut b.link),
         [Command::from(GimbalCommand::Recenter); 6]

@@ -308,6 +308,12 @@ impl CameraComponent {
             }
             MavCmd::VideoStartCapture | MavCmd::VideoStopCapture => {
                 let start = cmd.command == MavCmd::VideoStartCapture;
+                // param1: the stream recorded, 0 for all (NaN, left out, taken so); the
+                // gimbal records its one video whichever, but an id it has not is refused.
+                let stream = cmd.params[0];
+                if !stream.is_nan() && streams(stream).is_none() {
+                    return (MavResult::Denied, Reply::Nothing);
+                }
                 // common.xml: VIDEO_START_CAPTURE's param2 is how often (Hz) to send
                 // CAMERA_CAPTURE_STATUS while recording, 0 for never (NaN taken so).
                 let hz = cmd.params[1];
@@ -378,9 +384,10 @@ impl CameraComponent {
             // QGroundControl stays "resetting" and ignores its photo, video and mode buttons
             // until it restarts (`VehicleCameraControl.cc` `_mavCommandResult`).
             MavCmd::ResetCameraSettings => {
-                self.mode = CameraMode::Image;
                 let result = self.settings.reset(gimbal);
+                // A reset turned away changes nothing, the mode included.
                 let reply = if result == MavResult::Accepted {
+                    self.mode = CameraMode::Image;
                     Reply::Settings
                 } else {
                     Reply::Nothing
