@@ -588,6 +588,17 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     assert!(burst
         .iter()
         .all(|r| (r.target_system, r.target_component) == GCS));
+    // The FTP server's counters, through the bridge: four requests, the refused one among
+    // them, and every packet of the burst.
+    let stats = b.ftp_stats().unwrap();
+    assert_eq!(
+        (stats.requests, stats.bad_requests, stats.bursts),
+        (4, 1, 1)
+    );
+    assert_eq!(stats.burst_packets as usize, burst.len() - 1);
+    // A bridge with no camera has no FTP server.
+    let none = idu_gimbal_mavlink::Bridge::new(idu_gimbal_mavlink::BridgeConfig::default());
+    assert!(none.ftp_stats().is_none());
 }
 
 #[test]

@@ -350,6 +350,12 @@ impl Bridge {
         &self.reader
     }
 
+    /// The camera's FTP server's counters (requests, replies, malformed requests, bursts
+    /// cut, sessions reclaimed); `None` without a camera.
+    pub fn ftp_stats(&self) -> Option<crate::ftp::FtpStats> {
+        self.state.camera.as_ref().map(CameraComponent::ftp_stats)
+    }
+
     /// What signing accepted and turned away; `None` when not signing (feature `signing`).
     #[cfg(feature = "signing")]
     pub fn signing_stats(&self) -> Option<crate::signing::SigningStats> {

@@ -580,6 +580,11 @@ impl CameraComponent {
         }
     }
 
+    /// The FTP server's counters.
+    pub(crate) fn ftp_stats(&self) -> crate::ftp::FtpStats {
+        self.ftp.stats()
+    }
+
     /// A message other than a command, addressed to the camera ([`handles`]): FTP and the
     /// extended parameters.
     pub(crate) fn message<const Q: usize, const T: usize, M: Medium>(
