@@ -46,7 +46,7 @@ use std::io::Write;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant as StdInstant};
 
-use idu_gimbal::link::{Can, Config, Link, Medium};
+use idu_gimbal::link::{Can, Config, Link, LinkStats, Medium};
 use idu_gimbal::sim::{LockHolds, SimConfig, Simulator};
 use idu_gimbal::video::{Camera, Family};
 use idu_gimbal::wire::postback::GimbalType;
@@ -209,8 +209,8 @@ trait Pump {
     type Medium: Medium;
     /// Moves frames or bytes between the gimbal and the link; `Err` ends the run.
     fn pump(&mut self, link: &mut Link<8, 8, Self::Medium>, now: Instant) -> Result<(), Failure>;
-    /// Faults new since the last call, for stderr.
-    fn notes(&mut self) -> Vec<String> {
+    /// Faults new since the last call, for stderr (`link`: the link's counters).
+    fn notes(&mut self, _link: &LinkStats) -> Vec<String> {
         Vec::new()
     }
 }
@@ -281,8 +281,8 @@ impl<T: Transport> Pump for TransportSide<T> {
     fn pump(&mut self, link: &mut Link<8, 8, T::Medium>, now: Instant) -> Result<(), Failure> {
         transport::pump(&mut self.0, link, now)
     }
-    fn notes(&mut self) -> Vec<String> {
-        self.0.take_notes()
+    fn notes(&mut self, link: &LinkStats) -> Vec<String> {
+        self.0.take_notes(link)
     }
 }
 
@@ -536,7 +536,7 @@ fn serve<S: Pump>(
         }
         if clock >= notes_at {
             for note in side
-                .notes()
+                .notes(&link.stats())
                 .into_iter()
                 .chain(clients.unsent.lines(clock, false))
             {

@@ -170,7 +170,7 @@ fn flush<T: Transport>(
                 s.transport.name(),
                 SEND_TIMEOUT.as_secs()
             );
-            for note in s.transport.take_notes() {
+            for note in s.take_notes() {
                 why.push_str("; ");
                 why.push_str(&note);
             }
@@ -310,7 +310,7 @@ pub fn watch<T: Transport>(
         }
         let clock_now = Instant::now();
         if clock_now >= notes_at {
-            for note in s.transport.take_notes() {
+            for note in s.take_notes() {
                 eprintln!("gimbalctl: warning: {note}");
             }
             notes_at = clock_now + NOTE_EVERY;
@@ -650,11 +650,50 @@ mod tests {
             counters[2].starts_with("bus errors 1  last: "),
             "{counters:?}"
         );
-        let notes = s.transport.take_notes();
+        let notes = s.take_notes();
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].starts_with("mock0: ") && notes[0].ends_with("(1 new, 1 in all)"));
-        assert!(s.transport.take_notes().is_empty());
+        assert!(s.take_notes().is_empty());
         // A monitor-less session records no frames.
         assert!(s.transport.take_frames().is_empty());
+    }
+
+    #[test]
+    fn postbacks_lost_on_the_bus_are_told_once_as_they_grow() {
+        // A simulated gimbal's postback with one byte of its second frame flipped (a CRC
+        // error), then a good one: the link counts the first, and the notes say it once.
+        let bus: Bus<2, 64> = Bus::new(5);
+        let mut s = mock_session(&bus, Mode::Drive);
+        let mut other = bus.endpoint(1).unwrap();
+        let mut sim: Simulator =
+            Simulator::new(SimConfig::default(), idu_gimbal::Instant::from_millis(0));
+        let mut frames = Vec::new();
+        for ms in [500, 1000] {
+            sim.poll(idu_gimbal::Instant::from_millis(ms)).unwrap();
+            while let Some(f) = sim.pop_frame() {
+                frames.push(f);
+            }
+        }
+        assert_eq!(frames.len(), 8);
+        frames[1].data[3] ^= 0x40;
+        for f in &frames {
+            other
+                .transmit(&MockFrame::extended(f.id, &f.data).unwrap())
+                .unwrap();
+        }
+        s.pump(idu_gimbal::Instant::from_millis(0)).unwrap();
+        assert_eq!(
+            (s.link.stats().postbacks, s.link.stats().crc_errors),
+            (1, 1)
+        );
+        let notes = s.take_notes();
+        assert_eq!(
+            notes,
+            [
+                "mock0: postbacks lost: 1 with a bad CRC, 0 cut short (a frame missing or late), \
+              0 restarted by a new header, 0 postback-ID frames not 8 bytes; postbacks so far: 1"
+            ]
+        );
+        assert!(s.take_notes().is_empty());
     }
 }

@@ -225,9 +225,10 @@ pub trait Transport {
     /// The link's and the transport's counters as lines for `control`'s panel (three).
     fn counters(&self, link: &LinkStats) -> [String; 3];
 
-    /// Faults new since the last call, one line each for stderr: CAN error frames,
-    /// bytes that held no frame.
-    fn take_notes(&mut self) -> Vec<String>;
+    /// Faults new since the last call, one line each for stderr: CAN error frames and
+    /// postbacks lost on the bus (from `link`, the link's counters), bytes that held no
+    /// frame.
+    fn take_notes(&mut self, link: &LinkStats) -> Vec<String>;
 
     /// Frames received other than postbacks, in order, since the last call ([`Mode::Monitor`]
     /// on CAN; empty otherwise).
@@ -271,6 +272,11 @@ impl<T: Transport> Session<T> {
     /// Queues a text (CAN only; the serial link carries none).
     pub fn send_text(&mut self, text: &[u8]) -> Result<(), String> {
         T::send_text(&mut self.link, text)
+    }
+
+    /// Faults new since the last call, for stderr ([`Transport::take_notes`]).
+    pub fn take_notes(&mut self) -> Vec<String> {
+        self.transport.take_notes(&self.link.stats())
     }
 
     /// The counters as lines for `control`'s panel (three).

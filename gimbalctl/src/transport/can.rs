@@ -160,6 +160,9 @@ pub struct CanTransport<C> {
     config: Config,
     /// Whether the last poll consumed fewer frames and errors than its bound.
     drained: bool,
+    /// The link's postback faults as last said: CRC errors, partials dropped for a gap,
+    /// restarts, malformed frames.
+    postback_faults: [u32; 4],
 }
 
 /// Frames one poll receives in [`Mode::Monitor`]: a postback is four frames, so one poll
@@ -183,6 +186,7 @@ where
             name: name.to_owned(),
             config: mode.config(MONITOR_FRAMES),
             drained: true,
+            postback_faults: [0; 4],
         }
     }
 
@@ -251,10 +255,11 @@ where
         ]
     }
 
-    fn take_notes(&mut self) -> Vec<String> {
+    fn take_notes(&mut self, link: &LinkStats) -> Vec<String> {
         let mut log = self.log.borrow_mut();
         let name = self.name.clone();
-        log.faults
+        let mut notes: Vec<String> = log
+            .faults
             .iter_mut()
             .filter(|f| f.count > f.told)
             .map(|f| {
@@ -264,7 +269,27 @@ where
                 let _ = write!(line, " ({new} new, {} in all)", f.count);
                 line
             })
-            .collect()
+            .collect();
+        // Postbacks the link could not take (a corrupt or cut frame on the bus), said as
+        // their counts grow; a stream transport says its own bytes.
+        let faults = [
+            link.crc_errors,
+            link.dropped_partials,
+            link.restarts,
+            link.malformed,
+        ];
+        if faults != self.postback_faults {
+            let [crc, gap, restart, malformed] =
+                std::array::from_fn(|i| faults[i].wrapping_sub(self.postback_faults[i]));
+            self.postback_faults = faults;
+            notes.push(format!(
+                "{name}: postbacks lost: {crc} with a bad CRC, {gap} cut short (a frame missing \
+                 or late), {restart} restarted by a new header, {malformed} postback-ID frames \
+                 not 8 bytes; postbacks so far: {}",
+                link.postbacks
+            ));
+        }
+        notes
     }
 
     fn take_frames(&mut self) -> Vec<Seen> {

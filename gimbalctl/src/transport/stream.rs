@@ -359,7 +359,7 @@ impl Transport for StreamTransport {
         ]
     }
 
-    fn take_notes(&mut self) -> Vec<String> {
+    fn take_notes(&mut self, _link: &LinkStats) -> Vec<String> {
         let s = self.port.stats().stream;
         let new = Self::garbage(&s).saturating_sub(Self::garbage(&self.noted));
         if new == 0 {
