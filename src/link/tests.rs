@@ -495,6 +495,28 @@ fn displaced_frames_are_requeued_and_refused_frames_go_back() {
 }
 
 #[test]
+fn a_refused_vehicle_frame_a_newer_value_replaced_is_counted_superseded() {
+    // A GPS frame taken, a newer position queued before the driver reports, then the
+    // driver refuses the frame: the newer value goes, and the refused one is counted as a
+    // displaced one would be.
+    let mut link: Link = Link::new(Config::default());
+    link.set_gps(Gps::new(1.0, 1.0).unwrap(), Instant::from_millis(0));
+    link.poll(Instant::from_millis(0));
+    let old = link.next_transmit().unwrap();
+    link.set_gps(Gps::new(2.0, 2.0).unwrap(), Instant::from_millis(200));
+    link.poll(Instant::from_millis(200));
+    let superseded = link.stats().superseded;
+    link.transmit_refused(old);
+    assert_eq!(link.stats().superseded, superseded + 1);
+    let f = link.next_transmit().unwrap();
+    assert_eq!(
+        VehicleFrame::decode(f.id, &f.data).unwrap(),
+        VehicleFrame::Gps(Gps::new(2.0, 2.0).unwrap())
+    );
+    assert_eq!(link.next_transmit(), None);
+}
+
+#[test]
 fn schedules_hold_across_the_tick_wrap() {
     let mut link: Link = Link::new(Config::default());
     let start = u32::MAX - 4999;

@@ -134,8 +134,12 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
         if frame.id == ids::ATTITUDE {
             self.attitude_refused();
         }
-        if let Requeued::NoRoom | Requeued::Foreign = self.requeue(frame) {
-            self.stats.queue_full = self.stats.queue_full.wrapping_add(1);
+        match self.requeue(frame) {
+            Requeued::Queued => {}
+            Requeued::Superseded => self.stats.superseded = self.stats.superseded.wrapping_add(1),
+            Requeued::NoRoom | Requeued::Foreign => {
+                self.stats.queue_full = self.stats.queue_full.wrapping_add(1)
+            }
         }
     }
 
