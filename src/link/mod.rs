@@ -160,7 +160,7 @@ impl Default for Config {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct LinkStats {
     /// Frames received (including ignored ones): `ignored_frames` plus the assembler's
-    /// frames.
+    /// frames, plus on a serial link its whole postbacks (a frame each).
     pub frames_received: u32,
     /// Frames the CAN driver accepted for transmission.
     pub frames_sent: u32,

@@ -1,9 +1,9 @@
 //! The transmit queue: control frames before vehicle frames before text.
 //!
 //! - Control frames wait in a FIFO of `Q` slots. A full FIFO is an error to the caller.
-//! - The zero-rate frame that ends a rate hold needs no slot: it is a flag, sent after the
-//!   control frames queued before it (the last rate repeats among them), so ending a hold
-//!   cannot fail for want of room.
+//! - The zero-rate frame that ends a rate hold needs no slot: it is a flag, sent once the
+//!   control FIFO is empty (after the last rate repeats, and after any command queued
+//!   behind it), so ending a hold cannot fail for want of room.
 //! - Vehicle frames are a pending flag per kind (attitude, GPS, altitude): the frame is
 //!   built from the latest value when it leaves, so a newer value always wins over one not
 //!   yet sent. Within the class they leave in CAN priority order (attitude `FF13`, GPS

@@ -49,7 +49,8 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     }
 
     /// Ends a rate hold with one zero-rate command. The zero-rate command needs no queue
-    /// slot, so it is never refused: it leaves after the control frames already queued.
+    /// slot, so it is never refused: it leaves once no control frame waits (after those
+    /// already queued, and any queued before it leaves).
     pub fn stop_rate(&mut self) {
         if let Steering::Rate(_) = self.steering {
             self.end_rate_hold();
