@@ -16,7 +16,8 @@
 //! **Status.** The postback says whether the gimbal tracks, not where the target is in the
 //! image. The gimbal's tracker turns the gimbal to keep its target at the image's centre,
 //! so while it tracks what the bridge started, the status gives the target there, with the
-//! size it was given: a point at (0.5, 0.5) with the commanded radius, or the commanded
+//! size it was given: a point at (0.5, 0.5) with the radius of the box sent (the
+//! commanded one, or half [`POINT_BOX_SIDE`] when that is larger), or the commanded
 //! rectangle centred on it (`target_data` `IN_STATUS`). Between the command and the
 //! gimbal's turn the target is still off centre: the box says where it is being brought.
 //! Tracking the bridge did not start (the gimbal's own controls) is `ACTIVE` with no mode
@@ -189,7 +190,8 @@ impl Tracking {
     }
 
     /// `MAV_CMD_SET_MESSAGE_INTERVAL` for the status: µs; −1 stops it, 0 is the default
-    /// (none: only on request). Below 1 ms or above a minute is out of range.
+    /// (every [`TRACKING_STATUS_MS`] while tracking what the bridge started, once `IDLE`
+    /// when that stops). Below 1 ms or above a minute is out of range.
     pub(crate) fn set_interval(&mut self, interval_us: f32, now: Instant) -> MavResult {
         self.interval_ms = match Interval::from_us(interval_us) {
             Some(Interval::Stop) => Some(0),
