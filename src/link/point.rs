@@ -11,7 +11,7 @@
 //! ([`Config::aim_deadband_mdeg`](super::Config::aim_deadband_mdeg)).
 //!
 //! - A target whose elevation is outside the gimbal's pitch range [-100°, 60°] raises
-//!   [`Event::TargetUnreachable`](super::Event::TargetUnreachable) once, and the gimbal
+//!   [`Event::TargetUnreachable`] once, and the gimbal
 //!   holds the last reachable aim: nothing is clamped.
 //! - Without fresh GPS and altitude no new aim is computed; without a fresh vehicle
 //!   heading where the gimbal is nose-referenced nothing is sent.

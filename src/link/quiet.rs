@@ -1,6 +1,6 @@
 //! The idle fast paths' intervals: how long after the last full poll nothing needs doing.
 //!
-//! Two intervals, each at most [`MAX_QUIET_MS`](super::MAX_QUIET_MS) (below 2^16), share
+//! Two intervals, each at most [`MAX_QUIET_MS`] (below 2^16), share
 //! one word, so that either check is the word and the last poll's time loaded as a pair
 //! and one compare:
 //! - the schedules' (low half): no deadline comes before it ends, so [`Link::poll`] may

@@ -197,7 +197,7 @@ pub(crate) struct State {
     autopilot_state_stream: StreamState,
     setpoint_stream: StreamState,
     /// When to look at the streams again (`None`: at the next poll). The asks are due at
-    /// whole seconds; looking every [`STREAM_CHECK_MS`] keeps the idle poll short.
+    /// whole seconds; looking every `STREAM_CHECK_MS` keeps the idle poll short.
     next_stream_check: Option<Instant>,
     pub(crate) vehicle: Vehicle,
     /// The rate hold last set has its yaw in the earth frame (for the status's `YAW_LOCK`).

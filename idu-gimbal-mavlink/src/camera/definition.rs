@@ -16,7 +16,7 @@
 //! the files' `<definition version>`).
 //!
 //! The files hold an empty `<model>`, which the file served fills with
-//! `CAMERA_INFORMATION`'s model name ([`file`]): QGroundControl 5.0 renames the camera to
+//! `CAMERA_INFORMATION`'s model name (`file`): QGroundControl 5.0 renames the camera to
 //! the definition's model once it has loaded it (`VehicleCameraControl.cc` `_loadConstants`,
 //! :835-848 at a11717e), and then no longer finds the name it listed the camera under when
 //! the camera goes away (`QGCCameraManager.cc`:217, 274), so a stale entry stayed in its

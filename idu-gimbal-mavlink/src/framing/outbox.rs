@@ -3,7 +3,7 @@
 //!
 //! A frame is written straight into the buffer: its header, its payload (put in place by
 //! the message's codec, [`Outbox::push_with`], or copied) with MAVLink 2's trailing zeros
-//! dropped, and its checksum, with the frame reader's table ([`x25`](super::x25)). `mavio`'s frame builder serialized the same bytes
+//! dropped, and its checksum, with the frame reader's table ([`x25`] module). `mavio`'s frame builder serialized the same bytes
 //! (`tests/framing.rs` holds the two equal) through a 255-byte payload and a ~300-byte frame
 //! copied twice, with a checksum looked up through `crc-any`: about 3,000 of the 5,100
 //! instructions a status poll took on the Cortex-M4.
