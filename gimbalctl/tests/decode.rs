@@ -332,8 +332,22 @@ fn stream_capture() {
                 .unwrap(),
             json!({"type": "command", "t": null, "id": null, "peripheral": "dual_light",
                    "command": "palette", "args": ["ice-blue"]}),
+            // Incomplete: the leading garbage (a run of bytes that held no frame) and the
+            // frame cut off.
             json!({"type": "stats", "lines": 0, "frames": 5, "messages": 3, "crc_errors": 1,
-                   "incomplete": 1, "malformed_lines": 1, "foreign_frames": 0}),
+                   "incomplete": 2, "malformed_lines": 1, "foreign_frames": 0}),
+        ]),
+    );
+    // A control frame without its first byte: all 23 bytes skipped, one frame lost.
+    let frame = tcp_frame(&unhex("0F07000000000000"));
+    let out = run_stdin(&["decode", "--stream", "--stats"], &frame[1..]);
+    assert_eq!(out.code, 0, "{out:?}");
+    assert_json_eq(
+        &json!(out.json()),
+        &json!([
+            json!({"type": "stats", "lines": 0, "frames": 0, "messages": 0,
+                       "crc_errors": 0, "incomplete": 1, "malformed_lines": 0,
+                       "foreign_frames": 0})
         ]),
     );
 }

@@ -23,6 +23,8 @@ pub struct StreamDecoder {
     /// parser rescans a bad frame's bytes), and whether a loss was reported already.
     bad_frame: bool,
     lost_reported: bool,
+    /// Runs of bytes that held no frame and no CRC error explains, each reported lost.
+    lost_runs: u64,
 }
 
 impl StreamDecoder {
@@ -80,6 +82,7 @@ impl StreamDecoder {
             if !self.bad_frame && !self.lost_reported {
                 sink.record(Record::Lost(at))?;
                 self.lost_reported = true;
+                self.lost_runs += 1;
             }
             self.mark_skipped = skipped;
         }
@@ -103,7 +106,9 @@ impl StreamDecoder {
             frames: u64::from(s.control_frames) + u64::from(s.postbacks) + u64::from(s.crc_errors),
             messages: self.messages,
             crc_errors: s.crc_errors.into(),
-            incomplete: s.truncated.into(),
+            // A frame lost or garbled on the line (a run of bytes that held none, the
+            // `Lost` records `plot` counts), and a partial frame at the end.
+            incomplete: u64::from(s.truncated) + self.lost_runs,
             malformed_lines: self.undecodable,
             foreign_frames: 0,
         }
