@@ -162,11 +162,11 @@ fn counted(n: u64, noun: &str) -> String {
     format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
 }
 
-/// How much `count` grew since `said`, which then holds it; `None` if it did not.
-fn growth(count: u32, said: &mut u32) -> Option<u32> {
-    let n = count.wrapping_sub(*said);
-    *said = count;
-    (n != 0).then_some(n)
+/// How much each of `counts` grew since `said`, which then holds them; `None` if none did.
+fn grown<const N: usize>(counts: [u32; N], said: &mut [u32; N]) -> Option<[u32; N]> {
+    let new: [u32; N] = std::array::from_fn(|i| counts[i].wrapping_sub(said[i]));
+    *said = counts;
+    new.iter().any(|&n| n != 0).then_some(new)
 }
 
 /// What signing let through and turned away, for stderr.
@@ -477,8 +477,11 @@ fn serve<S: Pump>(
     let mut was_up = false;
     let mut notes_at = start + NOTE_EVERY;
     // Said at most once a NOTE_EVERY, as the count grows.
-    let mut other_autopilots = 0;
-    let mut refused_vehicle_updates = 0;
+    let mut other_autopilots = [0u32];
+    let mut refused_vehicle_updates = [0u32];
+    // The reader's faults and the bridge's drops as last said.
+    let mut reader_faults = [0u32; 3];
+    let mut bridge_drops = [0u32; 3];
     let mut signing_turned = (0, 0, 0);
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
@@ -543,17 +546,45 @@ fn serve<S: Pump>(
                 eprintln!("gimbalctl mavlink: warning: {note}");
             }
             let stats = bridge.stats();
-            if let Some(n) = growth(stats.other_autopilots, &mut other_autopilots) {
+            if let Some([n]) = grown([stats.other_autopilots], &mut other_autopilots) {
                 eprintln!(
                     "gimbalctl mavlink: warning: {} of another autopilot ignored: following system {} (--system-id pins it)",
                     counted(n.into(), "heartbeat"),
                     bridge.system_id()
                 );
             }
-            if let Some(n) = growth(stats.refused_vehicle_updates, &mut refused_vehicle_updates) {
+            if let Some([n]) = grown(
+                [stats.refused_vehicle_updates],
+                &mut refused_vehicle_updates,
+            ) {
                 eprintln!(
                     "gimbalctl mavlink: warning: {} not passed to the gimbal: a quaternion that gives no finite attitude, or a latitude or longitude out of range",
                     counted(n.into(), "vehicle update")
+                );
+            }
+            // What came from the autopilot's link and held no frame for the bridge.
+            let r = stats.reader;
+            if let Some([skipped, bad, unsupported]) = grown(
+                [r.skipped_bytes, r.bad_frames, r.unsupported],
+                &mut reader_faults,
+            ) {
+                eprintln!(
+                    "gimbalctl mavlink: warning: from the autopilot's link: {} that held no frame (MAVLink 1 among them: the bridge speaks MAVLink 2), {} whose checksum failed, {} with flags the bridge cannot read",
+                    counted(skipped.into(), "byte"),
+                    counted(bad.into(), "frame"),
+                    counted(unsupported.into(), "frame"),
+                );
+            }
+            // What the bridge could not follow or send.
+            if let Some([refused, queue_full, outbox_full]) = grown(
+                [stats.refused_setpoints, stats.queue_full, stats.outbox_full],
+                &mut bridge_drops,
+            ) {
+                eprintln!(
+                    "gimbalctl mavlink: warning: {} not followed (out of the gimbal's range, rolled, or in a frame that needs the vehicle's heading), {} the gimbal's queue had no room for, {} not sent (the outbox full)",
+                    counted(refused.into(), "setpoint"),
+                    counted(queue_full.into(), "command"),
+                    counted(outbox_full.into(), "frame"),
                 );
             }
             // Frames signing turned away, said as their count grows.

@@ -25,7 +25,7 @@ use idu_gimbal_mavlink::mavio;
 use mavio::dialects::common::enums::{MavAutopilot, MavCmd, MavResult, MavType};
 use mavio::dialects::common::messages::{
     AutopilotStateForGimbalDevice, CommandAck, CommandLong, FileTransferProtocol,
-    GimbalDeviceInformation, GlobalPositionInt, Heartbeat,
+    GimbalDeviceInformation, GimbalDeviceSetAttitude, GlobalPositionInt, Heartbeat,
 };
 use mavio::dialects::common::Common;
 use mavio::protocol::{Frame, V2};
@@ -739,4 +739,76 @@ fn vehicle_updates_and_autopilots_not_followed_are_said() {
 /// `stderr`, summed.
 fn said_refused(stderr: &str) -> u64 {
     said(stderr, " not passed to the gimbal: ")
+}
+
+/// What held no frame for the bridge, and a setpoint it cannot follow, are said, never
+/// dropped without a word: a MAVLink 1 heartbeat (17 bytes the MAVLink 2 reader skips), a
+/// MAVLink 2 frame whose checksum is broken, and a setpoint pitched 80° up (the gimbal
+/// reaches 60°).
+#[test]
+fn what_the_bridge_cannot_read_or_follow_is_said() {
+    let bridge = Bridge::start();
+    let client = socket();
+    const AUTOPILOT: (u8, u8) = (1, 1);
+    let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
+    // MAVLink 1: STX 0xFE, length 9, sequence, system, component, message 0, the payload,
+    // a checksum (not checked: the reader never takes it for a frame).
+    let mut mavlink1 = vec![0xFE, 9, 0, AUTOPILOT.0, AUTOPILOT.1, 0];
+    mavlink1.extend([0u8; 9]);
+    mavlink1.extend([0x12, 0x34]);
+    let mut broken = frame(AUTOPILOT, 1, &quadrotor);
+    *broken.last_mut().expect("a frame") ^= 0xFF;
+    // Pitch 80° up: a rotation of 80° about y, [cos 40°, 0, sin 40°, 0].
+    let half = 40f32.to_radians();
+    let setpoint = GimbalDeviceSetAttitude {
+        target_system: AUTOPILOT.0,
+        target_component: GIMBAL,
+        q: [half.cos(), 0.0, half.sin(), 0.0],
+        angular_velocity_x: f32::NAN,
+        angular_velocity_y: f32::NAN,
+        angular_velocity_z: f32::NAN,
+        ..Default::default()
+    };
+    for d in [
+        frame(AUTOPILOT, 0, &quadrotor),
+        mavlink1,
+        broken,
+        frame(AUTOPILOT, 2, &setpoint),
+    ] {
+        client.send_to(&d, bridge.addr).expect("send");
+    }
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let counts = |stderr: &str| {
+        (
+            said_after(stderr, "from the autopilot's link", ": "),
+            said_after(stderr, " that held no frame (", ", "),
+            said(stderr, " not followed ("),
+        )
+    };
+    // Bytes: the MAVLink 1 frame's 17 and the broken frame's 21 (10 of header, 9 of
+    // payload, 2 of checksum), whose start byte is dropped and the rest searched for one.
+    let want = (17 + 21, 1, 1);
+    while counts(&bridge.stderr.text()) != want && Instant::now() < deadline {
+        thread::sleep(Duration::from_millis(5));
+    }
+    let stderr = bridge.stop();
+    assert_eq!(counts(&stderr), want, "{stderr}");
+    assert!(
+        stderr.contains(" whose checksum failed, 0 frames with flags the bridge cannot read\n"),
+        "{stderr}"
+    );
+}
+
+/// The counts that follow `before` up to `after` on the "warning:" lines holding `before`,
+/// summed: the second count of a line that gives several.
+fn said_after(stderr: &str, before: &str, after: &str) -> u64 {
+    stderr
+        .lines()
+        .filter(|l| l.contains("warning: "))
+        .filter_map(|l| {
+            let rest = l.split(before).nth(1)?;
+            let rest = rest.split(after).nth(1)?;
+            rest.split(' ').next()?.parse::<u64>().ok()
+        })
+        .sum()
 }
