@@ -207,17 +207,17 @@ fn indexes(frames: &[Frame<V2>]) -> Vec<i32> {
         .collect()
 }
 
+/// `MAV_CMD_IMAGE_START_CAPTURE` for one image with sequence number `seq`, from GCS at `ms`:
+/// the ACK and the frames after it.
+fn capture_one(b: &mut Firmware, seq: f32, ms: u32) -> (CommandAck, Vec<Frame<V2>>) {
+    ask4(b, 100, MavCmd::ImageStartCapture, [0.0, 0.0, 1.0, seq], ms)
+}
+
 #[test]
 fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
     let mut b = bridge();
     // ArduPilot's take_picture: interval 0, count 1, sequence image_index + 1.
-    let (ack, frames) = ask4(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.0, 1.0, 1.0],
-        10,
-    );
+    let (ack, frames) = capture_one(&mut b, 1.0, 10);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
     // The ACK, then the image, then the status.
@@ -226,25 +226,13 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
     assert_eq!(indexes(&frames), [0]);
     assert_eq!(of::<CameraCaptureStatus>(&frames)[0].image_count, 1);
     // The same command again (its ACK was lost): ACKed, no picture, no image message.
-    let (ack, frames) = ask4(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.0, 1.0, 1.0],
-        20,
-    );
+    let (ack, frames) = capture_one(&mut b, 1.0, 20);
     assert_eq!(ack.result, MavResult::Accepted);
     assert!(queued(&mut b.link).is_empty());
     assert!(indexes(&frames).is_empty());
     // The next sequence number is a new picture; MAVSDK's first is 0 ("none"): always new.
     for (ms, seq, index) in [(30, 2.0, 1), (40, 0.0, 2), (50, 0.0, 3)] {
-        let (_, frames) = ask4(
-            &mut b,
-            100,
-            MavCmd::ImageStartCapture,
-            [0.0, 0.0, 1.0, seq],
-            ms,
-        );
+        let (_, frames) = capture_one(&mut b, seq, ms);
         assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
         assert_eq!(indexes(&frames), [index]);
     }
@@ -254,23 +242,11 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
 fn a_capture_number_is_whole_and_its_repeat_the_same_clients_soon_after() {
     let mut b = bridge();
     // A sequence number that is no whole number: refused, no picture.
-    let (ack, _) = ask4(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.0, 1.0, 1.5],
-        10,
-    );
+    let (ack, _) = capture_one(&mut b, 1.5, 10);
     assert_eq!(ack.result, MavResult::Denied);
     assert!(queued(&mut b.link).is_empty());
     // GCS's number 1, then another ground station's number 1: two pictures.
-    let (ack, _) = ask4(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.0, 1.0, 1.0],
-        20,
-    );
+    let (ack, _) = capture_one(&mut b, 1.0, 20);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
     let other = (GCS.0, GCS.1 + 1);
@@ -281,13 +257,7 @@ fn a_capture_number_is_whole_and_its_repeat_the_same_clients_soon_after() {
     assert_eq!(acks[0].result, MavResult::Accepted);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
     // GCS's number 1 again a minute on (a restarted client numbering from 1): a picture.
-    let (ack, _) = ask4(
-        &mut b,
-        100,
-        MavCmd::ImageStartCapture,
-        [0.0, 0.0, 1.0, 1.0],
-        60_020,
-    );
+    let (ack, _) = capture_one(&mut b, 1.0, 60_020);
     assert_eq!(ack.result, MavResult::Accepted);
     assert_eq!(queued(&mut b.link), [GimbalCommand::Photo(Photo::Single)]);
 }
