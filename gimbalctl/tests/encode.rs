@@ -108,6 +108,12 @@ const GOLDEN: &[(&str, &[&str])] = &[
     // = 0xDCD8 (an i16 cannot hold 360.00; the protocol notes).
     ("attitude 1.5 -2 270", &["0000FF13#960038FFD8DC0000"]),
     ("attitude 0 0 0", &["0000FF13#0000000000000000"]),
+    // Any heading, reduced by whole turns as typed: 1e11 = 277,777,777 × 360 + 280, sent
+    // as -80 = -8000 = 0xE0C0 (its nearest f32, 99,999,997,952, would be 32°); 1e39, beyond
+    // f32, is a heading too: 1e39 mod 360 in f64 is 352 (Python: 1e39 % 360), sent as -8 =
+    // -800 = 0xFCE0.
+    ("attitude 0 0 1e11", &["0000FF13#00000000C0E00000"]),
+    ("attitude 0 0 1e39", &["0000FF13#00000000E0FC0000"]),
     // Text: 8 ASCII bytes a frame, last on 02008202 padded with 00; "HELLO, G" =
     // 48 45 4C 4C 4F 2C 20 47, "IMBAL" = 49 4D 42 41 4C.
     (
