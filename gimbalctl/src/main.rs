@@ -18,6 +18,7 @@ mod json;
 mod mavlink;
 mod panel;
 mod plot;
+mod plural;
 mod rtsp;
 mod send_monitor;
 mod sim;

@@ -58,6 +58,7 @@ use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::error::Failure;
+use crate::plural::counted;
 use crate::tcp::{address, resolve, DefaultPort};
 use crate::transport::{
     self, clock, Job, Mode, SerialSpec, Session, StreamPort, Target, Transport,
@@ -155,11 +156,6 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
             })
         }
     }
-}
-
-/// `n` `noun`s in words, the noun in the singular for one: "1 datagram", "2 datagrams".
-fn counted(n: u64, noun: &str) -> String {
-    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
 }
 
 /// How much each of `counts` grew since `said`, which then holds them; `None` if none did.

@@ -29,6 +29,7 @@ use idu_gimbal::wire::serial::{StreamItem, StreamParser};
 use idu_gimbal::Instant;
 
 use crate::error::Failure;
+use crate::plural::counted;
 use crate::spec;
 use crate::tcp::DefaultPort;
 
@@ -46,6 +47,31 @@ struct Client {
     parser: StreamParser,
     /// The last command logged for this client.
     last_logged: Option<[u8; 8]>,
+    /// Its parser's faults as last said ([`NoFrame`]).
+    no_frame: NoFrame,
+}
+
+/// What a client sent that was no frame, said as it grows: bytes skipped looking for a
+/// header, frames whose CRC failed, frames whose fixed bytes were wrong.
+#[derive(Default)]
+struct NoFrame([u32; 3]);
+
+impl NoFrame {
+    /// The line to say for `parser`'s faults new since the last call, if any.
+    fn note(&mut self, from: &str, parser: &StreamParser) -> Option<String> {
+        let s = parser.stats();
+        let now = [s.skipped_bytes, s.crc_errors, s.invalid_frames];
+        if now == self.0 {
+            return None;
+        }
+        let [skipped, crc, invalid] = std::array::from_fn(|i| now[i].wrapping_sub(self.0[i]));
+        self.0 = now;
+        Some(format!(
+            "gimbalctl sim: {from}: sent what is no frame: {} skipped, {} with a bad CRC, {invalid} with wrong fixed bytes",
+            counted(skipped.into(), "byte"),
+            counted(crc.into(), "frame"),
+        ))
+    }
 }
 
 /// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
@@ -107,6 +133,7 @@ pub fn run(
                         peer,
                         parser: StreamParser::new(),
                         last_logged: None,
+                        no_frame: NoFrame::default(),
                     });
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock => break,
@@ -145,6 +172,9 @@ pub fn run(
                                 }
                                 Err(e) => eprintln!("gimbalctl sim: {}: rejected: {e}", c.peer),
                             }
+                        }
+                        if let Some(line) = c.no_frame.note(&c.peer.to_string(), &c.parser) {
+                            eprintln!("{line}");
                         }
                     }
                     Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
@@ -206,6 +236,7 @@ pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
     let mut gimbal: SerialSimulator = SerialSimulator::new(SimConfig::default(), now());
     let mut last_logged: Option<Command> = None;
     let mut handled = 0u32;
+    let mut no_frame = NoFrame::default();
     // One control frame is 24 bytes: a read of 24 completes at most one, so each command
     // is seen (and logged) as it arrives.
     let mut buf = [0u8; 24];
@@ -220,6 +251,9 @@ pub fn run_pty(exit_after_ms: Option<u64>) -> Result<(), Failure> {
                 break;
             }
             gimbal.receive(&buf[..n], now());
+            if let Some(line) = no_frame.note(&path, gimbal.parser()) {
+                eprintln!("{line}");
+            }
             let stats = gimbal.sim().stats();
             let seen = stats.commands.wrapping_add(stats.rejected);
             if seen != handled {

@@ -77,7 +77,10 @@ fn read_postbacks(s: &mut TcpStream, n: usize) -> Vec<Vec<u8>> {
 
 #[test]
 fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
-    let (_sim, addr) = start_sim(&["--exit-after-ms", "8000", "--max-clients", "2"]);
+    let (_sim, addr, log) = start_sim_logged(
+        &["--exit-after-ms", "8000", "--max-clients", "2"],
+        Duration::from_secs(10),
+    );
     let mut a = connect(&addr);
     let mut b = connect(&addr);
     // Give the sim a tick to take both before the third one comes.
@@ -111,11 +114,39 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
         assert!(start.elapsed() < Duration::from_secs(4), "pitch: {seen:?}");
         seen.extend(read_postbacks(&mut b, 1).iter().map(|m| postback_pitch(m)));
     }
+    // What was no frame is said, with its counts, in a line or over a few (as the reads
+    // came): every byte before the good frame skipped (the garbage's 17 and the bad
+    // frame's 24, rescanned), the bad CRC, and the candidate the garbage's `EB 90` began,
+    // whose fixed bytes were wrong.
+    let deadline = Instant::now() + Duration::from_secs(2);
+    while no_frame(&log.text()) != (41, 1, 1) && Instant::now() < deadline {
+        thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(no_frame(&log.text()), (41, 1, 1), "{}", log.text());
     // A client leaving frees a slot.
     drop(a);
     thread::sleep(Duration::from_millis(100));
     let mut d = connect(&addr);
     read_postbacks(&mut d, 1);
+}
+
+/// The counts of the sim's "sent what is no frame: N bytes skipped, N frames with a bad
+/// CRC, N with wrong fixed bytes" lines, summed.
+fn no_frame(log: &str) -> (u64, u64, u64) {
+    let mut sum = (0, 0, 0);
+    for line in log.lines() {
+        let Some(rest) = line.split("sent what is no frame: ").nth(1) else {
+            continue;
+        };
+        let n: Vec<u64> = rest
+            .split(", ")
+            .filter_map(|part| part.split(' ').next()?.parse().ok())
+            .collect();
+        if let [skipped, crc, invalid] = n[..] {
+            sum = (sum.0 + skipped, sum.1 + crc, sum.2 + invalid);
+        }
+    }
+    sum
 }
 
 #[test]

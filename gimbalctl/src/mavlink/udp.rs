@@ -84,7 +84,10 @@ impl Unsent {
         due.into_iter()
             .map(|(to, (n, _, why))| {
                 self.said.insert(to, clock);
-                format!("{} to {to} not sent: {why}", super::counted(n, "datagram"))
+                format!(
+                    "{} to {to} not sent: {why}",
+                    crate::plural::counted(n, "datagram")
+                )
             })
             .collect()
     }
