@@ -353,6 +353,23 @@ fn stream_capture() {
 }
 
 #[test]
+fn what_could_not_be_decoded_is_said_without_the_stats_line_too() {
+    let input = b"garbage\n00000F01#0F07000000000000\n";
+    let out = run_stdin(&["decode"], input);
+    assert_eq!(out.code, 0, "{out:?}");
+    assert_eq!(out.json().len(), 1, "{out:?}");
+    assert_eq!(
+        out.stderr,
+        "gimbalctl decode: warning: 0 CRC errors, 0 incomplete messages, 1 malformed line \
+         (--stats counts them)\n"
+    );
+    // With the stats line, it is said there, and stderr stays empty.
+    let out = run_stdin(&["decode", "--stats"], input);
+    assert_eq!((out.code, out.stderr.as_str()), (0, ""), "{out:?}");
+    assert_eq!(out.json()[1]["malformed_lines"], 1);
+}
+
+#[test]
 fn files_and_stdin() {
     let dir = std::env::temp_dir().join(format!("gimbalctl-decode-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -129,7 +129,24 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
     let stdout = std::io::stdout();
     let mut json = JsonLines::new(stdout.lock());
     let stats = decode_into(input, stream, &mut json)?;
-    json.finish(with_stats.then_some(&stats))
+    json.finish(with_stats.then_some(&stats))?;
+    // Without the stats line, what could not be decoded is still said.
+    let faults = [
+        (stats.crc_errors, "CRC error"),
+        (stats.incomplete, "incomplete message"),
+        (stats.malformed_lines, "malformed line"),
+    ];
+    if !with_stats && faults.iter().any(|&(n, _)| n != 0) {
+        let said: Vec<String> = faults
+            .iter()
+            .map(|&(n, what)| crate::plural::counted(n, what))
+            .collect();
+        eprintln!(
+            "gimbalctl decode: warning: {} (--stats counts them)",
+            said.join(", ")
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]
