@@ -319,7 +319,29 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// nose-referenced and no fresh vehicle heading was set. A full queue refuses nothing:
     /// the aim is held and its commands go at the next poll with room (counted in
     /// [`LinkStats::queue_full`] meanwhile).
+    ///
+    /// An aim's heading and pitch go together, so it needs a queue of at least two control
+    /// slots: with `Q` below 2 a call does not compile.
+    ///
+    /// ```
+    /// use idu_gimbal::link::{Aim, Config, Link, Yaw};
+    /// use idu_gimbal::wire::control::{Heading, Pitch};
+    /// use idu_gimbal::Instant;
+    /// let mut link: Link<2, 8> = Link::new(Config::default());
+    /// let level = Aim { yaw: Yaw::Vehicle(Heading::NORTH), pitch: Pitch::LEVEL };
+    /// assert!(link.aim(level, Instant::from_millis(0)).is_ok());
+    /// ```
+    ///
+    /// ```compile_fail
+    /// use idu_gimbal::link::{Aim, Config, Link, Yaw};
+    /// use idu_gimbal::wire::control::{Heading, Pitch};
+    /// use idu_gimbal::Instant;
+    /// let mut link: Link<1, 8> = Link::new(Config::default());
+    /// let level = Aim { yaw: Yaw::Vehicle(Heading::NORTH), pitch: Pitch::LEVEL };
+    /// assert!(link.aim(level, Instant::from_millis(0)).is_ok());
+    /// ```
     pub fn aim(&mut self, aim: Aim, now: Instant) -> Result<(), AimError> {
+        const { assert!(Q >= 2, "an aim sends a heading and a pitch together: Q >= 2") };
         if aim.yaw.is_earth() && !self.north_referenced(now) && !self.is_fresh(ATTITUDE, now) {
             return Err(AimError::NoVehicleHeading);
         }

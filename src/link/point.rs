@@ -155,7 +155,11 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// [`ALT_MAX_M`](crate::geo::ALT_MAX_M)), or while the target is within
     /// [`MIN_RANGE_M`](crate::geo::MIN_RANGE_M) of the vehicle (no bearing): the aim held
     /// before stays, and until the first one [`Link::aim_state`] is `None`.
+    ///
+    /// Its aims' heading and pitch go together, as [`Link::aim`]'s: with `Q` below 2 a call
+    /// does not compile.
     pub fn point_at(&mut self, target: Position) {
+        const { assert!(Q >= 2, "an aim sends a heading and a pitch together: Q >= 2") };
         self.quiet = quiet::Quiet::NONE;
         // A zero-rate frame still waiting would arrive after the aim and could undo it.
         self.tx.cancel_zero_rate();
