@@ -11,8 +11,8 @@
 //! ([`Config::aim_deadband_mdeg`](super::Config::aim_deadband_mdeg)).
 //!
 //! - A target whose elevation is outside the gimbal's pitch range [-100°, 60°] raises
-//!   [`Event::TargetUnreachable`] once, and the gimbal
-//!   holds the last reachable aim: nothing is clamped.
+//!   [`Event::TargetUnreachable`] once, and the gimbal holds the last reachable aim:
+//!   nothing is clamped.
 //! - Without fresh GPS and altitude no new aim is computed; without a fresh vehicle
 //!   heading where the gimbal is nose-referenced nothing is sent.
 //! - Any other pointing command, a rate hold, an aim, or
