@@ -18,9 +18,9 @@
 //!   postback there), or answers `WouldBlock` when the FIFO is empty.
 //! - Errors, each counted by the driver under its [`ErrorKind`]: the controller's last
 //!   error code (read, and so cleared, once per `receive`: stuff, form, acknowledge, bit 0/1
-//!   and CRC errors as their kinds), a receive FIFO overrun (`Overrun`; the frame that
-//!   came with it, or why the adapter cannot carry it, is delivered by the next
-//!   `receive`), the controller going bus-off, and frames the adapter cannot carry (both
+//!   and CRC errors as their kinds), a receive FIFO overrun (`Overrun`, once a loss: the
+//!   adapter clears the controller's message-lost flag; the frame that came with it, or
+//!   why the adapter cannot carry it, is delivered by the next `receive`), the controller going bus-off, and frames the adapter cannot carry (both
 //!   `Other`). See [`Error`].
 //!
 //! The fdcan crate's register layout is chosen by a feature of its own: this crate turns on
@@ -291,6 +291,10 @@ trait Controller {
     fn status(&mut self) -> (bool, LastErrorCode);
     /// `receive0`: a frame from receive FIFO 0, its bytes written to `data`.
     fn receive0(&mut self, data: &mut [u8]) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible>;
+    /// Clears FIFO 0's message-lost interrupt flag (`IR.RF0L`), of which the overrun
+    /// `receive0` reports (`RXF0S.RF0L`) is a copy: set until software clears it, so that
+    /// uncleared it would report every later frame as an overrun.
+    fn clear_overrun(&mut self);
     /// `transmit_preserve`: `keep` is called with a pending frame the new one displaced.
     fn transmit(
         &mut self,
@@ -312,6 +316,10 @@ impl<I: fdcan::Instance> Controller for fdcan::FdCan<I, NormalOperationMode> {
 
     fn receive0(&mut self, data: &mut [u8]) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible> {
         fdcan::FdCan::receive0(self, data)
+    }
+
+    fn clear_overrun(&mut self) {
+        self.clear_interrupt(fdcan::interrupt::Interrupt::RxFifo0MsgLost);
     }
 
     fn transmit(
@@ -386,7 +394,9 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
             Ok(ReceiveOverrun::NoOverrun(info)) => rx_frame(&info, &data).map_err(nb::Error::Other),
             Ok(ReceiveOverrun::Overrun(info)) => {
                 // Frames before this one were lost: the loss is reported first, then this
-                // frame (or why it cannot be one).
+                // frame (or why it cannot be one). The flag cleared, the next loss is the
+                // next report.
+                self.can.clear_overrun();
                 self.held = Some(rx_frame(&info, &data));
                 Err(nb::Error::Other(Error::Overrun))
             }
@@ -492,6 +502,9 @@ mod tests {
         fifo: VecDeque<(RxFrameInfo, [u8; 64], bool)>,
         bus_off: bool,
         lec: Option<LastErrorCode>,
+        /// The message-lost flag: set by a loss, reported with every frame taken until
+        /// cleared, as the controller's `RF0L`.
+        lost: bool,
     }
 
     fn raw_id(id: fdcan::id::Id) -> u32 {
@@ -562,13 +575,19 @@ mod tests {
             data: &mut [u8],
         ) -> nb::Result<ReceiveOverrun<RxFrameInfo>, Infallible> {
             let popped = self.0.borrow_mut().fifo.pop_front();
-            let (info, bytes, overrun) = popped.ok_or(nb::Error::WouldBlock)?;
+            let (info, bytes, lost) = popped.ok_or(nb::Error::WouldBlock)?;
+            let mut chip = self.0.borrow_mut();
+            chip.lost |= lost;
             data[..info.len as usize].copy_from_slice(&bytes[..info.len as usize]);
-            Ok(if overrun {
+            Ok(if chip.lost {
                 ReceiveOverrun::Overrun(info)
             } else {
                 ReceiveOverrun::NoOverrun(info)
             })
+        }
+
+        fn clear_overrun(&mut self) {
+            self.0.borrow_mut().lost = false;
         }
 
         fn transmit(
@@ -731,6 +750,12 @@ mod tests {
         assert_eq!(can.receive(), Err(nb::Error::Other(Error::Overrun)));
         assert_eq!(can.receive(), Ok(g));
         assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        // The controller's flag stays set until cleared: the adapter clears it, so the
+        // frames after are frames, not the same loss again.
+        let h = data_frame(ids::POSTBACK, &[3; 8]);
+        chip.borrow_mut().push_rx(&h, false);
+        assert_eq!(can.receive(), Ok(h));
+        assert!(!chip.borrow().lost);
         // An overrun with a frame the adapter cannot carry: the loss, then that error.
         chip.borrow_mut().push_rx_fd(true);
         assert_eq!(can.receive(), Err(nb::Error::Other(Error::Overrun)));
