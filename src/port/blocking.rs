@@ -8,7 +8,11 @@ use embedded_can::nb::Can;
 ///
 /// A blocking `receive` waits for a frame, which would stall a [`CanPort`](super::CanPort)'s poll, so the
 /// adapter asks `rx_ready` first (typically: the controller's interrupt pin is asserted)
-/// and answers `WouldBlock` when it says no.
+/// and answers `WouldBlock` when it says no. `transmit` is the driver's own: one that
+/// really blocks until a transmit buffer is free stalls the poll while none is (a bus
+/// where no node acknowledges, a gimbal unpowered, keeps them full), so give the adapter
+/// a driver whose `transmit` returns when it cannot queue, with a classifier for that
+/// error.
 ///
 /// Some drivers do not block at all: they return an error instead. The `mcp2515` crate
 /// answers `Error::NoMessage` from `receive` when nothing is waiting and `Error::TxBusy`
@@ -65,7 +69,8 @@ impl<E, F: FnMut(&E) -> bool> Classify<E> for F {
 }
 
 /// The classifier of [`Blocking::new`]: every driver error is a fault. Right for drivers
-/// that really block (they report only faults).
+/// that report only faults (a `receive` that really blocks is guarded by `rx_ready`; a
+/// `transmit` that does is not, see [`Blocking`]).
 #[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AllFaults;
