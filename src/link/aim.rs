@@ -341,7 +341,12 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// assert!(link.aim(level, Instant::from_millis(0)).is_ok());
     /// ```
     pub fn aim(&mut self, aim: Aim, now: Instant) -> Result<(), AimError> {
-        const { assert!(Q >= 2, "an aim sends a heading and a pitch together: Q >= 2") };
+        const {
+            assert!(
+                Q >= 2,
+                "an aim sends a heading and a pitch together: Q >= 2"
+            )
+        };
         if aim.yaw.is_earth() && !self.north_referenced(now) && !self.is_fresh(ATTITUDE, now) {
             return Err(AimError::NoVehicleHeading);
         }

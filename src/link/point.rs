@@ -159,7 +159,12 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     /// Its aims' heading and pitch go together, as [`Link::aim`]'s: with `Q` below 2 a call
     /// does not compile.
     pub fn point_at(&mut self, target: Position) {
-        const { assert!(Q >= 2, "an aim sends a heading and a pitch together: Q >= 2") };
+        const {
+            assert!(
+                Q >= 2,
+                "an aim sends a heading and a pitch together: Q >= 2"
+            )
+        };
         self.quiet = quiet::Quiet::NONE;
         // A zero-rate frame still waiting would arrive after the aim and could undo it.
         self.tx.cancel_zero_rate();

@@ -8,8 +8,28 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     ///
     /// When nothing is due and nothing changed since the last poll, this returns after one
     /// comparison.
+    ///
+    /// A port's [`poll`](crate::Port::poll) runs this itself; called beside it as well, it
+    /// leaves the port what the port holds (frames waiting for the hardware, a serial frame
+    /// part-written), which the port's next poll sends.
     #[inline]
     pub fn poll(&mut self, now: Instant) {
+        if self.is_quiet(now) {
+            return;
+        }
+        // The port's hold ends only when the port finds nothing waiting; a full poll sets
+        // both intervals, so it is kept here.
+        let held = self.quiet.idle() == 0;
+        self.poll_all(now);
+        if held {
+            self.quiet.hold_idle();
+        }
+    }
+
+    /// [`Link::poll`] for a port, which releases its own hold after the transmit that
+    /// follows.
+    #[inline]
+    pub(crate) fn poll_for_port(&mut self, now: Instant) {
         if self.is_quiet(now) {
             return;
         }

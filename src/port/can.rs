@@ -207,7 +207,7 @@ impl<C: Can> CanPort<C> {
         now: Instant,
         first_error: Option<DriverError>,
     ) -> Result<(), DriverError> {
-        link.poll(now);
+        link.poll_for_port(now);
         if link.has_transmit() {
             // A tail call: the result is `transmit`'s.
             return self.transmit(link, first_error);

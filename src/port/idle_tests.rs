@@ -45,6 +45,8 @@ enum Op {
     /// The line takes nothing (`true`: CAN delivery stops, with one mailbox; the serial
     /// port stalls) or resumes: frames are refused and queued again, or wait part-written.
     Stall(bool),
+    /// The application polls the link itself, beside its port's polls.
+    LinkPoll,
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -62,6 +64,7 @@ fn op() -> impl Strategy<Value = Op> {
         2 => Just(Op::Postback),
         1 => (0u8..4).prop_map(Op::PostbackPart),
         2 => any::<bool>().prop_map(Op::Stall),
+        1 => Just(Op::LinkPoll),
     ]
 }
 
@@ -85,6 +88,10 @@ macro_rules! apply_common {
     ($gimbal:expr, $op:expr, $now:expr) => {
         match *$op {
             Op::Wait(_) => true,
+            Op::LinkPoll => {
+                $gimbal.poll($now);
+                true
+            }
             Op::Send => {
                 let _ = $gimbal.send(pitch());
                 true
@@ -372,6 +379,18 @@ fn can_idle_check_holds_between_deadlines_and_ends_while_a_frame_waits() {
     side.port.poll(&mut side.link, at(4)).unwrap();
     assert!(side.link.has_transmit());
     assert!(!side.link.is_idle(at(5)));
+    // The application polls the link itself at its next deadline (a full poll), then
+    // delivery resumes: the port's next poll still sends what waits.
+    let _ = side.observe();
+    side.link.poll(at(60_004));
+    assert!(
+        !side.link.is_idle(at(60_004)),
+        "the full poll keeps the hold"
+    );
+    bus.set_auto_deliver(true);
+    side.port.poll(&mut side.link, at(60_004)).unwrap();
+    assert!(!side.link.has_transmit());
+    assert!(!side.observe().0.is_empty());
 }
 
 /// A frame part-written when the port stalls waits outside the link's queue: the idle
@@ -399,9 +418,16 @@ fn serial_a_part_written_frame_ends_the_idle_check() {
     side.port.poll(&mut side.link, at(2)).unwrap();
     assert!(side.port.stream().has_transmit(&side.link));
     assert!(!side.link.is_idle(at(3)));
+    // The application polls the link itself at its next deadline (a full poll): the
+    // part-written frame still ends the idle check.
+    side.link.poll(at(60_002));
+    assert!(
+        !side.link.is_idle(at(60_002)),
+        "the full poll keeps the hold"
+    );
     pipe.set_faults(slow);
-    side.port.poll(&mut side.link, at(3)).unwrap();
+    side.port.poll(&mut side.link, at(60_002)).unwrap();
     assert_eq!(side.observe().0.len(), 24);
-    side.port.poll(&mut side.link, at(4)).unwrap();
-    assert!(side.link.is_idle(at(5)));
+    side.port.poll(&mut side.link, at(60_003)).unwrap();
+    assert!(side.link.is_idle(at(60_004)));
 }

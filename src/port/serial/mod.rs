@@ -163,7 +163,7 @@ impl<U: Uart> SerialPort<U> {
         now: Instant,
         first_error: &mut Option<UartError<U>>,
     ) {
-        link.poll(now);
+        link.poll_for_port(now);
         if self.stream.has_transmit(link) {
             if let Some(e) = self.transmit(link) {
                 first_error.get_or_insert(e);
