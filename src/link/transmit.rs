@@ -14,7 +14,11 @@ impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     }
 
     /// The CAN driver accepted the frame last taken. `displaced` is a frame it handed back
-    /// (a pending lower-priority frame it took out of a mailbox): it is re-queued.
+    /// (a pending lower-priority frame it took out of a mailbox): it is re-queued, at the
+    /// front of its class. A text frame finds no room when texts queued since fill the
+    /// text slots: it is counted in [`LinkStats::queue_full`] and lost, and the gimbal may
+    /// join the rest of that text to the next. Where texts are queued back to back, keep
+    /// `T` above the longest text by the controller's mailboxes (3 on bxCAN).
     #[inline]
     pub fn transmit_done(&mut self, displaced: Option<Frame>) {
         self.frame_done(displaced)
