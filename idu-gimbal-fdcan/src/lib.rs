@@ -384,6 +384,8 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
         let went_off = bus_off && !self.bus_off;
         self.bus_off = bus_off;
         if went_off {
+            // The error code read with it (likely what took the controller off) comes next.
+            self.held = lec_error(lec).map(Err);
             return Err(nb::Error::Other(Error::BusOff));
         }
         if let Some(e) = lec_error(lec) {
@@ -769,6 +771,20 @@ mod tests {
         assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
         chip.borrow_mut().bus_off = true;
         assert_eq!(can.receive(), Err(nb::Error::Other(Error::BusOff)));
+        // The error code read with a bus-off is not lost: it comes next.
+        {
+            let mut c = chip.borrow_mut();
+            c.bus_off = false;
+        }
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
+        {
+            let mut c = chip.borrow_mut();
+            c.bus_off = true;
+            c.lec = Some(LastErrorCode::Bit1Error);
+        }
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::BusOff)));
+        assert_eq!(can.receive(), Err(nb::Error::Other(Error::Bit1)));
+        assert_eq!(can.receive(), Err(nb::Error::WouldBlock));
     }
 
     #[test]
