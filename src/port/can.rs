@@ -340,8 +340,10 @@ impl<C: Can> Port for CanPort<C> {
     /// Receives pending frames (at most [`Config::max_rx_per_poll`](crate::Config)), runs
     /// the link's schedules, and transmits queued frames until the CAN driver is busy.
     ///
-    /// A CAN driver error is counted and does not stop the work: the poll goes on, and the
-    /// first error seen is returned at the end.
+    /// A CAN driver error is counted and the poll goes on: after a receive error it
+    /// receives on and runs the schedules; a transmit error ends this poll's transmitting
+    /// (the frame is queued again for the next poll). The first error seen is returned at
+    /// the end.
     #[inline]
     fn poll<const Q: usize, const T: usize>(
         &mut self,

@@ -73,8 +73,9 @@ pub trait Port {
 
     /// Receives what is waiting (bounded by [`Config::max_rx_per_poll`](crate::Config)),
     /// runs the link's schedules, and transmits what the link queued until the hardware
-    /// takes no more. An error is counted in the port's stats and does not stop the work;
-    /// the first one seen is returned at the end.
+    /// takes no more. An error is counted in the port's stats and the poll goes on, but a
+    /// transmit error ends this poll's transmitting (what waits goes at the next poll); the
+    /// first error seen is returned at the end.
     fn poll<const Q: usize, const T: usize>(
         &mut self,
         link: &mut Link<Q, T, Self::Medium>,

@@ -284,8 +284,9 @@ impl<U: Uart> Port for SerialPort<U> {
     /// Reads what is waiting (at most [`Config::max_rx_per_poll`](crate::Config) reads of
     /// 32 bytes), runs the link's schedules, and writes until the UART takes no more.
     ///
-    /// A UART error is counted and does not stop the work: the poll goes on, and the first
-    /// error seen is returned at the end.
+    /// A UART error is counted and the poll goes on: after a read error it runs the
+    /// schedules; a write error ends this poll's writing (a frame part-written is finished
+    /// at the next poll). The first error seen is returned at the end.
     #[inline]
     fn poll<const Q: usize, const T: usize>(
         &mut self,
