@@ -54,8 +54,8 @@ pub struct SerialFaults {
     /// (`embedded-hal-nb`: a word is refused with `WouldBlock` once that many were taken
     /// since the port last reported `WouldBlock`).
     pub max_write: u8,
-    /// Probability, per write call (and per `write_ready`), that the port takes nothing
-    /// now: `write_ready` is false, an `embedded-hal-nb` write is `WouldBlock`.
+    /// Probability, per `write_ready` call and per `embedded-hal-nb` word written, that the
+    /// port takes nothing now: `write_ready` is false, the word is `WouldBlock`.
     pub write_stall: f32,
     /// Probability, per read call, that it fails with a noise error (nothing consumed).
     pub rx_error: f32,
@@ -304,19 +304,11 @@ impl<const N: usize> Pipe<N> {
     }
 
     /// Writes up to `max` of `bytes` (after the slow-writer limit) onto the wire.
-    fn write(
-        &self,
-        line: usize,
-        bytes: &[u8],
-        stall_checked: bool,
-    ) -> Result<usize, MockSerialError> {
+    fn write(&self, line: usize, bytes: &[u8]) -> Result<usize, MockSerialError> {
         self.on_line(line, |rng, faults, l| {
             if roll(rng, faults.tx_error) {
                 bump(&mut l.stats.errors, 1);
                 return Err(MockSerialError::Noise);
-            }
-            if !stall_checked && roll(rng, faults.write_stall) {
-                return Ok(0);
             }
             let n = limit(rng, faults.max_write, bytes.len());
             for &b in bytes.iter().take(n) {
@@ -360,7 +352,7 @@ impl<const N: usize> Pipe<N> {
         if refused {
             return Err(nb::Error::WouldBlock);
         }
-        match self.write(line, &[b], true) {
+        match self.write(line, &[b]) {
             Ok(1) => Ok(()),
             Ok(_) => Err(nb::Error::WouldBlock),
             Err(e) => Err(nb::Error::Other(e)),
@@ -419,10 +411,11 @@ impl<const N: usize> embedded_io::ReadReady for Rx<'_, N> {
 }
 
 impl<const N: usize> embedded_io::Write for Tx<'_, N> {
-    /// Never blocks: `Ok(0)` when the slow writer takes nothing now (ask `write_ready`
-    /// first, as [`Io`](crate::port::Io) does, for the `embedded-io` contract).
+    /// Never blocks: takes what the slow writer takes, at least one byte of a non-empty
+    /// `buf` (the stall is `write_ready`'s: ask it first, as [`Io`](crate::port::Io) does,
+    /// for the `embedded-io` contract).
     fn write(&mut self, buf: &[u8]) -> Result<usize, MockSerialError> {
-        self.pipe.write(self.line, buf, true)
+        self.pipe.write(self.line, buf)
     }
 
     fn flush(&mut self) -> Result<(), MockSerialError> {
