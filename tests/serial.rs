@@ -718,3 +718,23 @@ fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
     assert_eq!(link.stats().frames_sent, 1);
     assert!(!link.has_transmit());
 }
+
+#[test]
+fn the_serial_simulator_takes_only_what_it_gave_from_an_overlong_write_report() {
+    // Three postbacks, each written before the next: the third wraps in the 64-byte ring
+    // (bytes 54 to 63, then 0 to 16), so the simulator gives 10 bytes, then 17. A port that
+    // reports all 27 written after being given 10 wrote 10: the other 17 still wait.
+    let mut sim: SerialSimulator =
+        SerialSimulator::new(SimConfig::default(), Instant::from_millis(0));
+    for ms in [500, 1000] {
+        assert!(sim.poll(Instant::from_millis(ms)).is_some());
+        assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN);
+        sim.transmit_written(MESSAGE_LEN);
+    }
+    assert_eq!(sim.overlong_writes(), 0);
+    assert!(sim.poll(Instant::from_millis(1500)).is_some());
+    assert_eq!(sim.transmit_bytes().len(), 10);
+    sim.transmit_written(MESSAGE_LEN);
+    assert_eq!(sim.overlong_writes(), 1);
+    assert_eq!(sim.transmit_bytes().len(), 17);
+}

@@ -42,6 +42,7 @@ pub struct SerialSimulator<const OUT: usize = 64> {
     parser: StreamParser,
     out: Deque<u8, OUT>,
     out_overflows: u32,
+    overlong_writes: u32,
 }
 
 impl<const OUT: usize> SerialSimulator<OUT> {
@@ -58,6 +59,7 @@ impl<const OUT: usize> SerialSimulator<OUT> {
             parser: StreamParser::new(),
             out: Deque::new(),
             out_overflows: 0,
+            overlong_writes: 0,
         }
     }
 
@@ -95,9 +97,15 @@ impl<const OUT: usize> SerialSimulator<OUT> {
         self.out.as_slices().0
     }
 
-    /// `n` bytes of [`SerialSimulator::transmit_bytes`] were written.
+    /// `n` bytes of [`SerialSimulator::transmit_bytes`] were written. More than it gave
+    /// (a port over-reporting) takes only what it gave, and is counted in
+    /// [`SerialSimulator::overlong_writes`]: bytes it did not give were not written.
     pub fn transmit_written(&mut self, n: usize) {
-        for _ in 0..n {
+        let given = self.transmit_bytes().len();
+        if n > given {
+            self.overlong_writes = self.overlong_writes.wrapping_add(1);
+        }
+        for _ in 0..n.min(given) {
             if self.out.pop_front().is_none() {
                 break;
             }
@@ -137,6 +145,11 @@ impl<const OUT: usize> SerialSimulator<OUT> {
     /// Postbacks dropped for lack of room in the transmit buffer.
     pub fn out_overflows(&self) -> u32 {
         self.out_overflows
+    }
+
+    /// Writes reported as more bytes than [`SerialSimulator::transmit_bytes`] gave.
+    pub fn overlong_writes(&self) -> u32 {
+        self.overlong_writes
     }
 
     /// The simulated gimbal.
