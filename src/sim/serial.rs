@@ -142,7 +142,8 @@ impl<const OUT: usize> SerialSimulator<OUT> {
         Ok(status)
     }
 
-    /// Postbacks dropped for lack of room in the transmit buffer.
+    /// Postbacks dropped for lack of room in the transmit buffer (the model made them:
+    /// they are among [`SimStats::postbacks`](super::SimStats::postbacks) too).
     pub fn out_overflows(&self) -> u32 {
         self.out_overflows
     }
