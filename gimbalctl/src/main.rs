@@ -12,6 +12,16 @@ use clap::builder::TypedValueParser as _;
 use clap::{Parser, Subcommand};
 use idu_gimbal::wire::serial;
 
+/// A stderr line that never panics: `std`'s `eprintln!` panics when stderr is gone (a pipe
+/// whose reader exited, as in `gimbalctl sim 2>&1 | head`); a line nobody can read is
+/// dropped and the run goes on. Defined before the modules, it is the one they use.
+macro_rules! eprintln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod decode;
 mod error;
 mod json;

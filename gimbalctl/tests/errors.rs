@@ -336,3 +336,31 @@ fn rtsp_addresses() {
         usage_error_naming(args, words);
     }
 }
+
+/// A stderr nobody reads any more (a pipe whose reader exited) loses the lines, not the
+/// run: `decode` reads its input to the end, then warns of a malformed line on stderr,
+/// whose reader is gone by then; it exits 0 with its output, as with stderr open.
+#[test]
+fn a_closed_stderr_is_no_panic() {
+    use std::io::{Read as _, Write as _};
+    let mut child = command(&["decode"])
+        .stdin(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn gimbalctl");
+    drop(child.stderr.take());
+    let mut stdin = child.stdin.take().expect("stdin");
+    stdin
+        .write_all(b"garbage\n00000F01#0F07000000000000\n")
+        .expect("write stdin");
+    drop(stdin);
+    let mut stdout = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut stdout)
+        .expect("read stdout");
+    let status = child.wait().expect("wait");
+    assert_eq!(status.code(), Some(0), "{stdout}");
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+}
