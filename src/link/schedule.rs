@@ -11,17 +11,19 @@ impl<const Q: usize, const T: usize, M: Medium> Link<Q, T, M> {
     ///
     /// A port's [`poll`](crate::Port::poll) runs this itself; called beside it as well, it
     /// leaves the port what the port holds (frames waiting for the hardware, a serial frame
-    /// part-written), which the port's next poll sends.
+    /// part-written) and what this poll queued, which the port's next poll sends.
     #[inline]
     pub fn poll(&mut self, now: Instant) {
         if self.is_quiet(now) {
             return;
         }
         // The port's hold ends only when the port finds nothing waiting; a full poll sets
-        // both intervals, so it is kept here.
+        // both intervals, so it is kept here, and taken for what the poll itself queued
+        // (a vehicle push, a rate repeat, the dead-man's zero rate), which no port poll
+        // follows here to send.
         let held = self.quiet.idle() == 0;
         self.poll_all(now);
-        if held {
+        if held || !self.tx.is_empty() {
             self.quiet.hold_idle();
         }
     }
