@@ -22,13 +22,13 @@ macro_rules! eprintln {
     }};
 }
 
+mod counts;
 mod decode;
 mod error;
 mod json;
 mod mavlink;
 mod panel;
 mod plot;
-mod plural;
 mod rtsp;
 mod send_monitor;
 mod sim;

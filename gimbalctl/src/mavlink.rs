@@ -57,8 +57,8 @@ use idu_gimbal_mavlink::framing::FrameReader;
 use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
+use crate::counts::{counted, grown};
 use crate::error::Failure;
-use crate::plural::counted;
 use crate::tcp::{address, resolve, DefaultPort};
 use crate::transport::{
     self, clock, Job, Mode, SerialSpec, Session, StreamPort, Target, Transport,
@@ -156,13 +156,6 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
             })
         }
     }
-}
-
-/// How much each of `counts` grew since `said`, which then holds them; `None` if none did.
-fn grown<const N: usize>(counts: [u32; N], said: &mut [u32; N]) -> Option<[u32; N]> {
-    let new: [u32; N] = std::array::from_fn(|i| counts[i].wrapping_sub(said[i]));
-    *said = counts;
-    new.iter().any(|&n| n != 0).then_some(new)
 }
 
 /// What signing let through and turned away, for stderr.

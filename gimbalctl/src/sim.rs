@@ -28,8 +28,8 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::serial::{StreamItem, StreamParser};
 use idu_gimbal::Instant;
 
+use crate::counts::{counted, grown};
 use crate::error::Failure;
-use crate::plural::counted;
 use crate::spec;
 use crate::tcp::DefaultPort;
 
@@ -60,12 +60,10 @@ impl NoFrame {
     /// The line to say for `parser`'s faults new since the last call, if any.
     fn note(&mut self, from: &str, parser: &StreamParser) -> Option<String> {
         let s = parser.stats();
-        let now = [s.skipped_bytes, s.crc_errors, s.invalid_frames];
-        if now == self.0 {
-            return None;
-        }
-        let [skipped, crc, invalid] = std::array::from_fn(|i| now[i].wrapping_sub(self.0[i]));
-        self.0 = now;
+        let [skipped, crc, invalid] = grown(
+            [s.skipped_bytes, s.crc_errors, s.invalid_frames],
+            &mut self.0,
+        )?;
         Some(format!(
             "gimbalctl sim: {from}: sent what is no frame: {} skipped, {} with a bad CRC, {invalid} with wrong fixed bytes",
             counted(skipped.into(), "byte"),

@@ -139,7 +139,7 @@ pub fn run(file: Option<&str>, stream: bool, with_stats: bool) -> Result<(), Fai
     if !with_stats && faults.iter().any(|&(n, _)| n != 0) {
         let said: Vec<String> = faults
             .iter()
-            .map(|&(n, what)| crate::plural::counted(n, what))
+            .map(|&(n, what)| crate::counts::counted(n, what))
             .collect();
         eprintln!(
             "gimbalctl decode: warning: {} (--stats counts them)",

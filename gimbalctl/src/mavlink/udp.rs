@@ -86,7 +86,7 @@ impl Unsent {
                 self.said.insert(to, clock);
                 format!(
                     "{} to {to} not sent: {why}",
-                    crate::plural::counted(n, "datagram")
+                    crate::counts::counted(n, "datagram")
                 )
             })
             .collect()

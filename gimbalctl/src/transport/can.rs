@@ -18,6 +18,7 @@ use idu_gimbal::port::{CanPort, Port};
 use idu_gimbal::Instant;
 
 use super::{Mode, Transport};
+use crate::counts::grown;
 use crate::error::Failure;
 
 /// What a CAN driver's error means to the user.
@@ -278,10 +279,7 @@ where
             link.restarts,
             link.malformed,
         ];
-        if faults != self.postback_faults {
-            let [crc, gap, restart, malformed] =
-                std::array::from_fn(|i| faults[i].wrapping_sub(self.postback_faults[i]));
-            self.postback_faults = faults;
+        if let Some([crc, gap, restart, malformed]) = grown(faults, &mut self.postback_faults) {
             notes.push(format!(
                 "{name}: postbacks lost: {crc} with a bad CRC, {gap} cut short (a frame missing \
                  or late), {restart} restarted by a new header, {malformed} postback-ID frames \
