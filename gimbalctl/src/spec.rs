@@ -487,13 +487,12 @@ impl Spec {
                 f32_arg(roll, |ro| Attitude::new(0.0, ro, 0.0)).map_err(r)?;
                 // Any heading: whole turns taken off as typed (in f64), before the f32 the
                 // library takes would round a large one to another angle. Not finite: the
-                // library's error.
+                // library's error, below (the value as typed: NaN or infinite alike).
                 let heading = if heading.is_finite() {
                     heading.rem_euclid(360.0)
                 } else {
                     heading
                 };
-                f32_arg(heading, |h| Attitude::new(0.0, 0.0, h)).map_err(r)?;
                 let att = Attitude::new(pitch as f32, roll as f32, heading as f32).map_err(r)?;
                 Ok(Message::Vehicle(att.into()))
             }
