@@ -69,6 +69,14 @@ class Inbox:
         self.pump()
         return len(self.messages)
 
+    def after(self, msg, otherwise):
+        """The mark just past `msg`, a message received here: what its sender sent after
+        it (one socket keeps the order). `otherwise` when `msg` is None."""
+        for i, (_, m) in enumerate(self.messages):
+            if m is msg:
+                return i + 1
+        return otherwise
+
     def wait(self, pred, timeout, since):
         """The first message since the mark `since` for which `pred` holds, waiting up to
         `timeout` seconds; None after that."""

@@ -806,8 +806,10 @@ def tracking(qgc, info):
         cases.append(("point", mav.MAV_CMD_CAMERA_TRACK_POINT, (0.60, 0.45, CLICK_RADIUS), mav.CAMERA_TRACKING_MODE_POINT))
     for label, cmd, params, mode in cases:
         ack, since = qgc.command(cmd, *params)
+        # From the ACK on: a status of the case before may come between the command and it.
         st = qgc.wait(lambda m: m.get_type() == "CAMERA_TRACKING_IMAGE_STATUS" and m.get_srcComponent() == CAMERA
-                      and m.tracking_status & mav.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, TRACK_STATUS_WAIT, since)
+                      and m.tracking_status & mav.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE, TRACK_STATUS_WAIT,
+                      qgc.after(ack, since))
         if st is not None and st.tracking_mode == mav.CAMERA_TRACKING_MODE_RECTANGLE:
             box = (st.rec_top_x, st.rec_top_y, st.rec_bottom_x, st.rec_bottom_y)
             drawn = fin(*box) and box[2] > box[0] and box[3] > box[1]
@@ -822,7 +824,9 @@ def tracking(qgc, info):
     a1, _ = qgc.command(mav.MAV_CMD_CAMERA_STOP_TRACKING)
     a2, since = qgc.command(mav.MAV_CMD_SET_MESSAGE_INTERVAL, mav.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS, -1)
     qgc.idle(1.0)  # two of the status's 500 ms intervals
-    active = [m for m in qgc.camera(since, "CAMERA_TRACKING_IMAGE_STATUS")
+    # After the ACK of −1: the status owed at the stop (ACTIVE, from the last postback while
+    # tracking) goes before it, and may be read only after the command was sent.
+    active = [m for m in qgc.camera(qgc.after(a2, since), "CAMERA_TRACKING_IMAGE_STATUS")
               if m.tracking_status & mav.CAMERA_TRACKING_STATUS_FLAGS_ACTIVE]
     check(a1 is not None and a1.result == mav.MAV_RESULT_ACCEPTED and a2 is not None and a2.result == mav.MAV_RESULT_ACCEPTED
           and not active, f"stopTracking: STOP_TRACKING {result_name(a1)}, SET_MESSAGE_INTERVAL -1 {result_name(a2)}, "
