@@ -511,17 +511,24 @@ def definition(mpx, ap, family, model, since):
     opens = [p for p in sent if p[3] == 4]
     path = opens[0][12:12 + opens[0][4]] if opens else None
     check(path == b"/camera.xml", f"MAVProxy opens /camera.xml (mftp://camera.xml as a path): {path!r}")
-    image = bytearray()
-    terminate_acked = False
-    for _, msg in ap.bridge(since, "FILE_TRANSFER_PROTOCOL"):
-        p = bytes(msg.payload)
-        opcode, size, req, offset = p[3], p[4], p[5], int.from_bytes(p[8:12], "little")
-        if opcode == 128 and req in (5, 15) and size:  # ACK of ReadFile / BurstReadFile
-            if len(image) < offset + size:
-                image.extend(b"\0" * (offset + size - len(image)))
-            image[offset:offset + size] = p[12:12 + size]
-        if opcode == 128 and req == 1:
-            terminate_acked = True
+    # MAVProxy prints "loaded" once it has read the file, and may end the session after:
+    # its ACK is waited for.
+    end = time.monotonic() + REPLY_TIMEOUT
+    while True:
+        image = bytearray()
+        terminate_acked = False
+        for _, msg in ap.bridge(since, "FILE_TRANSFER_PROTOCOL"):
+            p = bytes(msg.payload)
+            opcode, size, req, offset = p[3], p[4], p[5], int.from_bytes(p[8:12], "little")
+            if opcode == 128 and req in (5, 15) and size:  # ACK of ReadFile / BurstReadFile
+                if len(image) < offset + size:
+                    image.extend(b"\0" * (offset + size - len(image)))
+                image[offset:offset + size] = p[12:12 + size]
+            if opcode == 128 and req == 1:
+                terminate_acked = True
+        if terminate_acked or time.monotonic() >= end:
+            break
+        time.sleep(0.02)
     check(bytes(image) == data, f"the bytes served are {os.path.basename(DEFINITIONS)}'s file ({len(image)} of {len(data)} bytes)")
     check(terminate_acked, "MAVProxy's TerminateSession is ACKed")
     return params
@@ -597,8 +604,9 @@ def capture(mpx, ap):
     check(st is not None, "CAMERA_CAPTURE_STATUS image_count 1")
 
     # Three at 0.5 s. The bridge stamps each image with its own clock (time_boot_ms) in the
-    # tick it takes it (1 ms loop): 500 ms apart, ±50 ms for a late tick (a starved process
-    # on a machine shared with builds wakes tens of ms late).
+    # tick it takes it (1 ms loop), each at its deadline: 500 ms apart, ±150 ms for a late
+    # tick (a process starved on a loaded machine wakes tens of ms late, once 60), which
+    # still tells 0.5 s from none or 1 s.
     since, msince = ap.mark(), mpx.mark()
     mpx.send("camera photo 0.5 3")
     ack, sent = ap.ack(since, mav.MAV_CMD_IMAGE_START_CAPTURE)
@@ -612,7 +620,7 @@ def capture(mpx, ap):
     check(image_lines(mpx, msince) == [1, 2, 3], f"MAVProxy prints images 1, 2, 3: {image_lines(mpx, msince)}")
     stamps = [m.time_boot_ms for _, m in ap.bridge(since, "CAMERA_IMAGE_CAPTURED")]
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    check(len(stamps) == 3 and all(abs(g - 500) <= 50 for g in gaps), f"three images 500 ms apart: gaps {gaps} ms")
+    check(len(stamps) == 3 and all(abs(g - 500) <= 150 for g in gaps), f"three images 500 ms apart: gaps {gaps} ms")
 
     # Until stopped, then none.
     since, msince = ap.mark(), mpx.mark()
@@ -664,10 +672,11 @@ def record(mpx, ap):
             st = ap.wait_bridge(since, "CAMERA_CAPTURE_STATUS")
             got = [t for t, m in ap.bridge(since, "CAMERA_CAPTURE_STATUS") if m is st]
             # The time recorded is the bridge's, from the command's tick to the status's;
-            # here, from the ACK's arrival to the status's: the same to the loopback's
-            # delays and the bridge's ticks, 100 ms on a loaded machine.
+            # here, from the ACK's arrival to the status's: the same to the difference of two
+            # arrival delays (the bridge's tick, this process's receiving thread), each up
+            # to 100 ms on a loaded machine.
             elapsed_ms = (got[0] - acked) * 1000 if got else None
-            check(st is not None and st.video_status == 1 and abs(st.recording_time_ms - elapsed_ms) <= 100,
+            check(st is not None and st.video_status == 1 and abs(st.recording_time_ms - elapsed_ms) <= 200,
                   f"recording_time_ms is the time since the start ({elapsed_ms and round(elapsed_ms)} ms): "
                   f"{st and st.recording_time_ms}")
 
@@ -769,10 +778,11 @@ def tracking(mpx, ap, bridge, family):
              f"{mav.MAVLINK_MSG_ID_CAMERA_TRACKING_IMAGE_STATUS} 200000 0 0 0 0 0")
     ack, _ = ap.ack(since, mav.MAV_CMD_SET_MESSAGE_INTERVAL)
     check(ack is not None and ack.result == mav.MAV_RESULT_ACCEPTED, f"SET_MESSAGE_INTERVAL tracking status 200 ms: ACK {result_name(ack and ack.result)}")
-    # The postback's tracking flag comes every 500 ms: ACTIVE within 1.5 s.
+    # The postback's tracking flag comes every 500 ms, the status every 200: ACTIVE in
+    # 0.7 s, waited for as any reply (MAVProxy reads its input before its link).
     pattern = (r"CAMERA_TRACKING_IMAGE_STATUS \{tracking_status : (\d+), tracking_mode : (\d+), "
                r"target_data : (\d+), point_x : ([-\d.e]+|nan), point_y : ([-\d.e]+|nan), radius : ([-\d.e]+|nan)")
-    end = time.monotonic() + 1.5
+    end = time.monotonic() + REPLY_TIMEOUT
     while True:
         m = mpx.poll("status CAMERA_TRACKING_IMAGE_STATUS", pattern, 0.5)
         ok = m is not None and (int(m.group(1)), int(m.group(2))) == (
@@ -784,11 +794,13 @@ def tracking(mpx, ap, bridge, family):
     # The statuses that follow the interval's ACK: the first of the 200 ms series comes at
     # the bridge's next poll after it. One before the ACK is from the default series
     # (tracking started: a status at once), which may reach here after `since`.
-    stamps = ap.stamps_after_ack(since, mav.MAV_CMD_SET_MESSAGE_INTERVAL, "CAMERA_TRACKING_IMAGE_STATUS", 4)
+    stamps = ap.stamps_after_ack(since, mav.MAV_CMD_SET_MESSAGE_INTERVAL, "CAMERA_TRACKING_IMAGE_STATUS", 6)
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    # 200 ms on the bridge's clock, received here: on average within 10 %, each within
-    # ±150 ms (a late tick of the bridge or of this thread on a loaded machine).
-    check(len(gaps) >= 3 and abs(sum(gaps) / len(gaps) - 0.2) <= 0.02 and all(0.05 <= g <= 0.35 for g in gaps),
+    # 200 ms on the bridge's clock, received here. The next is due a period after the tick
+    # that sent one, so a late tick lengthens the series and nothing shortens it: on average
+    # 190 to 240 ms over five gaps (a 200 ms stall in a second), each within ±150 ms (a
+    # late tick of the bridge or of this thread on a loaded machine). The default is 500.
+    check(len(gaps) == 5 and 0.19 <= sum(gaps) / len(gaps) <= 0.24 and all(0.05 <= g <= 0.35 for g in gaps),
           f"the status every 200 ms: {[round(g, 3) for g in gaps]}")
     since, mark = ap.mark(), bridge.mark()
     mpx.send(f"message COMMAND_LONG {AP_SYSTEM} {CAMERA} {mav.MAV_CMD_CAMERA_STOP_TRACKING} 0 0 0 0 0 0 0 0")
@@ -877,16 +889,25 @@ def footprint(mpx, ap, family):
         mpx.send(f"message COMMAND_LONG {AP_SYSTEM} {CAMERA} {mav.MAV_CMD_REQUEST_MESSAGE} 0 "
                  f"{mav.MAVLINK_MSG_ID_CAMERA_FOV_STATUS} 0 0 0 0 0 0")
         fov = ap.wait_bridge(since, "CAMERA_FOV_STATUS")
-        time.sleep(0.3)  # the streams' information reaches MAVProxy's camera module
-        since_out = mpx.send("camera projection")
-        m = mpx.wait(since_out, r"position: ([-\d.]+) ([-\d.]+) AMSL=([-\d.]+)m relative=([-\d.]+)m")
-        text = mpx.since(since_out)
-        streams = next((l for l in text if l.startswith(" streams: ") or l.startswith("streams: ")), "")
-        shown = dict(re.findall(r"(\d+)=(\d+x\d+/[\d.]+)deg", streams))
         thermal = {i for i, s in infos.items() if s.flags & mav.VIDEO_STREAM_STATUS_FLAGS_THERMAL}
         want = {str(i): (f"{WIDTH}x{HEIGHT}/{round(want_h):.1f}" if i not in thermal else None) for i in infos}
-        check(infos and all(want[k] is None or shown.get(k) == want[k] for k in want)
-              and all(float(shown.get(str(i), "0/nan").split("/")[1]) == 0.0 for i in thermal),
+
+        def drawn(shown):
+            return (all(want[k] is None or shown.get(k) == want[k] for k in want)
+                    and all(float(shown.get(str(i), "0/nan").split("/")[1]) == 0.0 for i in thermal))
+        # Asked until the streams' information has reached MAVProxy's camera module (it
+        # reads its input before its link: a backlog shows the zoom before).
+        end = time.monotonic() + REPLY_TIMEOUT
+        while True:
+            since_out = mpx.send("camera projection")
+            m = mpx.wait(since_out, r"position: ([-\d.]+) ([-\d.]+) AMSL=([-\d.]+)m relative=([-\d.]+)m")
+            text = mpx.since(since_out)
+            streams = next((l for l in text if l.startswith(" streams: ") or l.startswith("streams: ")), "")
+            shown = dict(re.findall(r"(\d+)=(\d+x\d+/[\d.]+)deg", streams))
+            if drawn(shown) or time.monotonic() >= end:
+                break
+            time.sleep(0.1)
+        check(infos and drawn(shown),
               f"zoom {zoom_percent} % (×{ratio:g}): camera projection shows the visible streams at "
               f"{WIDTH}x{HEIGHT}, hfov {round(want_h)}° (2 atan(tan({HFOV:g}°/2)/{ratio:g}) = {want_h:.2f}° rounded), "
               f"the thermal one 0: {streams.strip()!r}")
