@@ -239,6 +239,12 @@ fn twenty_clients_in_a_row_from_new_ports_are_all_answered() {
         // Gone: its port closed, as a ground station that reconnects leaves it.
         drop(client);
     }
+    // Peer lines past ten a second are summed when the second ends: the last joins may be
+    // said a second after the last client's answer.
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while peer_events(&bridge.stderr.text(), "joined") < 20 && Instant::now() < deadline {
+        thread::sleep(Duration::from_millis(20));
+    }
     let stderr = bridge.stop();
     assert_eq!(waits.len(), 20, "{waits:?}");
     // The kernel may hand a closed port out again; only with 20 distinct ports are the
@@ -297,11 +303,13 @@ fn a_live_ground_station_keeps_its_slot_in_a_crowd() {
         }
     }
     let stderr = bridge.stop();
-    // The gimbal's heartbeat is 1 Hz: at least 5 in 6 s, none more than 1.5 s apart.
+    // The gimbal's heartbeat is 1 Hz: at least 5 in 6 s, none more than 2.5 s apart as
+    // read here (a second, and up to 1.5 s that this thread or the bridge stalls on a
+    // loaded machine), under the 3.5 s after which QGroundControl drops the link.
     assert!(heard_at.len() >= 5, "{heard_at:?}\n{stderr}");
     let gaps = heard_at.windows(2).map(|w| w[1] - w[0]);
     assert!(
-        gaps.clone().all(|g| g < Duration::from_millis(1_500)),
+        gaps.clone().all(|g| g < Duration::from_millis(2_500)),
         "{heard_at:?}"
     );
     // 63 of the crowd joined beside it; 7 were refused, once each. At most 10 peer lines a
@@ -392,9 +400,9 @@ fn garbage_floods_never_become_peers_nor_hide_a_good_client() {
             let begin = Instant::now();
             let mut n = 0usize;
             while n < FLOOD_MAX && begin.elapsed() < FLOOD_TIME {
-                if n >= FLOOD_MIN && answered.load(Ordering::Acquire) {
-                    break;
-                }
+                // Answered: one more burst, so that the flood is seen to go on past the
+                // answers however late they came.
+                let last = n >= FLOOD_MIN && answered.load(Ordering::Acquire);
                 for sock in &flooders {
                     // UDP: a datagram the kernel drops is as good as sent.
                     let _ = sock.send_to(&garbage(&mut rng, n as u8), bridge.addr);
@@ -403,6 +411,9 @@ fn garbage_floods_never_become_peers_nor_hide_a_good_client() {
                 sent.store(n, Ordering::Release);
                 if n == 10 * SOCKETS {
                     let _ = started_tx.send(());
+                }
+                if last {
+                    break;
                 }
                 thread::sleep(Duration::from_millis(1));
             }

@@ -103,7 +103,9 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
     thread::sleep(Duration::from_millis(20));
     a.write_all(&good[7..]).unwrap();
 
-    // Both clients get postbacks, 500 ms apart, and see the pitch move to -30.
+    // Both clients get postbacks, 500 ms apart, and see the pitch move to -30. What b
+    // holds already is read first, so that the two timed are both sent from now on.
+    drain(&mut b);
     let start = Instant::now();
     let first = read_postbacks(&mut b, 2);
     let elapsed = start.elapsed();
@@ -123,11 +125,32 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
         thread::sleep(Duration::from_millis(5));
     }
     assert_eq!(no_frame(&log.text()), (41, 1, 1), "{}", log.text());
-    // A client leaving frees a slot.
+    // A client leaving frees a slot, once the sim has seen it go.
+    let gone = a.local_addr().expect("a's address");
     drop(a);
-    thread::sleep(Duration::from_millis(100));
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while !log.text().lines().any(|l| {
+        l.contains(&format!("sim: {gone} disconnected"))
+            || l.contains(&format!("sim: {gone}: ")) && l.contains("(os error ")
+            || l.contains(&format!("dropping {gone}"))
+    }) {
+        assert!(
+            Instant::now() < deadline,
+            "a never seen gone:\n{}",
+            log.text()
+        );
+        thread::sleep(Duration::from_millis(5));
+    }
     let mut d = connect(&addr);
     read_postbacks(&mut d, 1);
+}
+
+/// Reads, without waiting, what `s` holds.
+fn drain(s: &mut TcpStream) {
+    s.set_nonblocking(true).expect("non-blocking");
+    let mut chunk = [0u8; 256];
+    while matches!(s.read(&mut chunk), Ok(k) if k > 0) {}
+    s.set_nonblocking(false).expect("blocking");
 }
 
 /// The counts of the sim's "sent what is no frame: N bytes skipped, N frames with a bad
@@ -261,8 +284,9 @@ fn monitor_warns_when_postbacks_stop_and_fails_when_the_server_goes() {
     let addr = listener.local_addr().unwrap().to_string();
     let server = thread::spawn(move || {
         let (mut s, _) = listener.accept().unwrap();
-        // Silence for 1.8 s, then one postback split across two writes, after garbage.
-        thread::sleep(Duration::from_millis(1800));
+        // Silence for 3 s, twice the monitor's 1.5 s before it warns (a stalled monitor
+        // wakes late), then one postback split across two writes, after garbage.
+        thread::sleep(Duration::from_millis(3000));
         let msg = postback(6, 1, 3, -3000, 18000, -150);
         s.write_all(b"\x01\x02\x03").unwrap();
         s.write_all(&msg[..5]).unwrap();

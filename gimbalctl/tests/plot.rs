@@ -256,8 +256,11 @@ fn polylines(svg: &str, color: &str) -> Vec<Vec<(f64, f64)>> {
 }
 
 fn render(log: &str) -> (Out, String) {
+    // A file of each call's own: the tests of this file run at once, in one process.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let path = dir.join(format!("plot-{}.svg", std::process::id()));
+    let path = dir.join(format!("plot-{}-{call}.svg", std::process::id()));
     let _ = std::fs::remove_file(&path);
     let out = run_stdin(&["plot", "-", "-o", path.to_str().unwrap()], log.as_bytes());
     let svg = std::fs::read_to_string(&path).unwrap_or_default();

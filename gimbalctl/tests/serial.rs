@@ -97,28 +97,35 @@ fn send_holds_a_rate_over_the_uart() {
 fn a_port_that_goes_away_is_exit_1() {
     let mut pty = TestPty::new();
     let path = pty.path.clone();
-    let (mut monitor, stdout, stderr) = spawn(&["monitor", "--serial", &path]);
+    let mut child = command(&["monitor", "--serial", &path])
+        .spawn()
+        .expect("spawn gimbalctl");
+    let stdout = lines(child.stdout.take().expect("stdout"));
+    let stderr = Log::collect(child.stderr.take().expect("stderr"));
+    let mut monitor = Guard(child);
     // A postback once gimbalctl has the port open (the open drops older bytes), then the
     // line goes away.
     wait_open(&mut pty);
     thread::sleep(Duration::from_millis(100));
     assert!(pty.write(&postback(1, 0, 3, -1234, 9000, 0)));
-    thread::sleep(Duration::from_millis(300));
+    // Gone once the monitor has printed it: a hang-up drops what the port has not read.
+    let line = stdout
+        .recv_timeout(Duration::from_secs(10))
+        .unwrap_or_else(|e| panic!("the postback never printed ({e}): {}", stderr.text()));
+    assert!(
+        line.starts_with("pitch -12.34 deg  heading 90.00 deg"),
+        "{line}"
+    );
     drop(pty);
     let stderr = went_away(&mut monitor, &stderr);
     assert!(stderr.contains(&path), "{stderr}");
     assert!(stderr.contains("after 1 postback"), "{stderr}");
-    let out = stdout.join().unwrap();
-    assert!(
-        out.starts_with("pitch -12.34 deg  heading 90.00 deg"),
-        "{out}"
-    );
 }
 
 /// The sim going away under `send --repeat-ms` and `mavlink` ends them too.
 #[test]
 fn the_sim_exiting_ends_a_session_with_exit_1() {
-    let (sim, path, _log) = start_pty_sim();
+    let (sim, path, log) = start_pty_sim();
     let (mut bridge, _out, stderr) = spawn(&[
         "mavlink",
         "--serial",
@@ -128,7 +135,8 @@ fn the_sim_exiting_ends_a_session_with_exit_1() {
         "--exit-after-ms",
         "20000",
     ]);
-    thread::sleep(Duration::from_millis(700));
+    // Gone once the bridge has the port (else it could not open it, a different error).
+    log.wait(&format!("{path} opened"), Duration::from_secs(10));
     drop(sim);
     went_away(&mut bridge, &stderr);
 }
@@ -364,7 +372,8 @@ fn mavlink_bridges_udp_to_the_uart_gimbal() {
         heard.assert_before(deadline, &log, &stderr);
         thread::sleep(Duration::from_millis(100));
     }
-    assert!(stderr.text().contains("gimbal link up"));
+    // Said at the first postback, which may come after the answers (every 500 ms).
+    stderr.wait("gimbal link up", Duration::from_secs(5));
 }
 
 /// `mavlink --serial --autopilot-serial`: the gimbal on the simulated UART, the autopilot on
