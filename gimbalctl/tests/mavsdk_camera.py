@@ -156,11 +156,13 @@ async def run(gimbalctl):
         await asyncio.sleep(1.0)
         collector.cancel()
         timed = [(round(t - start, 2), i) for t, i, _ in images if t >= start]
-        # Taken at 0, 0.5, 1.0, 1.5, 2.0 s; the bridge's tick is 1 ms and the loopback's
-        # delay a few ms, so 0.35..0.65 s between reports holds with a wide margin.
+        # Taken at 0, 0.5, 1.0, 1.5, 2.0 s on the bridge's grid, timed here as they reach
+        # this script through mavsdk_server and its gRPC stream: a few ms late on an idle
+        # machine, up to a few hundred on a loaded one, either report of a pair. Each gap
+        # 0.2 to 0.8 s, and on average 0.45 to 0.6 (a late first report shortens it).
         spacing = [b[0] - a[0] for a, b in zip(timed, timed[1:])]
         check([i for _, i in timed] == list(range(2, 2 + len(timed))) and 4 <= len(timed) <= 6
-              and all(0.35 < d < 0.65 for d in spacing),
+              and all(0.2 < d < 0.8 for d in spacing) and 0.45 <= sum(spacing) / len(spacing) <= 0.6,
               f"images every 0.5 s with consecutive indexes: {timed}")
         check(len(images) == stopped, f"none after stop_photo_interval ({len(images) - stopped})")
         await succeeds("zoom_range 50 %", camera.zoom_range(CAMERA, 50.0))
