@@ -61,7 +61,8 @@ use idu_firmware_support::vehicle::vehicle_stand_in;
 #[cfg(feature = "wire-units")]
 fn vehicle_stand_in(now: Instant) -> Option<idu_firmware_support::vehicle::Vehicle> {
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
-    let heading = ((now.as_millis() / 100) % 360) as i16 * 100 - 18_000;
+    // In i32: 359 × 100 is past i16 (an overflow, a panic in a debug build).
+    let heading = i16::try_from(((now.as_millis() / 100) % 360) as i32 * 100 - 18_000).ok()?;
     Some(idu_firmware_support::vehicle::Vehicle {
         gps: Gps::from_e7(473_977_420, 85_455_940).ok()?,
         altitude: Altitude::from_cm(48_800),

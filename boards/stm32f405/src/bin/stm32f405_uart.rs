@@ -74,12 +74,11 @@ mod fw {
         let mut link: SerialLink = SerialLink::new(Config::default());
         let mut port = SerialPort::new(Nb::new(RingRx, tx));
         // An example target: look at a point on the ground 200 m north of the stand-in
-        // position (nose-referenced over serial, from the observed vehicle heading).
+        // position (nose-referenced over serial, from the observed vehicle heading). The
+        // point-at aims pitch and heading both; a pointing command sent after it would end
+        // it.
         if let Ok(target) = Position::new(47.399_541, 8.545_594, 440.0) {
             link.point_at(target);
-        }
-        if let Ok(pitch) = Pitch::new(-30.0) {
-            let _ = link.send(GimbalCommand::Pitch(pitch));
         }
         let mut next_vehicle = now();
         let mut next_stats = now().add_millis(10_000);
