@@ -32,7 +32,9 @@ impl Sender {
         }
     }
 
-    /// Queues `message` from `component`; a full outbox is counted.
+    /// Queues `message` from `component`; a full outbox is counted. (The bridge sends as
+    /// two components, within the outbox's [`crate::framing::COMPONENTS`]: never refused
+    /// for that.)
     pub(crate) fn send(&mut self, component: u8, message: &dyn Message) {
         let pushed = self.outbox.push(self.system_id, component, message);
         if pushed.is_err() {

@@ -102,6 +102,35 @@ fn camera_heartbeats_beside_the_gimbals_once_its_identity_is_known() {
     assert_eq!(hbs.iter().filter(|h| h.0 == 154).count(), 2);
 }
 
+/// Each component numbers its own frames (pymavlink's and QGroundControl's loss counts are
+/// per system and component): the camera's and the gimbal's sequences each go up by one,
+/// whatever the other sends between them.
+#[test]
+fn the_camera_and_the_gimbal_number_their_frames_each_on_their_own() {
+    let mut b = bridge();
+    postback(&mut b, GimbalType::X30, 0);
+    let mut frames = Vec::new();
+    for ms in 0..5_000 {
+        b.poll(t(ms));
+        if ms % 500 == 0 {
+            postback(&mut b, GimbalType::X30, ms);
+        }
+        frames.extend(sent(&mut b));
+    }
+    for component in [154, 100] {
+        let seqs: Vec<u8> = frames
+            .iter()
+            .filter(|f| f.component_id() == component)
+            .map(|f| f.sequence())
+            .collect();
+        assert!(seqs.len() >= 5, "{component}: {seqs:?}");
+        assert!(
+            seqs.windows(2).all(|w| w[1] == w[0].wrapping_add(1)),
+            "component {component}: {seqs:?}"
+        );
+    }
+}
+
 #[test]
 fn the_mode_is_set_and_told_back_in_the_settings() {
     let mut b = bridge();

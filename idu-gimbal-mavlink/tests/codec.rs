@@ -29,7 +29,8 @@ fn mavio_payload(m: &dyn Message) -> Vec<u8> {
     m.encode(MavLinkVersion::V2).unwrap().bytes().to_vec()
 }
 
-/// The outbox's frame of `M` with the codec's payload, after `seq` frames.
+/// The outbox's frame of `M` with the codec's payload, after `seq` frames of the same
+/// component (each component's frames are numbered on their own).
 fn codec_frame<M: MessageSpecStatic>(
     seq: u8,
     system: u8,
@@ -39,7 +40,7 @@ fn codec_frame<M: MessageSpecStatic>(
 ) -> Vec<u8> {
     let mut out = Outbox::<600>::new();
     for _ in 0..seq {
-        out.push_payload(0, 0, 0, 0, &[1]).unwrap();
+        out.push_payload(0, component, 0, 0, &[1]).unwrap();
         let n = out.bytes().len();
         out.written(n);
     }
@@ -223,7 +224,7 @@ proptest! {
         // The general path: mavio's payload, the outbox's header and checksum.
         let mut out = Outbox::<600>::new();
         for _ in 0..seq {
-            out.push_payload(0, 0, 0, 0, &[1]).unwrap();
+            out.push_payload(0, 154, 0, 0, &[1]).unwrap();
             let n = out.bytes().len();
             out.written(n);
         }

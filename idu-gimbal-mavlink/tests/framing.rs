@@ -483,3 +483,37 @@ fn a_frame_inside_a_datagram_s_unfinished_tail_is_read_and_the_rest_dropped() {
         datagram.len() - hb.len()
     );
 }
+
+/// MAVLink numbers each component's frames on its own (pymavlink and QGroundControl count
+/// loss per system and component): frames from 154 and 100 interleaved are each 0, 1, 2 …
+/// in their own component; a component past the outbox's [`COMPONENTS`] is refused, its
+/// frame not queued.
+#[test]
+fn an_outbox_numbers_each_component_s_frames_on_their_own() {
+    use idu_gimbal_mavlink::framing::{Outbox, OutboxError, COMPONENTS};
+    let mut out = Outbox::<4096>::new();
+    for from in [154, 100, 154, 154, 100, 154] {
+        out.push_payload(1, from, 0, 50, &[1, 2, 3]).unwrap();
+    }
+    let mut seqs: Vec<(u8, u8)> = Vec::new();
+    FrameReader::new().feed(out.bytes(), |f| {
+        seqs.push((f.component_id(), f.sequence()));
+        Check::Unhandled
+    });
+    assert_eq!(
+        seqs,
+        [(154, 0), (100, 0), (154, 1), (154, 2), (100, 1), (154, 3)]
+    );
+    let mut out = Outbox::<4096>::new();
+    for c in 1..=COMPONENTS as u8 {
+        out.push_payload(1, c, 0, 50, &[1]).unwrap();
+    }
+    let held = out.bytes().len();
+    assert_eq!(
+        out.push_payload(1, 200, 0, 50, &[1]),
+        Err(OutboxError::Components)
+    );
+    assert_eq!(out.bytes().len(), held, "nothing of it queued");
+    // The components it numbers go on.
+    out.push_payload(1, 1, 0, 50, &[1]).unwrap();
+}

@@ -30,7 +30,7 @@ mod reader;
 mod x25;
 
 pub use frame::{DecodeError, ReceivedFrame};
-pub use outbox::{Outbox, OutboxError};
+pub use outbox::{Outbox, OutboxError, COMPONENTS};
 pub use reader::{Check, FrameReader, ReaderStats};
 
 /// The MAVLink 2 start byte.

@@ -21,7 +21,16 @@ pub enum OutboxError {
     Encode,
     /// No room for the whole frame: the transport is not taking bytes fast enough.
     Full,
+    /// A frame from one component more than the [`COMPONENTS`] the outbox numbers frames
+    /// for.
+    Components,
 }
+
+/// How many components an [`Outbox`] numbers frames for, each on its own (MAVLink's
+/// sequence is per component: readers count loss per system and component). The first
+/// components to send take the places; a frame from another is refused
+/// ([`OutboxError::Components`]). The bridge sends as two, its gimbal and its camera.
+pub const COMPONENTS: usize = 4;
 
 /// Serialized frames waiting for the transport, `N` bytes in all; whole frames only.
 ///
@@ -34,7 +43,9 @@ pub struct Outbox<const N: usize> {
     buf: [u8; N],
     start: usize,
     end: usize,
-    sequence: u8,
+    /// Each numbered component and its next frame's sequence number, in the order they
+    /// first sent.
+    sequences: [Option<(u8, u8)>; COMPONENTS],
     /// Signs every frame when set (feature `signing`).
     #[cfg(feature = "signing")]
     signing: Option<crate::signing::Signing>,
@@ -47,13 +58,13 @@ impl<const N: usize> Default for Outbox<N> {
 }
 
 impl<const N: usize> Outbox<N> {
-    /// An empty outbox; the first frame gets sequence number 0.
+    /// An empty outbox; each component's first frame gets sequence number 0.
     pub const fn new() -> Self {
         Outbox {
             buf: [0; N],
             start: 0,
             end: 0,
-            sequence: 0,
+            sequences: [None; COMPONENTS],
             #[cfg(feature = "signing")]
             signing: None,
         }
@@ -141,9 +152,18 @@ impl<const N: usize> Outbox<N> {
     ) -> Result<(), OutboxError> {
         // Only `write` is the message's own: the framing around it is one copy for every
         // message, out of line.
+        let place = self.place_of(component)?;
         write(self.reserve(len)?);
-        self.seal(system, component, id, crc_extra, len);
+        self.seal(system, component, id, crc_extra, len, place);
         Ok(())
+    }
+
+    /// Where `component`'s sequence number is kept: its place, or the first free one.
+    fn place_of(&self, component: u8) -> Result<usize, OutboxError> {
+        self.sequences
+            .iter()
+            .position(|s| s.is_none_or(|(c, _)| c == component))
+            .ok_or(OutboxError::Components)
     }
 
     /// Room for a frame of a `len`-byte payload at `end`: the payload's bytes, zeroed.
@@ -181,8 +201,22 @@ impl<const N: usize> Outbox<N> {
     /// payload's trailing zeros dropped (MAVLink 2), the header, the checksum, the
     /// signature; the frame queued.
     #[inline(never)]
-    fn seal(&mut self, system: u8, component: u8, id: u32, crc_extra: u8, len: usize) {
+    fn seal(
+        &mut self,
+        system: u8,
+        component: u8,
+        id: u32,
+        crc_extra: u8,
+        len: usize,
+        place: usize,
+    ) {
         let signature_len = self.signature_len();
+        let sequence = self
+            .sequences
+            .get(place)
+            .copied()
+            .flatten()
+            .map_or(0, |(_, s)| s);
         let Some(frame) = self.buf.get_mut(self.end..) else {
             return;
         };
@@ -202,7 +236,7 @@ impl<const N: usize> Outbox<N> {
             // Incompatibility flags: signed or not.
             u8::from(signature_len > 0) * IFLAG_SIGNED,
             0, // compatibility flags
-            self.sequence,
+            sequence,
             system,
             component,
             id0,
@@ -233,7 +267,9 @@ impl<const N: usize> Outbox<N> {
             .end
             .saturating_add(body_len)
             .saturating_add(signature_len);
-        self.sequence = self.sequence.wrapping_add(1);
+        if let Some(s) = self.sequences.get_mut(place) {
+            *s = Some((component, sequence.wrapping_add(1)));
+        }
     }
 
     /// The bytes to write next (all that wait); empty when nothing waits.
