@@ -54,7 +54,7 @@ use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::FrameReader;
-use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats};
+use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats, STREAMS};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::counts::{counted, grown};
@@ -161,8 +161,8 @@ fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
 /// What signing let through and turned away, for stderr.
 fn signing_line(s: &SigningStats) -> String {
     format!(
-        "frames accepted: {}; turned away: {} unsigned, {} with a bad signature, {} replayed",
-        s.accepted, s.unsigned, s.bad_signature, s.replayed
+        "frames accepted: {}; turned away: {} unsigned, {} with a bad signature, {} replayed, {} from a new stream while {} were remembered",
+        s.accepted, s.unsigned, s.bad_signature, s.replayed, s.streams_full, STREAMS
     )
 }
 
@@ -471,7 +471,7 @@ fn serve<S: Pump>(
     // The reader's faults and the bridge's drops as last said.
     let mut reader_faults = [0u32; 3];
     let mut bridge_drops = [0u32; 3];
-    let mut signing_turned = (0, 0, 0);
+    let mut signing_turned = (0, 0, 0, 0);
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
             if let Some(s) = bridge.signing_stats() {
@@ -578,7 +578,7 @@ fn serve<S: Pump>(
             }
             // Frames signing turned away, said as their count grows.
             if let Some(s) = bridge.signing_stats() {
-                let turned = (s.unsigned, s.bad_signature, s.replayed);
+                let turned = (s.unsigned, s.bad_signature, s.replayed, s.streams_full);
                 if turned != signing_turned {
                     eprintln!("gimbalctl mavlink: warning: signing: {}", signing_line(&s));
                     signing_turned = turned;

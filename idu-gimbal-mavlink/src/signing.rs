@@ -19,8 +19,11 @@
 //! 446 B of code on the Cortex-M4 where its unrolled one is 7,120 B.
 //!
 //! Streams are remembered up to [`STREAMS`]; a new one beyond takes the slot of the stream
-//! heard least recently (only a frame with a good signature makes or moves a stream, so
-//! only a key holder can). The key is never printed (`Debug` says so).
+//! heard least recently once that stream's frames are more than a minute behind the newest
+//! timestamp (too old to pass as a new stream's, so that forgetting it lets none of them
+//! be replayed), and is refused until then, counted (only a frame with a good signature
+//! makes or moves a stream, so only a key holder can). The key is never printed (`Debug`
+//! says so).
 
 use core::fmt;
 
@@ -82,6 +85,9 @@ pub struct SigningStats {
     /// Frames with a good signature but a timestamp not newer than their stream's (or a new
     /// stream's more than a minute old): dropped.
     pub replayed: u32,
+    /// Frames with a good signature from a new stream while [`STREAMS`] are remembered and
+    /// none can be forgotten yet (each could still come back as a new stream): dropped.
+    pub streams_full: u32,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -194,21 +200,36 @@ impl Signing {
             bump(&mut self.stats.replayed);
             return false;
         }
-        self.remember(id, ts);
+        if !self.remember(id, ts) {
+            bump(&mut self.stats.streams_full);
+            return false;
+        }
         self.timestamp = self.timestamp.max(ts);
         bump(&mut self.stats.accepted);
         true
     }
 
-    fn remember(&mut self, id: (u8, u8, u8), timestamp: u64) {
+    /// Keeps `timestamp` as the stream's last; false when the table is full and no stream
+    /// in it can be forgotten yet.
+    fn remember(&mut self, id: (u8, u8, u8), timestamp: u64) -> bool {
         let stream = Stream { id, timestamp };
         if let Some(s) = self.streams.iter_mut().find(|s| s.id == id) {
             *s = stream;
-        } else if let Err(stream) = self.streams.push(stream) {
-            // Full: the stream heard least recently (the oldest timestamp) gives way.
-            if let Some(oldest) = self.streams.iter_mut().min_by_key(|s| s.timestamp) {
+            return true;
+        }
+        let Err(stream) = self.streams.push(stream) else {
+            return true;
+        };
+        // Full: the stream heard least recently (the oldest timestamp) gives way, once its
+        // frames are too old to pass as a new stream's (forgotten sooner, its last frame
+        // replayed would be taken as a new stream's first).
+        let newest = self.timestamp;
+        match self.streams.iter_mut().min_by_key(|s| s.timestamp) {
+            Some(oldest) if oldest.timestamp.saturating_add(NEW_STREAM_SLACK) < newest => {
                 *oldest = stream;
+                true
             }
+            _ => false,
         }
     }
 }
@@ -342,6 +363,43 @@ mod tests {
             frame.extend_from_slice(&block);
             assert!(rx.verify(&frame, true, 1, 154));
         }
+    }
+
+    /// A full table makes room only by forgetting a stream whose frames could not pass as
+    /// a new stream's (more than a minute behind the newest): a forgotten stream's last
+    /// frame, replayed, would otherwise be taken as a new stream's.
+    #[test]
+    fn a_full_table_forgets_only_streams_too_old_to_come_back_as_new() {
+        let mut tx = signing();
+        let body = hex(PYMAVLINK);
+        let mut frame_at = |ts: u64| {
+            tx.at_least(ts);
+            let mut f = body[..44].to_vec();
+            f.extend_from_slice(&tx.sign(&body[..44]));
+            f
+        };
+        let mut rx = signing();
+        // STREAMS streams, systems 1 to 16, each heard at about the same time.
+        let first: Vec<Vec<u8>> = (0..STREAMS as u64).map(|i| frame_at(100 + i)).collect();
+        for (system, f) in (1u8..).zip(&first) {
+            assert!(rx.verify(f, true, system, 1));
+        }
+        // One more, while every stream known could still come back as new: refused.
+        let late = frame_at(200);
+        assert!(!rx.verify(&late, true, 100, 1));
+        assert_eq!(rx.stats().streams_full, 1);
+        // Had system 1 been forgotten for it, its first frame again would pass as new.
+        assert!(!rx.verify(&first[0], true, 1, 1));
+        assert_eq!(rx.stats().replayed, 1);
+        // Over a minute on, from system 2: system 1 (the oldest) can be forgotten now, and
+        // its first frame, replayed, is refused as too old for a new stream.
+        let on = frame_at(300 + NEW_STREAM_SLACK);
+        assert!(rx.verify(&on, true, 2, 1));
+        let new = frame_at(400 + NEW_STREAM_SLACK);
+        assert!(rx.verify(&new, true, 100, 1));
+        assert!(!rx.verify(&first[0], true, 1, 1));
+        assert_eq!(rx.stats().replayed, 2);
+        assert_eq!(rx.stats().streams_full, 1);
     }
 
     #[test]
