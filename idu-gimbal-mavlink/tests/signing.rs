@@ -121,6 +121,27 @@ fn a_signed_request_is_answered_signed_and_nothing_else_is() {
     );
 }
 
+/// A signed frame changed in transit is a corrupt frame first: a message the bridge knows
+/// whose checksum fails is found bad and read past byte by byte, as without a key, so a
+/// length made longer does not swallow the frame that follows (its signature, checked
+/// first, took it whole as a frame not for the bridge).
+#[test]
+fn a_corrupt_signed_frame_does_not_swallow_the_next() {
+    let k = key(KEY_PASSPHRASE);
+    let mut b = signing_bridge();
+    let _ = output(&mut b, &k);
+    let mut corrupt = sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T);
+    // Its length 16 bytes longer: it would end inside the next frame.
+    corrupt[1] += 16;
+    let mut bytes = corrupt;
+    bytes.extend(sign(&request(), COMMAND_LONG_CRC_EXTRA, &k, T + 1));
+    b.receive_all(&bytes, t(10));
+    assert_eq!(output(&mut b, &k), [(77, true), (283, true)]);
+    let (s, r) = (b.signing_stats().unwrap(), b.stats().reader);
+    assert_eq!((s.accepted, s.bad_signature), (1, 0), "{s:?}");
+    assert_eq!((r.frames, r.bad_frames), (1, 1), "{r:?}");
+}
+
 #[test]
 fn the_timestamps_sent_go_on_from_the_newest_known() {
     let k = key(KEY_PASSPHRASE);

@@ -34,6 +34,40 @@ where
     frame.decode::<M>().ok()
 }
 
+/// The `CRC_EXTRA` of a message the bridge handles, by id.
+#[cfg(feature = "signing")]
+fn crc_extra_of(id: u32) -> Option<u8> {
+    [
+        (
+            id_of::<AutopilotStateForGimbalDevice>(),
+            AutopilotStateForGimbalDevice::crc_extra(),
+        ),
+        (
+            id_of::<GimbalDeviceSetAttitude>(),
+            GimbalDeviceSetAttitude::crc_extra(),
+        ),
+        (id_of::<Heartbeat>(), Heartbeat::crc_extra()),
+        (id_of::<CommandLong>(), CommandLong::crc_extra()),
+        (id_of::<CommandInt>(), CommandInt::crc_extra()),
+        (id_of::<GlobalPositionInt>(), GlobalPositionInt::crc_extra()),
+        (
+            id_of::<FileTransferProtocol>(),
+            FileTransferProtocol::crc_extra(),
+        ),
+        (id_of::<ParamExtSet>(), ParamExtSet::crc_extra()),
+        (
+            id_of::<ParamExtRequestRead>(),
+            ParamExtRequestRead::crc_extra(),
+        ),
+        (
+            id_of::<ParamExtRequestList>(),
+            ParamExtRequestList::crc_extra(),
+        ),
+    ]
+    .into_iter()
+    .find_map(|(m, extra)| (m == id).then_some(extra))
+}
+
 impl State {
     /// A whole frame from the reader: acted on when the outbox has room for the most it can
     /// ask ([`ANSWER_ROOM`]), else it waits, so that no answer is promised and then dropped.
@@ -58,16 +92,21 @@ impl State {
         frame: &ReceivedFrame<'_>,
         now: Instant,
     ) -> Check {
-        // Signing: only frames signed with the key, newer than their stream's last (a frame
-        // changed in transit fails its signature, counted so).
+        let id = frame.message_id();
+        // Signing: only frames signed with the key, newer than their stream's last. A
+        // message the bridge knows whose checksum fails is a corrupt frame, not a forged
+        // one: found bad first, so that the reader reads past it byte by byte (taken whole,
+        // a length changed in transit would swallow the frames after it).
         #[cfg(feature = "signing")]
         if let Some(signing) = self.out.outbox.signing_mut() {
+            if crc_extra_of(id).is_some_and(|extra| !frame.checksum_holds(extra)) {
+                return Check::Bad;
+            }
             let (system, component) = (frame.system_id(), frame.component_id());
             if !signing.verify(frame.bytes(), frame.is_signed(), system, component) {
                 return Check::Unhandled;
             }
         }
-        let id = frame.message_id();
         let from = (frame.system_id(), frame.component_id());
         // The messages received many times a second first, each decoded by its own codec
         // (crate::codec); the CRC is checked with the message's CRC_EXTRA before anything.

@@ -44,6 +44,9 @@ pub struct ReaderStats {
 /// the message's `CRC_EXTRA` (only the messages the caller handles are known). A frame
 /// whose CRC fails is not consumed whole: the reader drops its start byte and looks for the
 /// next start byte inside it, so a corrupt length cannot swallow the frames that follow.
+/// A message the caller does not know cannot be checked: taken whole, one whose length was
+/// changed in transit takes in up to 280 bytes after it, and whatever frames they held go
+/// uncounted (the bridge checks every message it acts on; the others pass it unchecked).
 /// MAVLink 1 frames and frames with unknown incompatibility flags are skipped (this bridge
 /// speaks MAVLink 2 only).
 ///
