@@ -60,6 +60,9 @@ impl State {
             if self.command_gimbal(gimbal, GimbalCommand::LookDown) {
                 self.pose = Pose::Retracted;
                 self.rate_earth = false;
+            } else {
+                // No room (counted): the next setpoint with the flag is its edge again.
+                self.last_flags &= !GimbalDeviceFlags::RETRACT.bits();
             }
             return;
         }
@@ -73,6 +76,8 @@ impl State {
                 self.pose = Pose::Neutral;
                 self.rate_earth = false;
                 bump(&mut self.stats.angle_setpoints);
+            } else {
+                self.last_flags &= !GimbalDeviceFlags::NEUTRAL.bits();
             }
             return;
         }

@@ -903,6 +903,23 @@ fn neutral_holds_forward_and_retract_looks_down_once_each() {
     assert_eq!(queued(&mut b.link), [GimbalCommand::LookDown]);
 }
 
+/// RETRACT acts when the flag appears; one the gimbal's queue had no room for is tried
+/// again with the next setpoint that still carries it, not lost while it stays set.
+#[test]
+fn a_retract_the_queue_had_no_room_for_goes_with_the_next_setpoint() {
+    let mut b = bridge();
+    while b.link.send(GimbalCommand::Recenter).is_ok() {}
+    let retract = set_attitude(GimbalDeviceFlags::RETRACT, 0.0, 0.0);
+    b.receive_all(&frame(AP, 0, &retract), t(0));
+    assert_eq!(b.stats().queue_full, 1);
+    let _ = queued(&mut b.link);
+    b.receive_all(&frame(AP, 1, &retract), t(20));
+    assert_eq!(queued(&mut b.link), [GimbalCommand::LookDown]);
+    // Once acted on, not again while the flag stays.
+    b.receive_all(&frame(AP, 2, &retract), t(40));
+    assert_eq!(queued(&mut b.link), []);
+}
+
 #[test]
 fn a_rolled_setpoint_is_refused() {
     let mut b = bridge();

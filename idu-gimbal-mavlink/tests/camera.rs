@@ -267,6 +267,26 @@ fn a_single_capture_is_one_shot_and_a_retransmission_takes_no_second() {
     }
 }
 
+/// An image is placed where the vehicle last was by a position the gimbal took: one out of
+/// range (refused, counted) is not the image's.
+#[test]
+fn an_image_is_placed_by_the_last_position_in_range() {
+    let mut b = bridge();
+    b.receive_all(
+        &frame(AP, 1, &position(473_977_420, 85_455_940, 488_000, 38_000)),
+        t(0),
+    );
+    let refused = b.stats().refused_vehicle_updates;
+    b.receive_all(
+        &frame(AP, 2, &position(910_000_000, 85_455_940, 488_000, 38_000)),
+        t(5),
+    );
+    assert_eq!(b.stats().refused_vehicle_updates, refused + 1);
+    let (_, frames) = capture_one(&mut b, 1.0, 10);
+    let image = &of::<CameraImageCaptured>(&frames)[0];
+    assert_eq!((image.lat, image.lon), (473_977_420, 85_455_940));
+}
+
 #[test]
 fn a_capture_number_is_whole_and_its_repeat_the_same_clients_soon_after() {
     let mut b = bridge();

@@ -200,9 +200,10 @@ impl State {
         now: Instant,
     ) {
         self.position_stream.heard = Some(now);
-        self.vehicle.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
         match Gps::from_e7(pos.lat, pos.lon) {
             Ok(g) => {
+                // The images' position too: only one the gimbal takes.
+                self.vehicle.position = Some([pos.lat, pos.lon, pos.alt, pos.relative_alt]);
                 gimbal.set_gps(g, now);
                 bump(&mut self.stats.vehicle_updates);
             }

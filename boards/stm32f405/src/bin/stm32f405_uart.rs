@@ -37,7 +37,6 @@ mod fw {
     use idu_gimbal::geo::Position;
     use idu_gimbal::interface::UART_BAUD;
     use idu_gimbal::port::{Nb, Port, PortError};
-    use idu_gimbal::wire::control::{GimbalCommand, Pitch};
     use idu_gimbal::wire::vehicle::{Altitude, Attitude, Gps};
     use idu_gimbal::{Config, Instant, SerialLink, SerialPort};
 
