@@ -84,11 +84,13 @@ class Autopilot:
         return time.monotonic() - self.start
 
     def state_msg(self):
+        # As PX4 sends it (src/modules/mavlink/streams/AUTOPILOT_STATE_FOR_GIMBAL_DEVICE.hpp:
+        # the message zero-initialised, angular_velocity_z never set): no yaw rate, so the
+        # bridge has the turn's from the yaws and time_boot_us.
         half = math.radians(self.yaw) / 2
-        rate = 0.0 if self.turn_to is None else math.radians(math.copysign(TURN_DPS, self.turn_to - self.yaw))
         return self.m.mav.autopilot_state_for_gimbal_device_encode(
             AP_SYSTEM, 0, int(self.now() * 1e6), [math.cos(half), 0, 0, math.sin(half)],
-            0, 0, 0, 0, 0, 0, 0, 4, rate)
+            0, 0, 0, 0, 0, 0, 0, 4, 0.0)
 
     def set_msg(self):
         flags, yaw, pitch = self.setpoint

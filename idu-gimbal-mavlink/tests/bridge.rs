@@ -596,6 +596,49 @@ fn the_status_is_in_the_vehicle_frame_with_the_vehicle_heading_as_delta_yaw() {
         .contains(GimbalDeviceErrorFlags::COMMS_ERROR));
 }
 
+/// PX4 never sets `angular_velocity_z` (its AUTOPILOT_STATE_FOR_GIMBAL_DEVICE stream,
+/// zero-initialised): MAVLink 2 drops the zero, and a rate read as 0 would leave an
+/// earth-frame rate uncompensated and report a still vehicle. A state without the rate
+/// has it from the last two yaws and their `time_boot_us`.
+#[test]
+fn a_state_without_a_yaw_rate_has_it_from_the_last_two_yaws() {
+    let mut b = bridge();
+    let p = Postback::default();
+    let px4 = |yaw_deg: f32, us: u64| {
+        let mut s = autopilot_state(yaw_deg);
+        s.angular_velocity_z = 0.0;
+        s.time_boot_us = us;
+        s
+    };
+    // One state: no rate yet.
+    b.receive_all(&frame(AP, 0, &px4(10.0, 1_000_000)), t(0));
+    let s = status_after(&mut b, &p, 0);
+    assert!(s.delta_yaw_velocity.is_nan(), "{}", s.delta_yaw_velocity);
+    // 2° in 20 ms: 100°/s. f32 yaws from quaternions: within 1e-5 rad each, 1e-3 rad/s
+    // over 20 ms.
+    b.receive_all(&frame(AP, 1, &px4(12.0, 1_020_000)), t(20));
+    let s = status_after(&mut b, &p, 20);
+    assert!(
+        (s.delta_yaw_velocity - 100f32.to_radians()).abs() < 1e-3,
+        "{}",
+        s.delta_yaw_velocity
+    );
+    // Across ±180°: −179° after 179° is 2° on, not 358° back.
+    b.receive_all(&frame(AP, 2, &px4(179.0, 2_000_000)), t(1_000));
+    b.receive_all(&frame(AP, 3, &px4(-179.0, 2_020_000)), t(1_020));
+    let s = status_after(&mut b, &p, 1_020);
+    assert!((s.delta_yaw_velocity - 100f32.to_radians()).abs() < 1e-3);
+    // A rate sent is taken as sent.
+    let mut sent_rate = px4(-178.0, 2_040_000);
+    sent_rate.angular_velocity_z = 0.25;
+    b.receive_all(&frame(AP, 4, &sent_rate), t(1_040));
+    assert_eq!(status_after(&mut b, &p, 1_040).delta_yaw_velocity, 0.25);
+    // Samples more than a second apart give none.
+    b.receive_all(&frame(AP, 5, &px4(0.0, 5_000_000)), t(1_500));
+    b.receive_all(&frame(AP, 6, &px4(1.0, 6_500_000)), t(1_600));
+    assert!(status_after(&mut b, &p, 1_600).delta_yaw_velocity.is_nan());
+}
+
 #[test]
 fn the_status_flags_say_what_the_device_holds_not_the_postbacks_mode() {
     use idu_gimbal::wire::postback::ControlMode;

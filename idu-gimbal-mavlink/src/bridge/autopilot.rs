@@ -95,8 +95,10 @@ impl StreamState {
 pub(crate) struct Vehicle {
     /// Yaw (radians, NED: from north) and when it was measured.
     pub(crate) yaw: Option<(f32, Instant)>,
-    /// Yaw rate (rad/s, about NED's down axis), when the autopilot gave one.
+    /// Yaw rate (rad/s, about NED's down axis), the autopilot's or from its last two yaws.
     pub(crate) yaw_rate: Option<(f32, Instant)>,
+    /// The last yaw (radians) and the autopilot's `time_boot_us` of it, for a rate.
+    pub(crate) yaw_sample: Option<(f32, u64)>,
     /// From GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative alt (mm).
     pub(crate) position: Option<[i32; 4]>,
 }
@@ -162,6 +164,7 @@ impl State {
         &mut self,
         gimbal: &mut Link<Q, T, M>,
         state: &AutopilotStateForGimbalDevice,
+        rate_sent: bool,
         now: Instant,
     ) {
         self.autopilot_state_stream.heard = Some(now);
@@ -184,11 +187,20 @@ impl State {
         };
         self.vehicle.yaw = Some((yaw, now));
         // common.xml: "Z component of angular velocity in NED (North, East, Down). NaN if
-        // unknown".
-        self.vehicle.yaw_rate = state
-            .angular_velocity_z
-            .is_finite()
-            .then_some((state.angular_velocity_z, now));
+        // unknown". Not sent (PX4 never sets it, and MAVLink 2 drops its zero): from the
+        // last two yaws, at most a second apart on the autopilot's clock.
+        let us = state.time_boot_us;
+        let rate = if rate_sent {
+            Some(state.angular_velocity_z).filter(|r| r.is_finite())
+        } else {
+            self.vehicle.yaw_sample.and_then(|(last, at)| {
+                let dt = us.checked_sub(at).filter(|&d| d > 0 && d <= 1_000_000)?;
+                // `dt` <= 10^6: exact in f32.
+                Some(attitude::wrap_pi(yaw - last) / (dt as f32 * 1e-6))
+            })
+        };
+        self.vehicle.yaw_sample = Some((yaw, us));
+        self.vehicle.yaw_rate = rate.map(|r| (r, now));
         gimbal.set_attitude(a, now);
         bump(&mut self.stats.vehicle_updates);
     }

@@ -118,7 +118,8 @@ impl State {
                 return Check::Bad;
             };
             if self.for_gimbal(state.target_system, state.target_component) {
-                self.autopilot_state(gimbal, &state, now);
+                let rate_sent = frame.payload().len() > codec::autopilot_state::LEN_WITHOUT_RATE;
+                self.autopilot_state(gimbal, &state, rate_sent, now);
             } else {
                 bump(&mut self.stats.not_for_us);
             }

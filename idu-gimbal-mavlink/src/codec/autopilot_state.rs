@@ -9,6 +9,11 @@ use super::{decode_with, f32_at, quaternion_at, u16_at, u32_at, u8_at};
 /// The full payload's length.
 pub const LEN: usize = 57;
 
+/// The payload's length before the `angular_velocity_z` extension: a payload no longer was
+/// sent without the rate, or with a rate of +0.0 (MAVLink 2 drops trailing zeros), which
+/// PX4 sends, never setting it.
+pub const LEN_WITHOUT_RATE: usize = 53;
+
 mod field {
     pub const TIME_BOOT_US: usize = 0;
     pub const Q: usize = 8;

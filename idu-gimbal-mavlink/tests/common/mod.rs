@@ -263,7 +263,9 @@ pub fn set_attitude(
     }
 }
 
-/// The autopilot's state for the gimbal device: the vehicle level, heading `yaw_deg`.
+/// The autopilot's state for the gimbal device: the vehicle level, heading `yaw_deg`, not
+/// turning, the rate sent as ArduPilot sends it (−0.0: MAVLink 2 keeps its sign bit on the
+/// wire, where it drops +0.0, which reads as no rate sent, PX4's).
 pub fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
     AutopilotStateForGimbalDevice {
         target_system: AP.0,
@@ -282,7 +284,7 @@ pub fn autopilot_state(yaw_deg: f32) -> AutopilotStateForGimbalDevice {
         feed_forward_angular_velocity_z: 0.0,
         estimator_status: Default::default(),
         landed_state: Default::default(),
-        angular_velocity_z: 0.0,
+        angular_velocity_z: -0.0,
     }
 }
 
