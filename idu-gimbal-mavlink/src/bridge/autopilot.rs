@@ -97,8 +97,9 @@ pub(crate) struct Vehicle {
     pub(crate) yaw: Option<(f32, Instant)>,
     /// Yaw rate (rad/s, about NED's down axis), the autopilot's or from its last two yaws.
     pub(crate) yaw_rate: Option<(f32, Instant)>,
-    /// The last yaw (radians) and the autopilot's `time_boot_us` of it, for a rate.
-    pub(crate) yaw_sample: Option<(f32, u64)>,
+    /// The last yaw (radians) and the autopilot's `time_boot_us` of it, its low 32 bits (a
+    /// clock that wraps every 71 minutes, read across the wrap), for a rate.
+    pub(crate) yaw_sample: Option<(f32, u32)>,
     /// From GLOBAL_POSITION_INT: lat, lon (1e-7°), alt and relative alt (mm).
     pub(crate) position: Option<[i32; 4]>,
 }
@@ -189,12 +190,13 @@ impl State {
         // common.xml: "Z component of angular velocity in NED (North, East, Down). NaN if
         // unknown". Not sent (PX4 never sets it, and MAVLink 2 drops its zero): from the
         // last two yaws, at most a second apart on the autopilot's clock.
-        let us = state.time_boot_us;
+        // The low 32 bits: the difference of two is right across their wrap.
+        let us = state.time_boot_us as u32;
         let rate = if rate_sent {
             Some(state.angular_velocity_z).filter(|r| r.is_finite())
         } else {
             self.vehicle.yaw_sample.and_then(|(last, at)| {
-                let dt = us.checked_sub(at).filter(|&d| d > 0 && d <= 1_000_000)?;
+                let dt = Some(us.wrapping_sub(at)).filter(|&d| d > 0 && d <= 1_000_000)?;
                 // `dt` <= 10^6: exact in f32.
                 Some(attitude::wrap_pi(yaw - last) / (dt as f32 * 1e-6))
             })

@@ -152,9 +152,8 @@ impl<const N: usize> Outbox<N> {
     ) -> Result<(), OutboxError> {
         // Only `write` is the message's own: the framing around it is one copy for every
         // message, out of line.
-        let place = self.place_of(component)?;
-        write(self.reserve(len)?);
-        self.seal(system, component, id, crc_extra, len, place);
+        write(self.reserve(component, len)?);
+        self.seal(system, component, id, crc_extra, len);
         Ok(())
     }
 
@@ -166,13 +165,15 @@ impl<const N: usize> Outbox<N> {
             .ok_or(OutboxError::Components)
     }
 
-    /// Room for a frame of a `len`-byte payload at `end`: the payload's bytes, zeroed.
+    /// Room for a frame from `component` of a `len`-byte payload at `end`: the payload's
+    /// bytes, zeroed.
     #[inline(never)]
-    fn reserve(&mut self, len: usize) -> Result<&mut [u8], OutboxError> {
+    fn reserve(&mut self, component: u8, len: usize) -> Result<&mut [u8], OutboxError> {
         // A MAVLink payload has 1 to 255 bytes.
         if !(1..=255).contains(&len) {
             return Err(OutboxError::Encode);
         }
+        self.place_of(component)?;
         // Every length below is at most a frame's 280 bytes or the outbox's N, with
         // `start <= end <= N`: the saturating operations never saturate, and no overflow
         // check is left to panic.
@@ -201,16 +202,10 @@ impl<const N: usize> Outbox<N> {
     /// payload's trailing zeros dropped (MAVLink 2), the header, the checksum, the
     /// signature; the frame queued.
     #[inline(never)]
-    fn seal(
-        &mut self,
-        system: u8,
-        component: u8,
-        id: u32,
-        crc_extra: u8,
-        len: usize,
-        place: usize,
-    ) {
+    fn seal(&mut self, system: u8, component: u8, id: u32, crc_extra: u8, len: usize) {
         let signature_len = self.signature_len();
+        // Found by `reserve`.
+        let place = self.place_of(component).unwrap_or(0);
         let sequence = self
             .sequences
             .get(place)
