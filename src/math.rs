@@ -11,8 +11,9 @@ const PI_2_LO: f32 = 4.838_268e-4;
 ///
 /// `libm::sincosf` computes in `f64` (musl's kernels), which a Cortex-M4F does in software:
 /// with it the MAVLink bridge carried about 6 KiB of `f64` routines and a Payne–Hanek table for
-/// angles it never sees. Here the angle is reduced by multiples of π/2 (to within 10⁻⁸
-/// for |x| < 6000 rad, far beyond the half-angles of a gimbal's ±325°) and each quadrant
+/// angles it never sees. Here the angle is reduced by multiples of π/2 (to within 10⁻⁷
+/// for |x| < 6000 rad, the f32 rounding of the reduced angle itself, far beyond the
+/// half-angles of a gimbal's ±325°) and each quadrant
 /// evaluates Taylor polynomials to x⁹ and x¹⁰ on [−π/4, π/4], whose truncation error is
 /// below 2·10⁻⁹, under f32 rounding (6·10⁻⁸): the result is within a few ulps of the true
 /// value (the tests compare with `f64` on a dense grid). NaN and infinities give NaN.

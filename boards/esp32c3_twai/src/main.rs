@@ -7,6 +7,10 @@
 //!   frames whose bits happen to match through; the driver ignores those).
 //! * Millisecond tick: esp-hal's `time::Instant` (the system timer).
 //! * Logging over the USB serial/JTAG console with esp-println.
+//! * Bus-off is not recovered from: esp-hal's TWAI stays in reset mode, every receive
+//!   answering bus-off (each counted, each poll logging the first), until
+//!   `initiate_recovery`. A product recovers there; this example leaves the link down until
+//!   reset.
 //!
 //! The main loop points the gimbal 30° down once, pushes stand-in vehicle data at 10 Hz
 //! (replace [`vehicle_stand_in`] with your autopilot's estimates), polls the driver and

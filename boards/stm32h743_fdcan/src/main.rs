@@ -9,6 +9,10 @@
 //! * Clocks: HSE at [`HSE_HZ`] (16 MHz on the Pixhawk 6X; set 24 MHz for a Cube Orange),
 //!   400 MHz core. Millisecond tick: SysTick at 1 kHz.
 //! * Logging through defmt-rtt, panics through panic-probe (over the debug probe).
+//! * Bus-off is logged (the adapter reports it once) and not recovered from: the M_CAN
+//!   core stays in initialisation until software restarts it (`idu_gimbal_fdcan`'s docs:
+//!   release the controller, through configuration mode back to normal, wrap it again). A
+//!   product restarts it there; this example leaves the link down until reset.
 //!
 //! The main loop points the gimbal 30° down once, pushes stand-in vehicle data at 10 Hz
 //! (replace [`vehicle_stand_in`] with your autopilot's estimates), polls the driver and

@@ -7,7 +7,8 @@
 //! What it does each turn: pushes the vehicle's estimates at 10 Hz (the link sends each
 //! at its own rate while fresh), polls the port (busy polling: a postback is four
 //! back-to-back frames, ~0.5 ms at 1 Mbit/s, more than some receive FIFOs hold), and hands
-//! out each CAN driver error, each event with the newest postback, and the counters every 10 s.
+//! out the first CAN driver error of each poll (the port counts every one), each event
+//! with the newest postback, and the counters every 10 s.
 
 use embedded_can::nb::Can;
 use idu_gimbal::link::LinkStats;

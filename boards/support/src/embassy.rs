@@ -1,5 +1,7 @@
 //! Between embassy-time and the core's clock, for the embassy boards (`boards/embassy_*`):
-//! the conversion holds at any embassy-time tick rate.
+//! exact at a tick rate that is a whole number of kHz (the boards' 1 kHz and 1 MHz). At
+//! another (32,768 Hz), embassy's `from_millis` rounds down, and a task may wake up to a
+//! tick before its deadline's millisecond and poll again until it comes.
 
 use idu_gimbal::link::{Link, Medium};
 use idu_gimbal::Instant;
