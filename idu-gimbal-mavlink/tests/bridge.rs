@@ -1034,18 +1034,26 @@ fn streams_are_asked_of_the_autopilot_until_they_come() {
         b.receive_all(&frame(AP, 4, &autopilot_state(10.0)), t(ms));
         assert!(asks(&mut b, ms, ms + 1_000).is_empty());
     }
-    // The autopilot state stops (a rebooted autopilot forgets the interval): asked again
-    // 5 s after it was last heard (at 15 s), and every 5 s while it stays away.
+    // The autopilot state stops (a rebooted autopilot forgets the intervals): asked again
+    // 5 s after it was last heard (at 15 s), and every 5 s while it stays away, and the
+    // setpoints with it (PX4 back at its 5 Hz).
     for s in 0..10u32 {
         let ms = 16_000 + s * 1_000;
         b.receive_all(&frame(AP, 5, &pos), t(ms));
         let a = asks(&mut b, ms, ms + 1_000);
         let expect: &[(u32, u32, u32)] = match ms {
-            20_000 => &[(20_000, 286, 50_000)],
-            25_000 => &[(25_000, 286, 50_000)],
+            20_000 => &[(20_000, 286, 50_000), (20_000, 284, 50_000)],
+            25_000 => &[(25_000, 286, 50_000), (25_000, 284, 50_000)],
             _ => &[],
         };
         assert_eq!(a, expect, "at {ms}");
+    }
+    // Back: nothing is asked again.
+    for s in 0..10u32 {
+        let ms = 26_000 + s * 1_000;
+        b.receive_all(&frame(AP, 6, &pos), t(ms));
+        b.receive_all(&frame(AP, 7, &autopilot_state(10.0)), t(ms));
+        assert!(asks(&mut b, ms, ms + 1_000).is_empty(), "at {ms}");
     }
     // The core now holds and pushes the position.
     b.link.poll(t(26_000));

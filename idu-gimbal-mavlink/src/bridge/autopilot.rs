@@ -55,7 +55,8 @@ const AUTOPILOT_STATE_STREAM: Wanted = Wanted {
     once: false,
 };
 
-/// `GIMBAL_DEVICE_SET_ATTITUDE` at 20 Hz, asked once: PX4 re-sends its latest setpoint at
+/// `GIMBAL_DEVICE_SET_ATTITUDE` at 20 Hz, asked once, and again with the autopilot state
+/// when that stream stops (a restarted autopilot forgets both): PX4 re-sends its latest setpoint at
 /// the stream's rate, 5 Hz on a port in mode Normal (`configure_streams`), too slow for a
 /// smooth rate or ROI. Not asked of ArduPilot (its heartbeat's autopilot): it sends its
 /// setpoints at 50 Hz unasked and has no such stream, so it answers `DENIED`, and its SITL
@@ -151,8 +152,8 @@ impl State {
             self.position_stream.asked = None;
             self.autopilot_state_stream.asked = None;
             // Taken as asked where the ask is refused (see `SETPOINT_STREAM`).
-            self.setpoint_stream.asked =
-                (autopilot == MavAutopilot::Ardupilotmega as u8).then_some(now);
+            self.setpoints_askable = autopilot != MavAutopilot::Ardupilotmega as u8;
+            self.setpoint_stream.asked = (!self.setpoints_askable).then_some(now);
             self.next_stream_check = None;
         }
         self.autopilot = Some((system, component));
@@ -235,6 +236,16 @@ impl State {
             return;
         };
         self.next_stream_check = Some(now.add_millis(STREAM_CHECK_MS));
+        // The state came and has stopped: the autopilot restarted (or its link was down),
+        // forgetting the intervals asked of it; the setpoints' is asked again with it.
+        if self.setpoints_askable
+            && self.autopilot_state_stream.heard.is_some()
+            && self
+                .autopilot_state_stream
+                .due(&AUTOPILOT_STATE_STREAM, now)
+        {
+            self.setpoint_stream.asked = None;
+        }
         for (wanted, stream) in [
             (AUTOPILOT_STATE_STREAM, &mut self.autopilot_state_stream),
             (POSITION_STREAM, &mut self.position_stream),

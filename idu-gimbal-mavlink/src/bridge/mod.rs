@@ -196,6 +196,9 @@ pub(crate) struct State {
     position_stream: StreamState,
     autopilot_state_stream: StreamState,
     setpoint_stream: StreamState,
+    /// Whether the autopilot takes an ask for the setpoint stream (PX4; not ArduPilot, see
+    /// `SETPOINT_STREAM`).
+    setpoints_askable: bool,
     /// When to look at the streams again (`None`: at the next poll). The asks are due at
     /// whole seconds; looking every `STREAM_CHECK_MS` keeps the idle poll short.
     next_stream_check: Option<Instant>,
@@ -245,6 +248,7 @@ impl Bridge {
                 position_stream: StreamState::default(),
                 autopilot_state_stream: StreamState::default(),
                 setpoint_stream: StreamState::default(),
+                setpoints_askable: false,
                 next_stream_check: None,
                 vehicle: Vehicle::default(),
                 rate_earth: false,
