@@ -253,6 +253,15 @@ mod tests {
         Signing::new(SigningConfig::from_passphrase(b"idu-gimbal", 7))
     }
 
+    /// pymavlink's frame signed by `tx` with its next timestamp at or after `ts`.
+    fn signed_at(tx: &mut Signing, ts: u64) -> Vec<u8> {
+        let body = hex(PYMAVLINK);
+        tx.at_least(ts);
+        let mut f = body[..44].to_vec();
+        f.extend_from_slice(&tx.sign(&body[..44]));
+        f
+    }
+
     #[test]
     fn the_key_is_the_passphrase_s_sha256_and_never_printed() {
         let c = SigningConfig::from_passphrase(b"idu-gimbal", 7);
@@ -287,13 +296,7 @@ mod tests {
     fn each_stream_keeps_its_own_timestamp() {
         // Frames from streams A and B, signed by a sender whose clock moves on.
         let mut tx = signing();
-        let body = hex(PYMAVLINK);
-        let mut frame_at = |ts: u64| {
-            tx.at_least(ts);
-            let mut f = body[..44].to_vec();
-            f.extend_from_slice(&tx.sign(&body[..44]));
-            f
-        };
+        let mut frame_at = |ts: u64| signed_at(&mut tx, ts);
         // Each signature one past the time given: 11, 21, 31, 32.
         let (a11, b21, a31, b32) = (frame_at(10), frame_at(20), frame_at(30), frame_at(31));
         let mut rx = signing();
@@ -371,13 +374,7 @@ mod tests {
     #[test]
     fn a_full_table_forgets_only_streams_too_old_to_come_back_as_new() {
         let mut tx = signing();
-        let body = hex(PYMAVLINK);
-        let mut frame_at = |ts: u64| {
-            tx.at_least(ts);
-            let mut f = body[..44].to_vec();
-            f.extend_from_slice(&tx.sign(&body[..44]));
-            f
-        };
+        let mut frame_at = |ts: u64| signed_at(&mut tx, ts);
         let mut rx = signing();
         // STREAMS streams, systems 1 to 16, each heard at about the same time.
         let first: Vec<Vec<u8>> = (0..STREAMS as u64).map(|i| frame_at(100 + i)).collect();
