@@ -14,7 +14,8 @@
 //! - A NaN quaternion with angular velocities is a rate, held by the core (its dead-man
 //!   stops the gimbal when the stream stops). Its yaw rate is in the frame the flags name;
 //!   the gimbal's rate command turns the yaw motor, so an earth-frame yaw rate becomes a
-//!   motor rate by taking away the vehicle's yaw rate, and is refused without one.
+//!   motor rate by taking away the vehicle's yaw rate, and is refused without one. An axis
+//!   whose rate is NaN ("NaN to be ignored") is held; with both NaN, refused.
 //! - Yaw is in the earth frame with `YAW_IN_EARTH_FRAME`, or with `YAW_LOCK` unless
 //!   `YAW_IN_VEHICLE_FRAME` says otherwise (common.xml: YAW_LOCK "lock yaw angle to
 //!   absolute angle relative to North", the older way to say earth frame).
@@ -136,8 +137,16 @@ impl State {
     ) {
         // Body rates in FRD: about y is pitch (positive raises the camera, as the wire's
         // positive pitch rate), about z is yaw (positive to the right, as the wire's).
-        let pitch_rate = set.angular_velocity_y;
-        let mut yaw_rate = set.angular_velocity_z;
+        // common.xml: each "NaN to be ignored": that axis held (0), the other turned; with
+        // both NaN the setpoint asks nothing.
+        let (y, z) = (set.angular_velocity_y, set.angular_velocity_z);
+        if y.is_nan() && z.is_nan() {
+            bump(&mut self.stats.refused_setpoints);
+            return;
+        }
+        let held = |r: f32| if r.is_nan() { 0.0 } else { r };
+        let pitch_rate = held(y);
+        let mut yaw_rate = held(z);
         let earth = earth_yaw(set.flags);
         if earth {
             // An earth-frame yaw rate, to the motor's: minus the vehicle's own turn.

@@ -963,6 +963,26 @@ fn a_retract_the_queue_had_no_room_for_goes_with_the_next_setpoint() {
     assert_eq!(queued(&mut b.link), []);
 }
 
+/// common.xml: each angular velocity is "NaN to be ignored": a rate setpoint with one axis
+/// NaN turns the other and holds that one; with both NaN it asks nothing, refused.
+#[test]
+fn a_rate_setpoint_ignores_an_axis_given_as_nan() {
+    let mut b = bridge();
+    let mut rate = set_attitude(GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 0.0, 0.0);
+    rate.q = [f32::NAN; 4];
+    rate.angular_velocity_y = f32::NAN;
+    rate.angular_velocity_z = 0.2;
+    let before = b.stats();
+    b.receive_all(&frame(AP, 0, &rate), t(0));
+    let after = b.stats();
+    assert_eq!(after.rate_setpoints, before.rate_setpoints + 1);
+    assert_eq!(after.refused_setpoints, before.refused_setpoints);
+    assert!(b.link.is_rate_holding());
+    rate.angular_velocity_z = f32::NAN;
+    b.receive_all(&frame(AP, 1, &rate), t(10));
+    assert_eq!(b.stats().refused_setpoints, after.refused_setpoints + 1);
+}
+
 #[test]
 fn a_rolled_setpoint_is_refused() {
     let mut b = bridge();
