@@ -43,13 +43,13 @@ impl Sender {
     }
 
     /// Queues message `M` from `component`, its `len`-byte payload written in place by its
-    /// codec ([`crate::codec`]); a full outbox is counted.
+    /// codec ([`crate::codec`]); a full outbox is counted. Whether it was queued.
     pub(crate) fn send_encoded<M: MessageSpecStatic>(
         &mut self,
         component: u8,
         len: usize,
         encode: impl FnOnce(&mut [u8]),
-    ) {
+    ) -> bool {
         let pushed = self.outbox.push_with(
             self.system_id,
             component,
@@ -61,6 +61,7 @@ impl Sender {
         if pushed.is_err() {
             bump(&mut self.outbox_full);
         }
+        pushed.is_ok()
     }
 
     /// Queues `me`'s `COMMAND_ACK` of `command` with `result` to `to`: the one way ACKs go

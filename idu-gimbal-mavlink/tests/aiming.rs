@@ -386,6 +386,28 @@ fn a_setpoint_beyond_the_yaw_travel_or_not_reached_is_reported_once() {
     assert_eq!(rig.bridge.link.stats().aim_not_reached, 1);
 }
 
+/// The aim's troubles are told whatever the status's interval: with the status stopped
+/// (`SET_MESSAGE_INTERVAL` −1), the text still comes, within the heartbeat's second.
+#[test]
+fn an_aim_not_reached_is_told_with_the_status_stopped() {
+    let mut rig = Rig::with(SimConfig {
+        slew_dps: 0.0,
+        ..SimConfig::default()
+    });
+    rig.run(1000);
+    rig.send(&command7(
+        (AP.0, 154),
+        MavCmd::SetMessageInterval,
+        [285.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    ));
+    rig.run(1000);
+    rig.status = None;
+    rig.setpoint = Some((GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 90.0, 0.0));
+    rig.run(20_000);
+    assert!(rig.status.is_none(), "the status stopped");
+    assert_eq!(rig.texts, ["Gimbal: setpoint not reached, re-sent 3 times"]);
+}
+
 #[cfg(feature = "roi")]
 #[test]
 fn a_region_of_interest_is_held_while_the_vehicle_turns() {

@@ -49,18 +49,31 @@ impl State {
     /// begins to need the yaw beyond the motor's travel, or is not reached: the failure
     /// flags carry the first (`AT_YAW_LIMIT`), but no flag the second, and ground stations
     /// show a status text to the pilot (QGroundControl as a message, ArduPilot and PX4
-    /// forward it). Once each time it begins.
-    fn tell_aim(&mut self, now: AimTold) {
-        let was = core::mem::replace(&mut self.aim_told, now);
+    /// forward it). Once each time it begins; looked at with each status and each
+    /// heartbeat (so also with the status stopped), a text the outbox had no room for at
+    /// the next look.
+    fn tell_aim<const Q: usize, const T: usize, M: Medium>(&mut self, gimbal: &Link<Q, T, M>) {
+        let aim = gimbal.aim_state();
+        let now = AimTold {
+            at_yaw_limit: aim.is_some_and(|a| a.at_yaw_limit),
+            not_reached: aim.is_some_and(|a| a.not_reached),
+        };
+        // A trouble that has ended is told again when it begins again.
+        self.aim_told.not_reached &= now.not_reached;
+        self.aim_told.at_yaw_limit &= now.at_yaw_limit;
         // The text says how many re-commands the link makes.
         const _: () = assert!(idu_gimbal::link::aim::ATTEMPTS == 3);
-        let text = if now.not_reached && !was.not_reached {
-            "Gimbal: setpoint not reached, re-sent 3 times"
-        } else if now.at_yaw_limit && !was.at_yaw_limit {
-            "Gimbal: setpoint beyond yaw travel, held at limit"
-        } else {
-            return;
-        };
+        if now.not_reached && !self.aim_told.not_reached {
+            self.aim_told.not_reached = self.warn("Gimbal: setpoint not reached, re-sent 3 times");
+        }
+        if now.at_yaw_limit && !self.aim_told.at_yaw_limit {
+            self.aim_told.at_yaw_limit =
+                self.warn("Gimbal: setpoint beyond yaw travel, held at limit");
+        }
+    }
+
+    /// A warning `STATUSTEXT` from the gimbal device; whether the outbox took it.
+    fn warn(&mut self, text: &str) -> bool {
         let message = Statustext {
             severity: MavSeverity::Warning,
             text: name(text),
@@ -71,7 +84,7 @@ impl State {
             self.config.gimbal_component,
             codec::statustext::LEN,
             |p| codec::statustext::encode(&message, p),
-        );
+        )
     }
 
     /// The heartbeats, when due: the gimbal device's and, with one, the camera's once its
@@ -90,6 +103,8 @@ impl State {
         // The camera's identity is its gimbal type's: asked only when a heartbeat is due.
         let camera_known = gimbal.gimbal_type().is_some();
         self.next_heartbeat = Some(now.add_millis(self.config.heartbeat.millis()));
+        // With the status stopped, the aim's troubles are still told.
+        self.tell_aim(gimbal);
         let hb = codec::heartbeat::of_component(MavType::Gimbal);
         self.out.send_encoded::<Heartbeat>(
             self.config.gimbal_component,
@@ -157,15 +172,10 @@ impl State {
         if !gimbal.is_link_up() {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
         }
-        let aim = gimbal.aim_state();
-        let told = AimTold {
-            at_yaw_limit: aim.is_some_and(|a| a.at_yaw_limit),
-            not_reached: aim.is_some_and(|a| a.not_reached),
-        };
-        if told.at_yaw_limit {
+        if gimbal.aim_state().is_some_and(|a| a.at_yaw_limit) {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
-        self.tell_aim(told);
+        self.tell_aim(gimbal);
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,
             target_component: 0,
