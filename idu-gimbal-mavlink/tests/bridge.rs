@@ -983,6 +983,21 @@ fn a_rate_setpoint_ignores_an_axis_given_as_nan() {
     assert_eq!(b.stats().refused_setpoints, after.refused_setpoints + 1);
 }
 
+/// The vehicle's state is the followed autopilot's only: PX4 sends it to every component
+/// (target 0, 0), and another vehicle's on a shared link would move this one's horizon and
+/// north.
+#[test]
+fn another_vehicle_s_state_is_not_taken() {
+    let mut b = bridge();
+    let before = b.stats();
+    b.receive_all(&frame((AP.0 + 1, 1), 0, &autopilot_state(90.0)), t(0));
+    let after = b.stats();
+    assert_eq!(after.vehicle_updates, before.vehicle_updates);
+    assert_eq!(after.not_for_us, before.not_for_us + 1);
+    b.receive_all(&frame(AP, 0, &autopilot_state(90.0)), t(10));
+    assert_eq!(b.stats().vehicle_updates, after.vehicle_updates + 1);
+}
+
 #[test]
 fn a_rolled_setpoint_is_refused() {
     let mut b = bridge();

@@ -117,7 +117,11 @@ impl State {
             let Some(state) = codec::autopilot_state::decode(frame.payload()) else {
                 return Check::Bad;
             };
-            if self.for_gimbal(state.target_system, state.target_component) {
+            // The followed autopilot's only (PX4 addresses it to every component; another
+            // vehicle's, on a shared link, would move this one's horizon and north).
+            if self.for_gimbal(state.target_system, state.target_component)
+                && self.autopilot == Some(from)
+            {
                 let rate_sent = frame.payload().len() > codec::autopilot_state::LEN_WITHOUT_RATE;
                 self.autopilot_state(gimbal, &state, rate_sent, now);
             } else {
