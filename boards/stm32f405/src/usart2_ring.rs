@@ -3,10 +3,13 @@
 //!
 //! The USART2 interrupt (RXNE, handled by [`on_interrupt`]) moves every byte into a
 //! `RING`-byte ring, so no byte is lost while the main loop is busy. A full ring or a line
-//! error (overrun, framing, parity, noise) is kept and reported by the next read as an
-//! error, which the driver counts; the parser above resynchronises on the next frame.
+//! error (overrun, framing, parity, noise) is reported by the next read as an error, which
+//! the driver counts (one for all that came between two reads); the parser above
+//! resynchronises on the next frame. Every byte the full ring dropped and every line error
+//! is counted here ([`counts`]).
 
 use core::cell::RefCell;
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::interrupt::Mutex;
 use heapless::Deque;
@@ -22,6 +25,26 @@ static UART_RX: Mutex<RefCell<Option<Rx<pac::USART2>>>> = Mutex::new(RefCell::ne
 static RECEIVED: Mutex<RefCell<Deque<u8, RING>>> = Mutex::new(RefCell::new(Deque::new()));
 /// The latest line error or ring overflow not yet reported.
 static LINE_ERROR: Mutex<RefCell<Option<LineError>>> = Mutex::new(RefCell::new(None));
+/// Bytes the full ring dropped, and line errors, since start (wrapping).
+static DROPPED: AtomicU32 = AtomicU32::new(0);
+static LINE_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+/// What the receive side lost since start, each wrapping at `u32::MAX`.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub struct Counts {
+    /// Bytes received while the ring was full, dropped.
+    pub dropped_bytes: u32,
+    /// Line errors the USART reported (overrun, framing, parity, noise).
+    pub line_errors: u32,
+}
+
+/// The counts so far.
+pub fn counts() -> Counts {
+    Counts {
+        dropped_bytes: DROPPED.load(Ordering::Relaxed),
+        line_errors: LINE_ERRORS.load(Ordering::Relaxed),
+    }
+}
 
 /// The USART2 interrupt's work. The program defines the handler (`#[interrupt] fn USART2()`)
 /// and calls this: a handler defined here would sit in the vector table of every program
@@ -36,12 +59,14 @@ pub fn on_interrupt() {
                 Ok(byte) => {
                     if ring.push_back(byte).is_err() {
                         // The main loop fell behind: the byte is lost, and said so.
+                        DROPPED.fetch_add(1, Ordering::Relaxed);
                         LINE_ERROR.borrow(cs).replace(Some(LineError::Overrun));
                     }
                 }
                 Err(nb::Error::WouldBlock) => break,
                 // The HAL read the data register to clear the error flag.
                 Err(nb::Error::Other(e)) => {
+                    LINE_ERRORS.fetch_add(1, Ordering::Relaxed);
                     LINE_ERROR.borrow(cs).replace(Some(e));
                 }
             }

@@ -5,8 +5,9 @@
 //!   (set the autopilot's serial port to MAVLink 2 at the same rate). Receive is
 //!   interrupt-driven into a 1024-byte ring (`src/usart2_ring.rs`): at 921600
 //!   baud 92 bytes arrive a millisecond, and the ring holds 11 ms of them while the main
-//!   loop is busy. A full ring or a line error is counted by the reader (the frame it broke
-//!   fails its CRC and is skipped); transmit is polled without blocking.
+//!   loop is busy. A full ring's dropped bytes and the line errors are counted by the ring
+//!   and logged as they grow (the frame they broke fails its CRC and is skipped, counted by
+//!   the bridge's reader); transmit is polled without blocking.
 //! * To the gimbal: CAN1 on **PB8 (RX) / PB9 (TX)** at 1 Mbit/s with a filter passing only
 //!   the postback, clocks and the 1 kHz tick (`src/board.rs`).
 //! * The bridge (`idu_gimbal_mavlink::Bridge`) owns the CAN driver; the main loop polls the
@@ -76,12 +77,13 @@ mod fw {
             if let Err(e) = port.poll(&mut link, now) {
                 defmt::warn!("{}", e);
             }
-            // A line error is counted where it shows: the frame it broke fails its CRC.
+            // What a line error or a full ring lost is counted by the ring (the frame it
+            // broke fails its CRC, counted by the bridge's reader), said as it grows.
             if input
                 .receive(&mut bridge, &mut link, now, |buf| autopilot.read(buf))
                 .is_err()
             {
-                defmt::warn!("autopilot UART: line error or overrun");
+                defmt::warn!("autopilot UART: {}", usart2_ring::counts());
             }
             bridge.poll(&mut link, now);
             loop {

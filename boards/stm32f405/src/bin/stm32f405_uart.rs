@@ -107,7 +107,12 @@ mod fw {
 
             if now.is_at_or_after(next_stats) {
                 next_stats = now.add_millis(10_000);
-                defmt::info!("stats: {} {}", link.stats(), port.stats());
+                defmt::info!(
+                    "stats: {} {} {}",
+                    link.stats(),
+                    port.stats(),
+                    usart2_ring::counts()
+                );
             }
         }
     }
