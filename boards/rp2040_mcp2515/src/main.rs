@@ -12,6 +12,9 @@
 //!   arrives in RXB0 while an older one still waits in RXB1 is read first. Busy polling at
 //!   10 MHz SPI empties both well within a frame time; a postback whose frames did come out
 //!   of order fails its CRC and is counted, never delivered.)
+//! * Transmit: one frame in flight ([`InOrder`]). mcp25xx loads the lowest free of the
+//!   three transmit buffers at equal priority, and the MCP2515 sends equal ones highest
+//!   buffer first: two frames queued behind a third would go out in reverse.
 //! * Millisecond tick: the RP2040's 1 MHz 64-bit timer.
 //! * GP25 (the Pico's LED) is on while the gimbal's link is up.
 //!
@@ -30,10 +33,13 @@
 
 use embedded_can::{ExtendedId, Id};
 use embedded_hal::digital::OutputPin;
+use embedded_hal::spi::SpiDevice;
 use embedded_hal_bus::spi::ExclusiveDevice;
 use mcp25xx::bitrates::clock_16mhz::CNF_1000K_BPS;
 use mcp25xx::registers::{OperationMode, RXB0CTRL, RXB1CTRL, RXM};
-use mcp25xx::{AcceptanceFilter, Config as McpConfig, IdHeader, MCP25xx};
+use mcp25xx::{
+    AcceptanceFilter, CanFrame, Config as McpConfig, IdHeader, MCP25xx, SpiError, TxBuffer,
+};
 use panic_halt as _;
 use rp2040_hal::{self as hal, fugit::RateExtU32, pac, Clock};
 
@@ -42,6 +48,34 @@ use idu_gimbal::{CanPort, Config, Instant, Link};
 
 // The main loop shared with the other CAN firmware.
 use idu_firmware_support::app::App;
+
+/// The MCP2515 with one frame in flight, so that frames go out in the order the link
+/// queued them: mcp25xx's `transmit` takes the lowest free of the three transmit buffers,
+/// all at the same priority, and the controller sends equal ones highest buffer first
+/// (datasheet, transmit priority). A frame takes ~130 µs at 1 Mbit/s and the protocol sends
+/// a few dozen a second: one at a time costs nothing.
+struct InOrder<SPI: SpiDevice>(MCP25xx<SPI>);
+
+impl<SPI: SpiDevice> embedded_can::nb::Can for InOrder<SPI> {
+    type Frame = CanFrame;
+    type Error = SpiError<SPI::Error>;
+
+    fn transmit(&mut self, frame: &CanFrame) -> nb::Result<Option<CanFrame>, Self::Error> {
+        let status = self.0.read_status().map_err(SpiError)?;
+        if status.txreq0() || status.txreq1() || status.txreq2() {
+            return Err(nb::Error::WouldBlock);
+        }
+        self.0
+            .load_tx_buffer(TxBuffer::TXB0, frame)
+            .map_err(SpiError)?;
+        self.0.request_to_send(TxBuffer::TXB0).map_err(SpiError)?;
+        Ok(None)
+    }
+
+    fn receive(&mut self) -> nb::Result<CanFrame, Self::Error> {
+        embedded_can::nb::Can::receive(&mut self.0)
+    }
+}
 
 /// The second-stage bootloader for the Pico's W25Q080 flash (for other flash chips,
 /// `rp2040_boot2::BOOT_LOADER_GENERIC_03H` works with any).
@@ -155,9 +189,8 @@ fn main() -> ! {
         panic!("MCP2515 configuration over SPI failed");
     }
 
-    // `MCP25xx` implements `embedded_can::nb::Can` with a real `WouldBlock`: no adapter.
     let mut link: Link = Link::new(Config::default());
-    let mut port = CanPort::new(mcp);
+    let mut port = CanPort::new(InOrder(mcp));
     if let Some(pitch) = look_down() {
         // The queue is empty: this cannot be refused.
         let _ = link.send(GimbalCommand::Pitch(pitch));
