@@ -63,7 +63,8 @@ const POSTBACK: ExtendedId = match ExtendedId::new(ids::POSTBACK) {
 
 /// Received frames, queued by the CAN RX interrupt: bxCAN's FIFO holds 3 frames and a
 /// postback is 4 back-to-back frames (~0.5 ms at 1 Mbit/s), so the interrupt, not the task,
-/// empties it.
+/// empties it. A frame that finds this queue full is dropped inside embassy-stm32, which
+/// counts nothing (16 frames are four postbacks: the task would have to stall for 2 s).
 const RX_QUEUE: usize = 16;
 static RX_BUF: StaticCell<RxBuf<RX_QUEUE>> = StaticCell::new();
 
@@ -75,8 +76,10 @@ static VEHICLE: Channel<CriticalSectionRawMutex, Vehicle, 4> = Channel::new();
 fn transmit(tx: &mut CanTx<'_>, link: &mut Link) {
     while let Some(frame) = link.next_transmit() {
         let Ok(can_frame) = can::Frame::new_extended(frame.id, &frame.data) else {
-            // Every frame the link hands out is a valid 29-bit, 8-byte frame.
+            // Every frame the link hands out is a valid 29-bit, 8-byte frame: never here.
+            // Told done all the same, so that the link does not wait on it.
             warn!("frame {=u32:#x} not representable, dropped", frame.id);
+            link.transmit_done(None);
             continue;
         };
         match tx.try_write(&can_frame) {
