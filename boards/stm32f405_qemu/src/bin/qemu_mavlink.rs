@@ -255,9 +255,12 @@ mod fw {
                 if bytes.is_empty() {
                     break;
                 }
-                let n = bytes.len();
-                let _ = self.bridge_line.1.write(bytes);
-                self.bridge.transmit_written(n);
+                // What the pipe took (a fault-free one takes all); the rest at the next
+                // millisecond.
+                match self.bridge_line.1.write(bytes) {
+                    Ok(n) if n > 0 => self.bridge.transmit_written(n),
+                    _ => break,
+                }
             }
             self.rig.run_gimbal(now);
             self.ap.read(self.ms);
