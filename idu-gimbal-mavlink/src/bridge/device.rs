@@ -16,6 +16,7 @@ use super::State;
 use crate::codec;
 use crate::status;
 use crate::tx::name;
+use idu_gimbal::link::aim::AimState;
 use idu_gimbal::link::{Link, Medium};
 
 /// The yaw motor's range either side of the nose, degrees: the postback's ±170.00°, or
@@ -52,8 +53,7 @@ impl State {
     /// forward it). Once each time it begins; looked at with each status and each
     /// heartbeat (so also with the status stopped), a text the outbox had no room for at
     /// the next look.
-    fn tell_aim<const Q: usize, const T: usize, M: Medium>(&mut self, gimbal: &Link<Q, T, M>) {
-        let aim = gimbal.aim_state();
+    fn tell_aim(&mut self, aim: Option<AimState>) {
         let now = AimTold {
             at_yaw_limit: aim.is_some_and(|a| a.at_yaw_limit),
             not_reached: aim.is_some_and(|a| a.not_reached),
@@ -104,7 +104,7 @@ impl State {
         let camera_known = gimbal.gimbal_type().is_some();
         self.next_heartbeat = Some(now.add_millis(self.config.heartbeat.millis()));
         // With the status stopped, the aim's troubles are still told.
-        self.tell_aim(gimbal);
+        self.tell_aim(gimbal.aim_state());
         let hb = codec::heartbeat::of_component(MavType::Gimbal);
         self.out.send_encoded::<Heartbeat>(
             self.config.gimbal_component,
@@ -172,10 +172,11 @@ impl State {
         if !gimbal.is_link_up() {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
         }
-        if gimbal.aim_state().is_some_and(|a| a.at_yaw_limit) {
+        let aim = gimbal.aim_state();
+        if aim.is_some_and(|a| a.at_yaw_limit) {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
-        self.tell_aim(gimbal);
+        self.tell_aim(aim);
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,
             target_component: 0,
