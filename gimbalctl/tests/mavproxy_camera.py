@@ -318,22 +318,28 @@ class Autopilot(threading.Thread):
                 return got[0] if got else None
             time.sleep(0.01)
 
+    def _after_ack(self, since, command, kind):
+        """Each `kind` from the camera (arrival time, message) that follows its ACK of
+        `command`, in the order the bridge sent them (one socket keeps it)."""
+        with self.lock:
+            msgs = [(t, m) for t, m in self.bridge_msgs[since[0]:] if m.get_srcComponent() == CAMERA]
+        acked, after = False, []
+        for t, m in msgs:
+            if m.get_type() == "COMMAND_ACK" and m.command == command:
+                acked = True
+            elif acked and m.get_type() == kind:
+                after.append((t, m))
+        return after
+
     def after_ack(self, since, command, kind, timeout=REPLY_TIMEOUT):
         """The first `kind` from the camera that follows its ACK of `command` (the reply a
         command produces comes after its ACK; one MAVProxy asked for earlier may come
         between the command and the ACK)."""
         end = time.monotonic() + timeout
         while True:
-            with self.lock:
-                msgs = [m for _, m in self.bridge_msgs[since[0]:] if m.get_srcComponent() == CAMERA]
-            acked = False
-            for m in msgs:
-                if m.get_type() == "COMMAND_ACK" and m.command == command:
-                    acked = True
-                elif acked and m.get_type() == kind:
-                    return m
-            if time.monotonic() >= end:
-                return None
+            after = self._after_ack(since, command, kind)
+            if after or time.monotonic() >= end:
+                return after[0][1] if after else None
             time.sleep(0.01)
 
     def stamps_after_ack(self, since, command, kind, count, timeout=REPLY_TIMEOUT):
@@ -341,14 +347,7 @@ class Autopilot(threading.Thread):
         `command` (fewer if they do not come within `timeout`)."""
         end = time.monotonic() + timeout
         while True:
-            with self.lock:
-                msgs = [(t, m) for t, m in self.bridge_msgs[since[0]:] if m.get_srcComponent() == CAMERA]
-            acked, stamps = False, []
-            for t, m in msgs:
-                if m.get_type() == "COMMAND_ACK" and m.command == command:
-                    acked = True
-                elif acked and m.get_type() == kind:
-                    stamps.append(t)
+            stamps = [t for t, _ in self._after_ack(since, command, kind)]
             if len(stamps) >= count or time.monotonic() >= end:
                 return stamps[:count]
             time.sleep(0.01)
