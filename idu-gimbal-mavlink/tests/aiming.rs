@@ -72,6 +72,14 @@ impl Rig {
         })
     }
 
+    /// A gimbal that takes commands and does not move.
+    fn stuck() -> Self {
+        Self::with(SimConfig {
+            slew_dps: 0.0,
+            ..SimConfig::default()
+        })
+    }
+
     fn with(sim: SimConfig) -> Self {
         let bridge = Firmware::new(
             Link::new(Config::default()),
@@ -375,10 +383,7 @@ fn a_setpoint_beyond_the_yaw_travel_or_not_reached_is_reported_once() {
         .failure_flags
         .contains(GimbalDeviceErrorFlags::AT_YAW_LIMIT));
     // A gimbal that takes commands and does not move: not reached, said once.
-    let mut rig = Rig::with(SimConfig {
-        slew_dps: 0.0,
-        ..SimConfig::default()
-    });
+    let mut rig = Rig::stuck();
     rig.run(1000);
     rig.setpoint = Some((GimbalDeviceFlags::YAW_IN_VEHICLE_FRAME, 90.0, 0.0));
     rig.run(20_000);
@@ -390,10 +395,7 @@ fn a_setpoint_beyond_the_yaw_travel_or_not_reached_is_reported_once() {
 /// (`SET_MESSAGE_INTERVAL` −1), the text still comes, within the heartbeat's second.
 #[test]
 fn an_aim_not_reached_is_told_with_the_status_stopped() {
-    let mut rig = Rig::with(SimConfig {
-        slew_dps: 0.0,
-        ..SimConfig::default()
-    });
+    let mut rig = Rig::stuck();
     rig.run(1000);
     rig.send(&command7(
         (AP.0, 154),
