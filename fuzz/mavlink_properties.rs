@@ -74,10 +74,14 @@ fn assert_whole_frames(out: &FrameReader) {
 fn dual_light_bridge() -> Firmware {
     let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
     Firmware {
-        bridge: Bridge::new(BridgeConfig {
-            camera,
-            ..BridgeConfig::default()
-        }),
+        bridge: Bridge::new(
+            BridgeConfig {
+                camera,
+                ..BridgeConfig::default()
+            }
+            .check()
+            .unwrap(),
+        ),
         link: Link::new(Config::default()),
     }
 }

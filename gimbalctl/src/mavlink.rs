@@ -298,7 +298,10 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
         camera: Some(camera),
         signing: opts.signing.as_ref().map(signing_config).transpose()?,
         ..BridgeConfig::default()
-    };
+    }
+    .check()
+    .map_err(|e| Failure::Usage(format!("gimbalctl mavlink: {e}")))?;
+    let bridge = Bridge::new(config);
     // Every argument checked (exit 2) before anything is opened.
     let udp = match opts.autopilot {
         Autopilot::Udp { listen, to: tos } => {
@@ -338,7 +341,6 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let now = clock(StdInstant::now());
     match opts.gimbal {
         Gimbal::Sim => {
-            let bridge = Bridge::new(config);
             // The simulated gimbal is of the family's type: the dual light's postback says
             // so, and the camera's model and zoom range follow it.
             let sim_config = SimConfig {
@@ -370,7 +372,7 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
             target.run(
                 Mode::Drive,
                 Bridged {
-                    config,
+                    bridge,
                     port,
                     announce: (where_, what),
                     exit_after_ms: opts.exit_after_ms,
@@ -411,7 +413,7 @@ fn parse_resolution(s: &str) -> Result<(u16, u16), Failure> {
 
 /// The bridge over an open gimbal session.
 struct Bridged {
-    config: BridgeConfig,
+    bridge: Bridge,
     port: Port,
     announce: (String, String),
     exit_after_ms: Option<u64>,
@@ -422,7 +424,7 @@ impl Job for Bridged {
 
     fn run<T: Transport>(self, session: Session<T>) -> Result<(), Failure> {
         announce(&self.announce.0, &self.announce.1)?;
-        let bridge = Bridge::new(self.config);
+        let bridge = self.bridge;
         let now = clock(StdInstant::now());
         serve(
             bridge,
@@ -688,7 +690,7 @@ mod tests {
             Mode::Drive,
         ));
         let mut link: Link = Link::new(Config::default());
-        let mut bridge = Bridge::new(BridgeConfig::default());
+        let mut bridge = Bridge::new(BridgeConfig::default().check().unwrap());
         let t = Instant::from_millis;
         let mut sim: Simulator = Simulator::new(SimConfig::default(), t(0));
         let heartbeat = Heartbeat {

@@ -101,7 +101,7 @@ pub mod status;
 mod tx;
 
 pub use bridge::{
-    Bridge, BridgeConfig, BridgeStats, Period, PeriodOutOfRange, SerialInput, ANSWER_ROOM,
-    ATTITUDE_STATUS, AUTOPILOT_SILENCE_MS, HEARTBEAT,
+    Bridge, BridgeConfig, BridgeConfigError, BridgeStats, CheckedConfig, Period, PeriodOutOfRange,
+    SerialInput, ANSWER_ROOM, ATTITUDE_STATUS, AUTOPILOT_SILENCE_MS, HEARTBEAT,
 };
 pub use mavio;

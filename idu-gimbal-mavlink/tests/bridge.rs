@@ -11,7 +11,8 @@ use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, VehicleFrame};
 use idu_gimbal_mavlink::attitude::YawPitch;
-use idu_gimbal_mavlink::{BridgeConfig, Period, AUTOPILOT_SILENCE_MS};
+use idu_gimbal_mavlink::camera::CameraConfig;
+use idu_gimbal_mavlink::{Bridge, BridgeConfig, BridgeConfigError, Period, AUTOPILOT_SILENCE_MS};
 use mavio::dialects::common::enums::{
     GimbalDeviceErrorFlags, GimbalDeviceFlags, MavAutopilot, MavCmd, MavResult, MavType,
 };
@@ -55,6 +56,64 @@ fn heartbeats_at_1_hz_with_the_autopilots_system_id() {
         && h.2.autopilot == MavAutopilot::Invalid));
     // System 1 until the autopilot's heartbeat, then the autopilot's.
     assert_eq!(hbs.iter().map(|h| h.0).collect::<Vec<_>>(), [1, 1, 7]);
+}
+
+/// A configuration that would leave the bridge unaddressable is refused with what is wrong;
+/// every other id is taken, the extremes included.
+#[test]
+fn a_zero_id_or_one_id_for_both_components_is_refused() {
+    let with = |system_id: Option<u8>, gimbal: u8, camera: Option<u8>| BridgeConfig {
+        system_id,
+        gimbal_component: gimbal,
+        camera: camera.map(|component| {
+            let mut c = CameraConfig::new("rtsp://192.168.144.108:554/stream=0").unwrap();
+            c.component = component;
+            c
+        }),
+        ..BridgeConfig::default()
+    };
+    let refused = |config: BridgeConfig| config.check().err();
+    assert_eq!(
+        refused(with(Some(0), 154, Some(100))),
+        Some(BridgeConfigError::SystemIdZero)
+    );
+    assert_eq!(
+        refused(with(None, 0, None)),
+        Some(BridgeConfigError::GimbalComponentZero)
+    );
+    assert_eq!(
+        refused(with(None, 154, Some(0))),
+        Some(BridgeConfigError::CameraComponentZero)
+    );
+    for id in [1, 100, 154, 255] {
+        assert_eq!(
+            refused(with(None, id, Some(id))),
+            Some(BridgeConfigError::CameraComponentIsGimbals(id))
+        );
+    }
+    for (system_id, gimbal, camera) in [
+        (None, 154, None),
+        (Some(1), 1, Some(255)),
+        (Some(255), 255, Some(1)),
+        (Some(7), 154, Some(155)),
+    ] {
+        let config = with(system_id, gimbal, camera);
+        let checked = config.clone().check().unwrap();
+        // Checked, not changed.
+        assert_eq!(checked.get(), &config);
+        let bridge = Bridge::new(checked);
+        assert_eq!(bridge.system_id(), system_id.unwrap_or(1));
+        assert_eq!(bridge.config(), &config);
+    }
+    // What each says: what is wrong and what is valid.
+    assert_eq!(
+        BridgeConfigError::SystemIdZero.to_string(),
+        "system id 0 is the broadcast system: valid 1 to 255"
+    );
+    assert_eq!(
+        BridgeConfigError::CameraComponentIsGimbals(154).to_string(),
+        "camera component 154 is the gimbal device's: valid 1 to 255, other than 154"
+    );
 }
 
 /// The times (ms after `start`, each poll 1 ms apart) at which `M` was sent in `polls`

@@ -597,7 +597,9 @@ fn a_burst_goes_on_to_its_client_while_another_is_answered() {
     );
     assert_eq!(stats.burst_packets as usize, burst.len() - 1);
     // A bridge with no camera has no FTP server.
-    let none = idu_gimbal_mavlink::Bridge::new(idu_gimbal_mavlink::BridgeConfig::default());
+    let none = idu_gimbal_mavlink::Bridge::new(
+        idu_gimbal_mavlink::BridgeConfig::default().check().unwrap(),
+    );
     assert!(none.ftp_stats().is_none());
 }
 

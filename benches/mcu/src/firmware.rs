@@ -13,9 +13,11 @@ pub struct Fw {
 }
 
 impl Fw {
+    /// `config` must be one [`Bridge::new`] takes: a bench's is, and one it refused would
+    /// stop the bench at its first instruction.
     pub fn new(config: BridgeConfig) -> Self {
         Fw {
-            bridge: Bridge::new(config),
+            bridge: Bridge::new(config.check().unwrap_or_else(|_| cortex_m::asm::udf())),
             link: Link::new(Config::default()),
         }
     }

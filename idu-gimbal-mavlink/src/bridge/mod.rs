@@ -7,6 +7,8 @@
 //! attitude status); the setpoints are the `setpoint` module's, the camera
 //! [`crate::camera`]'s.
 
+use core::fmt;
+
 use idu_gimbal::wire::control::{Command as GimbalCmd, GimbalCommand};
 use idu_gimbal::Instant;
 use mavio::dialects::common::enums::MavResult;
@@ -116,6 +118,90 @@ impl BridgeConfig {
     }
 }
 
+/// What is wrong with a [`BridgeConfig`]: [`Bridge::new`] refuses it, since the bridge
+/// could not be addressed as configured.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BridgeConfigError {
+    /// [`BridgeConfig::system_id`] is `Some(0)`, MAVLink's broadcast system, which no
+    /// autopilot sends as and no frame may come from: valid 1 to 255.
+    SystemIdZero,
+    /// [`BridgeConfig::gimbal_component`] is 0 (`MAV_COMP_ID_ALL`, the broadcast
+    /// component): valid 1 to 255.
+    GimbalComponentZero,
+    /// The camera's [`component`](CameraConfig::component) is 0 (`MAV_COMP_ID_ALL`):
+    /// valid 1 to 255, other than the gimbal device's.
+    CameraComponentZero,
+    /// The camera's [`component`](CameraConfig::component) is the gimbal device's (this
+    /// id): each needs its own, or one would not be told from the other.
+    CameraComponentIsGimbals(u8),
+}
+
+impl fmt::Display for BridgeConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BridgeConfigError::SystemIdZero => {
+                f.write_str("system id 0 is the broadcast system: valid 1 to 255")
+            }
+            BridgeConfigError::GimbalComponentZero => f.write_str(
+                "gimbal component 0 is the broadcast component (MAV_COMP_ID_ALL): valid 1 to 255",
+            ),
+            BridgeConfigError::CameraComponentZero => f.write_str(
+                "camera component 0 is the broadcast component (MAV_COMP_ID_ALL): valid 1 to 255, other than the gimbal's",
+            ),
+            BridgeConfigError::CameraComponentIsGimbals(id) => write!(
+                f,
+                "camera component {id} is the gimbal device's: valid 1 to 255, other than {id}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for BridgeConfigError {}
+
+impl BridgeConfig {
+    /// This configuration, checked: what [`Bridge::new`] takes. An error when the bridge
+    /// could not be addressed as configured (a system or component id of 0, or the
+    /// camera's component the gimbal device's).
+    ///
+    /// ```
+    /// use idu_gimbal_mavlink::{Bridge, BridgeConfig, BridgeConfigError};
+    ///
+    /// let bridge = Bridge::new(BridgeConfig::default().check()?);
+    /// let broadcast = BridgeConfig { system_id: Some(0), ..BridgeConfig::default() };
+    /// assert_eq!(broadcast.check().err(), Some(BridgeConfigError::SystemIdZero));
+    /// # Ok::<(), BridgeConfigError>(())
+    /// ```
+    pub fn check(self) -> Result<CheckedConfig, BridgeConfigError> {
+        if self.system_id == Some(0) {
+            return Err(BridgeConfigError::SystemIdZero);
+        }
+        let gimbal = self.gimbal_component;
+        if gimbal == 0 {
+            return Err(BridgeConfigError::GimbalComponentZero);
+        }
+        match self.camera.as_ref().map(|c| c.component) {
+            Some(0) => Err(BridgeConfigError::CameraComponentZero),
+            Some(camera) if camera == gimbal => {
+                Err(BridgeConfigError::CameraComponentIsGimbals(gimbal))
+            }
+            _ => Ok(CheckedConfig(self)),
+        }
+    }
+}
+
+/// A [`BridgeConfig`] that [`BridgeConfig::check`] found usable: the bridge can be
+/// addressed as configured.
+#[derive(Clone, PartialEq, Debug)]
+pub struct CheckedConfig(BridgeConfig);
+
+impl CheckedConfig {
+    /// The configuration.
+    pub fn get(&self) -> &BridgeConfig {
+        &self.0
+    }
+}
+
 impl Default for BridgeConfig {
     fn default() -> Self {
         BridgeConfig {
@@ -220,9 +306,10 @@ pub(crate) struct State {
 }
 
 impl Bridge {
-    /// A bridge with the given configuration; each call that acts on the gimbal takes the
-    /// application's link.
-    pub fn new(config: BridgeConfig) -> Self {
+    /// A bridge with the given configuration, checked ([`BridgeConfig::check`]); each call
+    /// that acts on the gimbal takes the application's link.
+    pub fn new(config: CheckedConfig) -> Self {
+        let CheckedConfig(config) = config;
         let camera = config
             .camera
             .as_ref()

@@ -21,7 +21,7 @@ use idu_gimbal::link::{Link, Medium};
 /// use idu_gimbal_mavlink::{Bridge, BridgeConfig, SerialInput};
 ///
 /// let mut link: Link = Link::new(Config::default());
-/// let mut bridge = Bridge::new(BridgeConfig::default());
+/// let mut bridge = Bridge::new(BridgeConfig::default().check().unwrap());
 /// let mut input: SerialInput<64> = SerialInput::new();
 /// // A UART with nothing waiting: `read` answers 0 bytes.
 /// let nothing = |_: &mut [u8]| Ok::<usize, ()>(0);

@@ -32,7 +32,7 @@ pub struct Firmware<const Q: usize = 8, const T: usize = 8, M: Medium = Can> {
 impl<const Q: usize, const T: usize, M: Medium> Firmware<Q, T, M> {
     pub fn new(link: Link<Q, T, M>, config: BridgeConfig) -> Self {
         Firmware {
-            bridge: Bridge::new(config),
+            bridge: Bridge::new(config.check().unwrap()),
             link,
         }
     }

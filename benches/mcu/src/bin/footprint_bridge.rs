@@ -38,12 +38,17 @@ fn main() -> ! {
         key: [input(8) as u8; 32],
         link_id: input(9) as u8,
     });
-    let Some(bridge) = cortex_m::singleton!(: Bridge = Bridge::new(BridgeConfig {
+    // As a firmware does with a configuration it got wrong: it cannot go on.
+    let Ok(config) = BridgeConfig {
         camera,
         #[cfg(feature = "signing")]
         signing,
         ..BridgeConfig::default()
-    })) else {
+    }
+    .check() else {
+        cortex_m::asm::udf()
+    };
+    let Some(bridge) = cortex_m::singleton!(: Bridge = Bridge::new(config)) else {
         cortex_m::asm::udf()
     };
     // As `footprint_driver` holds them.

@@ -64,10 +64,16 @@ mod fw {
         let camera = CameraConfig::with_streams_of(&Camera::new(Family::X3)).ok();
         let mut link: Link = Link::new(Config::default());
         let mut port = CanPort::new(can);
-        let mut bridge = Bridge::new(BridgeConfig {
+        let mut bridge = match (BridgeConfig {
             camera,
             ..BridgeConfig::default()
-        });
+        })
+        .check()
+        {
+            Ok(config) => Bridge::new(config),
+            // Only a configuration with a zero id or one id for both components is refused.
+            Err(_) => defmt::panic!("the MAVLink bridge's configuration is refused"),
+        };
         // What the bridge has not taken of the UART's bytes is held there, offered again
         // once what the bridge holds is sent.
         let mut input: SerialInput<64> = SerialInput::new();

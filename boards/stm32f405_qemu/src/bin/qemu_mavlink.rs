@@ -314,6 +314,14 @@ mod fw {
             qemu::exit(false)
         };
         let camera = CameraConfig::with_streams_of(&Camera::new(Family::DualLight)).ok();
+        let Ok(config) = (BridgeConfig {
+            camera,
+            ..BridgeConfig::default()
+        })
+        .check() else {
+            qemu::exit(false)
+        };
+        let bridge = Bridge::new(config);
         let mut w = World {
             ap: Autopilot {
                 line: ap_line,
@@ -321,10 +329,7 @@ mod fw {
                 seq: 0,
                 seen: Seen::default(),
             },
-            bridge: Bridge::new(BridgeConfig {
-                camera,
-                ..BridgeConfig::default()
-            }),
+            bridge,
             link: Link::new(Config::default()),
             rig,
             bridge_line,
