@@ -1,10 +1,17 @@
 //! What `GIMBAL_DEVICE_ATTITUDE_STATUS` reports, and why in the vehicle frame.
 //!
 //! The status is always in the vehicle frame (`YAW_IN_VEHICLE_FRAME`): `q`'s yaw is the
-//! gimbal's yaw motor angle relative to the nose, from the postback, and `delta_yaw` is
-//! the vehicle's heading from north (the autopilot's `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE`),
-//! NaN when the bridge has none. common.xml defines the pair by "q_earth = q_delta_yaw *
-//! q_vehicle", so a reader gets the earth-frame yaw as motor + delta_yaw.
+//! gimbal's yaw motor angle relative to the nose, and `delta_yaw` is the vehicle's heading
+//! from north (the autopilot's `AUTOPILOT_STATE_FOR_GIMBAL_DEVICE`), NaN when the bridge
+//! has none. common.xml defines the pair by "q_earth = q_delta_yaw * q_vehicle", so a
+//! reader gets the earth-frame yaw as motor + delta_yaw.
+//!
+//! Both are as of the status, not of the postback (2 Hz, so up to 500 ms old): QGroundControl
+//! and ArduPilot ignore `delta_yaw` and add the vehicle's heading now to the yaw. While the
+//! yaw is held in the earth frame the motor turns back by what the vehicle turns, so the
+//! status's motor angle is the postback's less the vehicle's turn since ([`attitude_turned`]);
+//! a yaw that follows the vehicle keeps its angle. A turn at 15°/s then reads within what
+//! the gimbal lags, where the postback's angle beside the heading now was off by up to 7.5°.
 //!
 //! Why not the earth frame, though the gimbal knows its bearing while attitude is
 //! pushed: ArduPilot's MAVLink gimbal v2 backend (`MNT1_TYPE` 6,
@@ -79,8 +86,15 @@ pub fn flags(held: Held) -> GimbalDeviceFlags {
 /// The status quaternion of a postback, in the vehicle frame (yaw = the motor angle from
 /// the nose, pitch from the horizon).
 pub fn attitude(p: &Postback) -> [f32; 4] {
+    attitude_turned(p, 0.0)
+}
+
+/// The status quaternion of a postback in the vehicle frame, its motor angle turned by
+/// `turned_rad`: what the motor has turned since the postback while the gimbal holds a yaw
+/// in the earth frame (the vehicle's heading then, less its heading now).
+pub fn attitude_turned(p: &Postback, turned_rad: f32) -> [f32; 4] {
     YawPitch {
-        yaw_rad: wrap_pi(p.motor_heading_deg().to_radians()),
+        yaw_rad: wrap_pi(p.motor_heading_deg().to_radians() + turned_rad),
         pitch_rad: p.pitch_deg().to_radians(),
     }
     .to_quaternion()

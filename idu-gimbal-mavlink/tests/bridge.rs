@@ -5,8 +5,8 @@ mod common;
 use common::*;
 
 use idu_gimbal::link::SerialLink;
-use idu_gimbal::link::{Config, Link};
-use idu_gimbal::wire::control::{Command, GimbalCommand, Rate};
+use idu_gimbal::link::{Aim, Config, Link, Yaw};
+use idu_gimbal::wire::control::{Command, GimbalCommand, Heading, Pitch, Rate};
 use idu_gimbal::wire::ids;
 use idu_gimbal::wire::postback::Postback;
 use idu_gimbal::wire::vehicle::{Altitude, VehicleFrame};
@@ -553,9 +553,12 @@ fn status_after(b: &mut Firmware, p: &Postback, ms: u32) -> GimbalDeviceAttitude
     of::<GimbalDeviceAttitudeStatus>(&sent(b)).remove(0)
 }
 
+/// The status says the motor angle and the vehicle's heading now, whatever the postback's
+/// age: QGroundControl and ArduPilot add the heading now to its yaw, and `delta_yaw` relates
+/// the frames now. A yaw held in the earth frame has the motor turn back by what the vehicle
+/// turned since the postback; one that follows the vehicle keeps its angle.
 #[test]
-fn delta_yaw_is_the_vehicle_heading_when_the_gimbal_reported() {
-    let mut b = bridge();
+fn the_status_gives_the_motor_angle_and_the_heading_now() {
     let p = Postback {
         motor_heading: 1_000,
         ..Postback::default()
@@ -565,36 +568,51 @@ fn delta_yaw_is_the_vehicle_heading_when_the_gimbal_reported() {
             b.link.receive(ids::POSTBACK, &data, t(ms));
         }
     };
-    let delta_yaw_at = |b: &mut Firmware, ms: u32| {
+    // (the status's yaw from the nose, its delta_yaw), degrees.
+    let status_at = |b: &mut Firmware, ms: u32| {
         let _ = sent(b);
         let c = command((0, 154), MavCmd::RequestMessage, 285.0, 0.0);
         b.receive_all(&frame(GCS, 0, &c), t(ms));
-        of::<GimbalDeviceAttitudeStatus>(&sent(b))
-            .remove(0)
-            .delta_yaw
-            .to_degrees()
+        let s = of::<GimbalDeviceAttitudeStatus>(&sent(b)).remove(0);
+        let yaw = YawPitch::from_quaternion(s.q).unwrap().yaw_rad.to_degrees();
+        (yaw, s.delta_yaw.to_degrees())
     };
     // f32 quaternion to yaw and back: well within 1e-3°.
-    let close = |a: f32, e: f32| (a - e).abs() < 1e-3;
-    b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(90));
-    postback_at(&mut b, 100);
-    b.poll(t(100));
-    // The vehicle turns to 30° with no postback since: the motor angle reported is still
-    // the one from when it headed 0°.
-    b.receive_all(&frame(AP, 1, &autopilot_state(30.0)), t(150));
-    let d = delta_yaw_at(&mut b, 160);
-    assert!(close(d, 0.0), "{d}");
-    // A postback at 200, noted: the heading then, 30°, even after a turn to 60°.
-    postback_at(&mut b, 200);
-    b.poll(t(200));
-    b.receive_all(&frame(AP, 2, &autopilot_state(60.0)), t(205));
-    let d = delta_yaw_at(&mut b, 210);
-    assert!(close(d, 30.0), "{d}");
-    // A postback not yet noted (asked before the next poll): the heading now.
-    postback_at(&mut b, 300);
-    b.receive_all(&frame(AP, 3, &autopilot_state(90.0)), t(300));
-    let d = delta_yaw_at(&mut b, 300);
-    assert!(close(d, 90.0), "{d}");
+    let close = |(yaw, delta): (f32, f32), e: (f32, f32)| {
+        (yaw - e.0).abs() < 1e-3 && (delta - e.1).abs() < 1e-3
+    };
+    for earth in [false, true] {
+        let mut b = bridge();
+        b.receive_all(&frame(AP, 0, &autopilot_state(0.0)), t(90));
+        if earth {
+            let aim = Aim {
+                yaw: Yaw::Earth(Heading::new(10.0).unwrap()),
+                pitch: Pitch::LEVEL,
+            };
+            b.link.aim(aim, t(95)).unwrap();
+        }
+        postback_at(&mut b, 100);
+        b.poll(t(100));
+        assert!(close(status_at(&mut b, 110), (10.0, 0.0)), "{earth}");
+        // The vehicle turns to 30° with no postback since: held in the earth frame, the
+        // motor is 20° left of the nose now; following the vehicle, still 10° right.
+        b.receive_all(&frame(AP, 1, &autopilot_state(30.0)), t(150));
+        let s = status_at(&mut b, 160);
+        let motor = if earth { -20.0 } else { 10.0 };
+        assert!(close(s, (motor, 30.0)), "{earth}: {s:?}");
+        // A postback at 200 (the motor again 10° right, the heading 30°), then a turn to
+        // 60°: 20° further back, or where it was.
+        postback_at(&mut b, 200);
+        b.poll(t(200));
+        b.receive_all(&frame(AP, 2, &autopilot_state(60.0)), t(205));
+        let s = status_at(&mut b, 210);
+        let motor = if earth { -20.0 } else { 10.0 };
+        assert!(close(s, (motor, 60.0)), "{earth}: {s:?}");
+        // A postback not yet noted (asked before the next poll): taken as of now.
+        postback_at(&mut b, 300);
+        b.receive_all(&frame(AP, 3, &autopilot_state(90.0)), t(300));
+        assert!(close(status_at(&mut b, 300), (10.0, 90.0)), "{earth}");
+    }
 }
 
 #[test]

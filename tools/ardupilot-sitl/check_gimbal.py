@@ -388,11 +388,11 @@ def distance_m(lat1, lon1, lat2, lon2):
 
 # Bounds of the turning step (see turning_roi). The simulated gimbal reports its motor angle
 # in a postback every 500 ms (idu_gimbal::sim::SimConfig::postback_period_ms); the bridge's
-# status (every 100 ms) carries the last postback's motor angle with delta_yaw = the vehicle's
-# heading when that postback arrived, so its own earth yaw (q yaw + delta_yaw) is consistent
-# whatever the postback's age. ArduPilot instead adds the vehicle's *current* yaw to that motor
-# angle (AP_Mount reads the quaternion as body frame), so while the vehicle turns at w deg/s its
-# reading lags by up to w x (postback period + status period).
+# status (every 100 ms) carries the motor angle and delta_yaw = the vehicle's heading as of
+# the status (the postback's angle turned back by the vehicle's turn since, while the yaw is
+# held in the earth frame). ArduPilot adds the vehicle's *current* yaw to that motor angle
+# (AP_Mount reads the quaternion as body frame), so its reading should be as close as the
+# bridge's own; its bound keeps a postback period of room until a run shows it.
 POSTBACK_PERIOD_S = 0.5
 # What the closed loop itself may lag by: the autopilot's attitude reaches the bridge every
 # 20 ms (ArduPilot's AUTOPILOT_STATE_FOR_GIMBAL_DEVICE at 50 Hz), the link re-commands the
@@ -415,7 +415,7 @@ def turning_roi(p, a, lat, lon):
           " flags ROLL|PITCH|YAW_LOCK (28); the camera keeps that bearing while the vehicle turns under it:")
     print("  within %.1f deg once the turn is over; during it within %.1f deg + w x %.2f s (the bridge's own"
           " status) and %.1f deg + w x %.2f s (ArduPilot's reading, which adds the current vehicle yaw to the"
-          " motor angle of the gimbal's last postback), w = the vehicle's peak yaw rate" % (
+          " status's motor angle), w = the vehicle's peak yaw rate" % (
               STEADY_TOL_DEG, STEADY_TOL_DEG, LOOP_LAG_S, STEADY_TOL_DEG, POSTBACK_PERIOD_S + LOOP_LAG_S))
     fail = []
     # faster streams for this step: the readings are paired by time while the vehicle turns

@@ -159,23 +159,33 @@ impl State {
         now: Instant,
     ) {
         let latest = gimbal.latest_postback(now).map(|(p, _)| p);
-        // The heading that goes with the postback's motor angle: `q_earth = q_delta_yaw ·
-        // q_vehicle` holds for the moment the gimbal reported.
-        let vehicle_yaw = self.postback_vehicle_yaw(gimbal, now);
         let held = status::Held {
             pose: self.pose,
             earth_yaw: gimbal.holds_earth_yaw() || (self.rate_earth && gimbal.is_rate_holding()),
         };
-        let q = latest.map_or([f32::NAN; 4], |p| status::attitude(&p));
-        let flags = status::flags(held);
         let mut failure = GimbalDeviceErrorFlags::empty();
         if !gimbal.is_link_up() {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
         }
         let aim = gimbal.aim_state();
-        if aim.is_some_and(|a| a.at_yaw_limit) {
+        let at_limit = aim.is_some_and(|a| a.at_yaw_limit);
+        if at_limit {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
+        // The motor angle now, not at the postback (up to 500 ms old): QGroundControl and
+        // ArduPilot add the vehicle's heading now to the status's yaw. A yaw held in the
+        // earth frame has the motor turn back by what the vehicle turns (unless at its
+        // travel's end); one that follows the vehicle keeps its angle. `delta_yaw`, the
+        // heading now, then relates the two frames now (`q_earth = q_delta_yaw · q_vehicle`).
+        let heading = self.vehicle.yaw(now);
+        let turned = match heading {
+            Some(h) if held.earth_yaw && !at_limit => self
+                .postback_vehicle_yaw(gimbal, now)
+                .map_or(0.0, |then| then - h),
+            _ => 0.0,
+        };
+        let q = latest.map_or([f32::NAN; 4], |p| status::attitude_turned(&p, turned));
+        let flags = status::flags(held);
         self.tell_aim(aim);
         let status = GimbalDeviceAttitudeStatus {
             target_system: 0,
@@ -187,10 +197,8 @@ impl State {
             angular_velocity_y: f32::NAN,
             angular_velocity_z: f32::NAN,
             failure_flags: failure,
-            delta_yaw: vehicle_yaw.unwrap_or(f32::NAN),
-            delta_yaw_velocity: vehicle_yaw
-                .and(self.vehicle.yaw_rate(now))
-                .unwrap_or(f32::NAN),
+            delta_yaw: heading.unwrap_or(f32::NAN),
+            delta_yaw_velocity: heading.and(self.vehicle.yaw_rate(now)).unwrap_or(f32::NAN),
             gimbal_device_id: 0,
         };
         self.out.send_encoded::<GimbalDeviceAttitudeStatus>(

@@ -172,6 +172,7 @@ impl BridgeConfig {
     /// assert_eq!(broadcast.check().err(), Some(BridgeConfigError::SystemIdZero));
     /// # Ok::<(), BridgeConfigError>(())
     /// ```
+    #[inline]
     pub fn check(self) -> Result<CheckedConfig, BridgeConfigError> {
         if self.system_id == Some(0) {
             return Err(BridgeConfigError::SystemIdZero);
