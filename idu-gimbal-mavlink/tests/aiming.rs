@@ -368,6 +368,41 @@ fn an_image_carries_the_cameras_attitude_in_the_earth_frame() {
             "{holds:?}: {a:?}"
         );
     }
+    // Images taken while the vehicle turns (at 30°/s from 30° to 129°, an image at every
+    // 11°: 367 ms apart, so that they fall at every age of the 2 Hz postback), an earth yaw
+    // held or a yaw that follows the vehicle (40° from the nose): each image's yaw is the
+    // camera's now within the gimbal's lag, whatever the postback's age.
+    for holds in BOTH {
+        for (flags, yaw) in [(PX4_EARTH, 100.0), (GimbalDeviceFlags::empty(), 40.0)] {
+            let mut rig = Rig::new(holds);
+            rig.vehicle_deg = 30.0;
+            rig.run(1000);
+            rig.setpoint = Some((flags, yaw, -20.0));
+            rig.run(3000);
+            let mut worst = 0.0f32;
+            for i in 1..=9u8 {
+                rig.turn(30.0 + 11.0 * f32::from(i), 30.0, |_| {});
+                let taken = rig.images.len();
+                // Each capture its own sequence number, or it is a retransmission.
+                rig.send(&command7(
+                    (AP.0, 100),
+                    MavCmd::ImageStartCapture,
+                    [0.0, 0.0, 1.0, f32::from(i), 0.0, 0.0, 0.0],
+                ));
+                rig.tick();
+                assert_eq!(rig.images.len(), taken + 1, "{holds:?} {flags:?}");
+                let image = rig.images.last().expect("an image");
+                let a = YawPitch::from_quaternion(image.q).expect("a known attitude");
+                let expected = if flags == PX4_EARTH {
+                    yaw
+                } else {
+                    wrap(rig.vehicle_deg + yaw)
+                };
+                worst = worst.max(off(a.yaw_rad.to_degrees(), expected));
+            }
+            assert!(worst < reading_lag(30.0), "{holds:?} {flags:?}: {worst}");
+        }
+    }
     // Unknown without a vehicle heading: NaN.
     let mut b = camera_bridge(CameraConfig::new("rtsp://192.168.42.108:554/stream=0").unwrap());
     for d in idu_gimbal::wire::postback::Postback::default().to_can_frames() {

@@ -161,7 +161,7 @@ impl State {
         let latest = gimbal.latest_postback(now).map(|(p, _)| p);
         let held = status::Held {
             pose: self.pose,
-            earth_yaw: gimbal.holds_earth_yaw() || (self.rate_earth && gimbal.is_rate_holding()),
+            earth_yaw: self.holds_earth_yaw(gimbal),
         };
         let mut failure = GimbalDeviceErrorFlags::empty();
         if !gimbal.is_link_up() {
@@ -173,15 +173,11 @@ impl State {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
         // The motor angle now, not at the postback (up to 500 ms old): QGroundControl and
-        // ArduPilot add the vehicle's heading now to the status's yaw. A yaw held in the
-        // earth frame has the motor turn back by what the vehicle turns (unless at its
-        // travel's end); one that follows the vehicle keeps its angle. `delta_yaw`, the
+        // ArduPilot add the vehicle's heading now to the status's yaw. `delta_yaw`, the
         // heading now, then relates the two frames now (`q_earth = q_delta_yaw · q_vehicle`).
         let heading = self.vehicle.yaw(now);
-        let turned = match heading {
-            Some(h) if held.earth_yaw && !at_limit => self
-                .postback_vehicle_yaw(gimbal, now)
-                .map_or(0.0, |then| then - h),
+        let turned = match (self.postback_heading(gimbal, now), heading) {
+            (Some(then), Some(now)) => then - now,
             _ => 0.0,
         };
         let q = latest.map_or([f32::NAN; 4], |p| status::attitude_turned(&p, turned));

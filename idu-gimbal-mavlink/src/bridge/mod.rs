@@ -578,15 +578,41 @@ impl State {
         }
     }
 
+    /// Whether the yaw is held in the earth frame (the status's `YAW_LOCK`): an earth-frame
+    /// aim, or an earth-frame rate hold.
+    pub(crate) fn holds_earth_yaw<const Q: usize, const T: usize, M: Medium>(
+        &self,
+        gimbal: &Link<Q, T, M>,
+    ) -> bool {
+        gimbal.holds_earth_yaw() || (self.rate_earth && gimbal.is_rate_holding())
+    }
+
+    /// The heading that turns the latest postback's motor angle into the camera's yaw from
+    /// north now: the vehicle's heading then while the yaw is held in the earth frame (the
+    /// motor has turned back by the vehicle's turn since), its heading now while the yaw
+    /// follows the vehicle (the motor kept its angle). At the travel's end the motor stops
+    /// instead: until the next postback (2 Hz) shows it, the status says `AT_YAW_LIMIT`.
+    pub(crate) fn postback_heading<const Q: usize, const T: usize, M: Medium>(
+        &self,
+        gimbal: &Link<Q, T, M>,
+        now: Instant,
+    ) -> Option<f32> {
+        if self.holds_earth_yaw(gimbal) {
+            self.postback_vehicle_yaw(gimbal, now)
+        } else {
+            self.vehicle.yaw(now)
+        }
+    }
+
     /// Where an image taken now is taken from: the vehicle's position, and the camera's
-    /// attitude from north (the latest postback's motor angle and pitch with the vehicle's
-    /// heading then; none while the gimbal link is down).
+    /// attitude from north (the latest postback's motor angle and pitch, with
+    /// [`State::postback_heading`]; none while the gimbal link is down).
     pub(crate) fn vantage<const Q: usize, const T: usize, M: Medium>(
         &self,
         gimbal: &Link<Q, T, M>,
         now: Instant,
     ) -> Vantage {
-        let yaw = self.postback_vehicle_yaw(gimbal, now);
+        let yaw = self.postback_heading(gimbal, now);
         let attitude = match (gimbal.latest_postback(now), yaw) {
             (Some((p, _)), Some(yaw)) if gimbal.is_link_up() => {
                 // |yaw| <= π: its 0.01° fit; the sum is wrapped into [-18000, 18000). (The
