@@ -12,9 +12,11 @@ Cases, each against an expectation computed here from the setpoint (not from the
 
 1. An earth-frame yaw (PX4's yaw lock and ROI: YAW_LOCK | YAW_IN_EARTH_FRAME,
    src/modules/gimbal/output_mavlink.cpp) held while the vehicle turns 30 -> 120 at 30 deg/s:
-   the status read as QGroundControl reads it (src/Gimbal/GimbalController.cc: the
-   vehicle-frame yaw plus delta_yaw) stays on the setpoint, and ends -20 from the nose.
-2. A vehicle-frame yaw (flags 0, ArduPilot's body frame) kept from the nose through a turn.
+   the status read with its delta_yaw and as QGroundControl and ArduPilot read it (the
+   vehicle-frame yaw plus the vehicle's heading now: src/Gimbal/GimbalController.cc, AP_Mount)
+   stays on the setpoint, and ends -20 from the nose.
+2. A vehicle-frame yaw (flags 0, ArduPilot's body frame) kept from the nose through a turn,
+   and the earth yaw both readings make of it turning with the vehicle.
 3. Both streams starting in one datagram: the first AUTOPILOT_STATE_FOR_GIMBAL_DEVICE (heading
    30) and the first setpoint (40 from the nose) in one UDP write, to a bridge that has seen
    neither: the camera ends 40 from the nose, not 70.
@@ -48,10 +50,11 @@ EARTH = mav.GIMBAL_DEVICE_FLAGS_YAW_LOCK | mav.GIMBAL_DEVICE_FLAGS_YAW_IN_EARTH_
 SETTLED = 0.5
 # While the vehicle turns at TURN_DPS the status may be off by: the gimbal acting on a
 # vehicle heading up to 170 ms old and slewing to catch up (255 ms of turn), the status
-# pairing the postback's motor angle with the heading of its moment (within the 20 ms of
-# the state's stream), and this script's own stream of the heading, late by up to 200 ms
-# on a loaded machine, or by the longest this script stalled during the turn, whose heading
-# then jumps by that much turn at once: half a second of turn or more.
+# giving the motor angle and heading as of its sending (the heading within the 20 ms of the
+# state's stream, the status up to 100 ms old when read), and this script's own stream of
+# the heading, late by up to 200 ms on a loaded machine, or by the longest this script
+# stalled during the turn, whose heading then jumps by that much turn at once: half a
+# second of turn or more.
 TURN_DPS = 30.0
 
 
@@ -152,9 +155,18 @@ class Autopilot:
             return None
         return euler_yaw(s.q)
 
+    def heading_reading(self):
+        """The earth yaw as QGroundControl (GimbalController.cc) and ArduPilot (AP_Mount)
+        read the status: its vehicle-frame yaw plus the vehicle's heading now (here this
+        script's own), delta_yaw ignored."""
+        y = self.vehicle_yaw()
+        if y is None or not self.status.flags & mav.GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME:
+            return None
+        return angle_diff(y + self.yaw, 0)
+
     def earth_yaw(self):
-        """QGroundControl's reading (GimbalController.cc): in the vehicle frame when
-        YAW_IN_VEHICLE_FRAME is set, then plus the vehicle's heading (here delta_yaw)."""
+        """The earth yaw as common.xml relates the status's frames: in the vehicle frame
+        when YAW_IN_VEHICLE_FRAME is set, then plus delta_yaw."""
         s = self.status
         if s is None or math.isnan(s.q[0]) or math.isnan(s.delta_yaw):
             return None
@@ -210,13 +222,15 @@ def session(gimbalctl, holds, r):
         locks = [False]
 
         def follow():
-            worst[0] = max(worst[0], off(ap.vehicle_yaw(), 40.0))
+            earth = ap.yaw + 40.0
+            worst[0] = max(worst[0], off(ap.vehicle_yaw(), 40.0), off(ap.earth_yaw(), earth),
+                           off(ap.heading_reading(), earth))
             locks[0] = locks[0] or ap.yaw_lock()
         ap.turn(120.0, follow)
         ap.run(SETTLE_S / 2)
         r.check(worst[0] < during_turn(ap.stall) and off(ap.vehicle_yaw(), 40.0) < SETTLED
                 and off(ap.earth_yaw(), 160.0) < SETTLED,
-                f"{tag} vehicle frame through a turn to 120: 40 from the nose throughout "
+                f"{tag} vehicle frame through a turn to 120: 40 from the nose and the heading + 40 throughout "
                 f"(worst {worst[0]:.1f} of {during_turn(ap.stall):.1f}, then {ap.vehicle_yaw()}, earth {ap.earth_yaw()})")
         r.check(not locks[0], f"{tag} no YAW_LOCK while the yaw follows the vehicle")
 
@@ -229,7 +243,8 @@ def session(gimbalctl, holds, r):
                 f"(earth {ap.earth_yaw()}, status {ap.vehicle_yaw()})")
         r.check(ap.yaw_lock(), f"{tag} YAW_LOCK while the earth yaw is held")
         worst = [0.0]
-        ap.turn(120.0, lambda: worst.__setitem__(0, max(worst[0], off(ap.earth_yaw(), 100.0))))
+        ap.turn(120.0, lambda: worst.__setitem__(
+            0, max(worst[0], off(ap.earth_yaw(), 100.0), off(ap.heading_reading(), 100.0))))
         ap.run(SETTLE_S / 2)
         r.check(worst[0] < during_turn(ap.stall) and off(ap.earth_yaw(), 100.0) < SETTLED
                 and off(ap.vehicle_yaw(), -20.0) < SETTLED,

@@ -11,7 +11,7 @@
 //! yaw is held in the earth frame the motor turns back by what the vehicle turns, so the
 //! status's motor angle is the postback's less the vehicle's turn since ([`attitude_turned`]);
 //! a yaw that follows the vehicle keeps its angle. A turn at 15°/s then reads within what
-//! the gimbal lags, where the postback's angle beside the heading now was off by up to 7.5°.
+//! the gimbal lags; the postback's angle beside the heading now would be off by up to 7.5°.
 //!
 //! Why not the earth frame, though the gimbal knows its bearing while attitude is
 //! pushed: ArduPilot's MAVLink gimbal v2 backend (`MNT1_TYPE` 6,

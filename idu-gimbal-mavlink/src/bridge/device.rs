@@ -168,8 +168,7 @@ impl State {
             failure |= GimbalDeviceErrorFlags::COMMS_ERROR;
         }
         let aim = gimbal.aim_state();
-        let at_limit = aim.is_some_and(|a| a.at_yaw_limit);
-        if at_limit {
+        if aim.is_some_and(|a| a.at_yaw_limit) {
             failure |= GimbalDeviceErrorFlags::AT_YAW_LIMIT;
         }
         // The motor angle now, not at the postback (up to 500 ms old): QGroundControl and

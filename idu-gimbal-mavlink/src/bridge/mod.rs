@@ -168,6 +168,7 @@ impl BridgeConfig {
     /// use idu_gimbal_mavlink::{Bridge, BridgeConfig, BridgeConfigError};
     ///
     /// let bridge = Bridge::new(BridgeConfig::default().check()?);
+    /// assert_eq!(bridge.system_id(), 1);
     /// let broadcast = BridgeConfig { system_id: Some(0), ..BridgeConfig::default() };
     /// assert_eq!(broadcast.check().err(), Some(BridgeConfigError::SystemIdZero));
     /// # Ok::<(), BridgeConfigError>(())
