@@ -105,11 +105,8 @@ pub fn attitude_turned(p: &Postback, turned_rad: f32) -> [f32; 4] {
 /// roll level); `q_earth = q_delta_yaw · q_vehicle`, as common.xml relates the status's two
 /// frames.
 pub fn earth_attitude(p: &Postback, vehicle_yaw_rad: f32) -> [f32; 4] {
-    YawPitch {
-        yaw_rad: wrap_pi(p.motor_heading_deg().to_radians() + vehicle_yaw_rad),
-        pitch_rad: p.pitch_deg().to_radians(),
-    }
-    .to_quaternion()
+    // The same sum as a turned motor angle's: the motor angle plus an angle.
+    attitude_turned(p, vehicle_yaw_rad)
 }
 
 #[cfg(test)]
