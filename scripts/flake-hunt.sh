@@ -16,14 +16,21 @@
 # FLAKE_ONLY=REGEX hunts only the binaries whose file name (e.g. `serial-<hash>`,
 # `idu_gimbal-<hash>` for the core's unit tests) matches REGEX: a re-run over what a
 # change touched.
+#
+# FLAKE_LOAD=K keeps K busy loops running beside the tests (default 0): a test that races a
+# child process or a reader thread fails far more often on a loaded machine, as CI's is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 N="${1:-200}"
 N_SLOW="${2:-30}"
 SLOW_SECONDS="${FLAKE_SLOW_SECONDS:-2}"
+LOAD="${FLAKE_LOAD:-0}"
 case "$N$N_SLOW" in
     *[!0-9]*) echo "flake-hunt: N and N_SLOW must be whole numbers (got '$N', '$N_SLOW')" >&2; exit 2 ;;
+esac
+case "$LOAD" in
+    '' | *[!0-9]*) echo "flake-hunt: FLAKE_LOAD must be a whole number of busy loops (got '$LOAD')" >&2; exit 2 ;;
 esac
 unset PROPTEST_RNG_SEED PROPTEST_CASES || true
 
@@ -50,7 +57,14 @@ else
 fi
 
 count=$(wc -l < "$out/binaries.tsv")
-echo "flake-hunt: $count test binaries; N=$N, N_SLOW=$N_SLOW (slow: over ${SLOW_SECONDS}s a run)"
+echo "flake-hunt: $count test binaries; N=$N, N_SLOW=$N_SLOW (slow: over ${SLOW_SECONDS}s a run), $LOAD busy loop(s) beside"
+load_pids=()
+stop_load() { [ "${#load_pids[@]}" -eq 0 ] || kill "${load_pids[@]}" 2>/dev/null || true; }
+trap stop_load EXIT
+for _ in $(seq 1 "$LOAD"); do
+    sh -c 'while :; do :; done' &
+    load_pids+=("$!")
+done
 start_all=$(date +%s)
 total_failures=0
 printf '| binary | runs | failures | seconds a run |\n|---|---:|---:|---:|\n' > "$out/summary.md"

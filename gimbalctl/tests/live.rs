@@ -12,7 +12,7 @@ mod common;
 use common::*;
 use std::io::Write;
 use std::process::{ChildStdin, Stdio};
-use std::sync::mpsc::Receiver;
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::Duration;
 
 /// How long each decoded object may take to appear (see the module docs).
@@ -71,7 +71,13 @@ fn decode_writes_each_object_before_the_next_line_comes() {
     // And the end of input still ends the run with status 0.
     drop(stdin);
     assert_eq!(wait_with_timeout(&mut child.0, TIMEOUT), Some(0));
-    assert!(rx.try_recv().is_err(), "nothing more was written");
+    // Nothing more was written: the stream ends (its reader finds the pipe closed) with no
+    // line after the last one read.
+    assert_eq!(
+        rx.recv_timeout(TIMEOUT),
+        Err(RecvTimeoutError::Disconnected),
+        "nothing more was written"
+    );
 }
 
 #[test]

@@ -37,11 +37,12 @@ fn wait_open(pty: &mut TestPty) {
 }
 
 /// Waits for `child`, whose port was just taken away, to end with exit 1 saying that it
-/// went away; its stderr.
+/// went away; its stderr. All of it: the log is read to its end, since the child's last
+/// lines may still be in the pipe when its exit is seen.
 #[track_caller]
-fn went_away(child: &mut Guard, stderr: &Log) -> String {
+fn went_away(child: &mut Guard, stderr: Log) -> String {
     let code = wait_with_timeout(&mut child.0, TIMEOUT);
-    let stderr = stderr.text();
+    let stderr = stderr.finish();
     assert_eq!(code, Some(1), "{stderr}");
     assert!(stderr.contains("went away"), "{stderr}");
     stderr
@@ -117,7 +118,7 @@ fn a_port_that_goes_away_is_exit_1() {
         "{line}"
     );
     drop(pty);
-    let stderr = went_away(&mut monitor, &stderr);
+    let stderr = went_away(&mut monitor, stderr);
     assert!(stderr.contains(&path), "{stderr}");
     assert!(stderr.contains("after 1 postback"), "{stderr}");
 }
@@ -138,7 +139,7 @@ fn the_sim_exiting_ends_a_session_with_exit_1() {
     // Gone once the bridge has the port (else it could not open it, a different error).
     log.wait(&format!("{path} opened"), Duration::from_secs(10));
     drop(sim);
-    went_away(&mut bridge, &stderr);
+    went_away(&mut bridge, stderr);
 }
 
 /// Bytes that hold no frame (what a wrong baud rate gives): counted and said on stderr
@@ -420,7 +421,7 @@ fn mavlink_bridges_an_autopilot_on_a_serial_port() {
     }
     // The autopilot's port goes away: exit 1, saying which.
     drop(ap);
-    let err = went_away(&mut bridge, &stderr);
+    let err = went_away(&mut bridge, stderr);
     assert!(err.contains(&ap_path), "{err}");
     let first = out.join().unwrap();
     assert!(
