@@ -596,9 +596,9 @@ fn the_status_gives_the_motor_angle_and_the_heading_now() {
         assert!(close(status_at(&mut b, 110), (10.0, 0.0)), "{earth}");
         // The vehicle turns to 30° with no postback since: held in the earth frame, the
         // motor is 20° left of the nose now; following the vehicle, still 10° right.
+        let motor = if earth { -20.0 } else { 10.0 };
         b.receive_all(&frame(AP, 1, &autopilot_state(30.0)), t(150));
         let s = status_at(&mut b, 160);
-        let motor = if earth { -20.0 } else { 10.0 };
         assert!(close(s, (motor, 30.0)), "{earth}: {s:?}");
         // A postback at 200 (the motor again 10° right, the heading 30°), then a turn to
         // 60°: 20° further back, or where it was.
@@ -606,7 +606,6 @@ fn the_status_gives_the_motor_angle_and_the_heading_now() {
         b.poll(t(200));
         b.receive_all(&frame(AP, 2, &autopilot_state(60.0)), t(205));
         let s = status_at(&mut b, 210);
-        let motor = if earth { -20.0 } else { 10.0 };
         assert!(close(s, (motor, 60.0)), "{earth}: {s:?}");
         // A postback not yet noted (asked before the next poll): taken as of now.
         postback_at(&mut b, 300);
