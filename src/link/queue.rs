@@ -268,8 +268,9 @@ impl<const Q: usize, const T: usize> TxQueue<Q, T> {
 
     /// Puts a frame back at the front of its class: for a frame popped and refused by the
     /// driver, or one the driver handed back from a mailbox. A full control or text FIFO
-    /// cannot take it back (this cannot happen to a frame just popped), except the
-    /// zero-rate frame, which needs no slot. A vehicle frame whose slot is already waiting
+    /// cannot take it back (a frame just popped finds its slot, unless something was
+    /// queued between the pop and the refusal), except the zero-rate frame, which needs
+    /// no slot. A vehicle frame whose slot is already waiting
     /// again is superseded, not an error.
     pub(crate) fn requeue(&mut self, id: u32, data: [u8; 8], quiet: &mut Quiet) -> Requeued {
         quiet.hold_idle();

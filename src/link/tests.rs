@@ -810,3 +810,22 @@ fn a_refused_first_attitude_leaves_the_gimbal_nose_referenced_and_a_later_one_do
     link.transmit_refused(f);
     assert!(link.north_referenced(at(100)));
 }
+
+/// A command sent between taking a frame and reporting it refused takes the slot the
+/// frame left: the refused frame finds its class full, and is lost and counted, as
+/// `Link::transmit_refused` says.
+#[test]
+fn a_frame_refused_after_a_send_into_its_slot_is_lost_and_counted() {
+    use crate::wire::control::{Command, GimbalCommand, Pitch};
+
+    let pitch = |deg| GimbalCommand::Pitch(Pitch::new(deg).unwrap());
+    let mut link: Link<1, 0> = Link::new(Config::default());
+    link.send(pitch(-10.0)).unwrap();
+    let f = link.next_transmit().unwrap();
+    link.send(pitch(-20.0)).unwrap();
+    link.transmit_refused(f);
+    assert_eq!(link.stats().queue_full, 1);
+    let next = link.next_transmit().unwrap();
+    assert_eq!(next.data, Command::from(pitch(-20.0)).encode());
+    assert_eq!(link.next_transmit(), None);
+}

@@ -25,7 +25,9 @@ impl<const Q: usize, const T: usize> Link<Q, T, Can> {
     }
 
     /// The CAN driver did not take the frame last taken (it was busy or failed): it goes
-    /// back to the front of its class.
+    /// back to the front of its class. Report it before sending anything more: a command
+    /// sent in between can take the slot the frame left, and the frame, finding its class
+    /// full, is then lost and counted in [`LinkStats::queue_full`].
     #[inline]
     pub fn transmit_refused(&mut self, frame: Frame) {
         self.frame_refused(frame)

@@ -250,7 +250,9 @@ impl<C: Can> CanPort<C> {
 
     /// Hands one frame, just taken from the link, to the CAN driver and reports to the
     /// link. `Err` ends the transmission: the CAN driver is busy (`None`; the frame is back
-    /// in the queue) or failed.
+    /// in the queue) or failed (the frame is back in the queue too), or its frame type
+    /// cannot hold the frame (dropped and counted: queued again, it would stop every frame
+    /// behind it at every poll).
     #[inline(always)]
     fn transmit_frame<const Q: usize, const T: usize>(
         &mut self,
@@ -260,7 +262,8 @@ impl<C: Can> CanPort<C> {
     ) -> Result<(), Option<DriverError>> {
         let Some(can_frame) = C::Frame::new(id, &data) else {
             // A CAN driver whose frame type refuses an extended frame of 8 bytes cannot
-            // send it.
+            // send it. The frames behind it go at the next poll, however soon.
+            link.hold_idle();
             return Err(Some(self.unsendable()));
         };
         match self.can.transmit(&can_frame) {
@@ -342,7 +345,10 @@ impl<C: Can> Port for CanPort<C> {
     ///
     /// A CAN driver error is counted and the poll goes on: after a receive error it
     /// receives on and runs the schedules; a transmit error ends this poll's transmitting
-    /// (the frame is queued again for the next poll). The first error seen is returned at
+    /// (the frame is queued again for the next poll). A frame the CAN driver's frame type
+    /// refuses to build (`Frame::new` gives `None` for an extended ID and 8 bytes, a driver
+    /// defect) is dropped, counted as `other` and reported as `ErrorKind::Other`: queued
+    /// again, it would stop every frame behind it. The first error seen is returned at
     /// the end.
     #[inline]
     fn poll<const Q: usize, const T: usize>(
@@ -462,6 +468,87 @@ mod tests {
         assert_eq!(stats.frames_sent, 4);
         assert_eq!(port.stats().driver_errors.total(), 0);
         assert!(!link.has_transmit());
+    }
+
+    /// A frame type that holds no extended frame of 8 bytes: a defective CAN driver.
+    #[derive(Debug)]
+    struct NoExtendedFrame;
+
+    impl embedded_can::Frame for NoExtendedFrame {
+        fn new(id: impl Into<Id>, _data: &[u8]) -> Option<Self> {
+            match id.into() {
+                Id::Extended(_) => None,
+                Id::Standard(_) => Some(NoExtendedFrame),
+            }
+        }
+        fn new_remote(_id: impl Into<Id>, _dlc: usize) -> Option<Self> {
+            None
+        }
+        fn is_extended(&self) -> bool {
+            false
+        }
+        fn is_remote_frame(&self) -> bool {
+            false
+        }
+        fn id(&self) -> Id {
+            Id::Standard(embedded_can::StandardId::ZERO)
+        }
+        fn dlc(&self) -> usize {
+            0
+        }
+        fn data(&self) -> &[u8] {
+            &[]
+        }
+    }
+
+    /// A CAN driver whose frame type cannot hold the link's frames; it sends nothing.
+    struct CannotHold {
+        transmits: usize,
+    }
+
+    impl Can for CannotHold {
+        type Frame = NoExtendedFrame;
+        type Error = ErrorKind;
+
+        fn transmit(
+            &mut self,
+            _frame: &Self::Frame,
+        ) -> nb::Result<Option<Self::Frame>, Self::Error> {
+            self.transmits += 1;
+            Ok(None)
+        }
+
+        fn receive(&mut self) -> nb::Result<Self::Frame, Self::Error> {
+            Err(nb::Error::WouldBlock)
+        }
+    }
+
+    /// A frame the CAN driver's frame type cannot build is dropped, counted as `other` and
+    /// reported, one per poll: queued again, it would stop the frames behind it forever.
+    /// The next poll, however soon (`next_deadline` is `now` while a frame waits), takes
+    /// the next frame.
+    #[test]
+    fn a_frame_the_drivers_frame_type_cannot_hold_is_dropped_and_counted() {
+        use crate::link::Config;
+        use crate::wire::control::{GimbalCommand, Pitch};
+
+        let mut port = CanPort::new(CannotHold { transmits: 0 });
+        let mut link: Link = Link::new(Config::default());
+        for deg in [-10.0, -20.0] {
+            link.send(GimbalCommand::Pitch(Pitch::new(deg).unwrap()))
+                .unwrap();
+        }
+        let other = DriverError(ErrorKind::Other);
+        assert_eq!(port.poll(&mut link, Instant::from_millis(0)), Err(other));
+        assert_eq!(port.stats().driver_errors.other, 1);
+        assert_eq!(port.stats().driver_errors.total(), 1);
+        assert!(link.has_transmit(), "the second waits for the next poll");
+        assert_eq!(port.poll(&mut link, Instant::from_millis(1)), Err(other));
+        assert_eq!(port.stats().driver_errors.other, 2);
+        assert!(!link.has_transmit());
+        assert_eq!(port.poll(&mut link, Instant::from_millis(2)), Ok(()));
+        assert_eq!(port.can().transmits, 0, "nothing reached the driver");
+        assert_eq!(link.stats().frames_sent, 0);
     }
 
     #[test]

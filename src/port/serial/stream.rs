@@ -157,7 +157,10 @@ impl SerialStream {
     /// `n` bytes of those [`SerialStream::transmit_bytes`] returned were written (more than
     /// it returned counts as all of them). With `n == 0` a frame of which nothing was
     /// written goes back to the front of the link's queue; once any byte of a frame is
-    /// written the frame is the link's last word until finished.
+    /// written the frame is the link's last word until finished. Report before sending
+    /// anything more on `link`: a command sent in between can take the slot the frame
+    /// left, and a frame that finds its class full is lost and counted in
+    /// [`LinkStats::queue_full`](crate::link::LinkStats::queue_full).
     pub fn transmit_written<const Q: usize, const T: usize>(
         &mut self,
         link: &mut Link<Q, T, Serial>,
