@@ -17,7 +17,8 @@
 # of date (--locked); every crate is still tried and the failures are listed at the end.
 #
 #   scripts/boards.sh              all boards
-#   scripts/boards.sh rp2040_mcp2515 esp32c3_twai     only these
+#   scripts/boards.sh rp2040_mcp2515 esp32c3_twai     only these (an unknown name: exit 2,
+#                                                     the valid names on stderr)
 set -uo pipefail
 cd "$(dirname "$0")/.."
 . scripts/firmware-env.sh
@@ -53,19 +54,29 @@ ensure_rust_target() {
 }
 
 selected=("$@")
-boards=()
+all=()
 for dir in boards/*/; do
     dir=${dir%/}
     [ -f "$dir/Cargo.toml" ] || continue
     grep -q '^\[workspace\]' "$dir/Cargo.toml" || continue
-    if [ ${#selected[@]} -gt 0 ] && ! printf '%s\n' "${selected[@]}" | grep -qx "$(basename "$dir")"; then
-        continue
-    fi
-    boards+=("$dir")
+    all+=("$dir")
 done
-if [ ${#boards[@]} -eq 0 ]; then
+if [ ${#all[@]} -eq 0 ]; then
     echo "boards: no board crate found under boards/" >&2
     exit 1
+fi
+boards=()
+if [ ${#selected[@]} -eq 0 ]; then
+    boards=("${all[@]}")
+else
+    for name in "${selected[@]}"; do
+        if [ -z "$name" ] || [ ! -d "boards/$name" ] || ! printf '%s\n' "${all[@]}" | grep -qxF "boards/$name"; then
+            valid=$(printf '%s\n' "${all[@]}" | sed 's|^boards/||' | paste -sd' ')
+            echo "boards: unknown board '$name' (valid: $valid)" >&2
+            exit 2
+        fi
+        boards+=("boards/$name")
+    done
 fi
 
 SIZE=$(size_tool)

@@ -38,18 +38,32 @@ out="$PWD/target/flake-hunt"
 rm -rf "$out"
 mkdir -p "$out"
 
-# "executable<TAB>package directory" of every test binary.
-cargo test --workspace --all-features --no-run --message-format=json 2>/dev/null |
-    python3 -c '
+# "executable<TAB>package directory" of every test binary. A build that fails ends the
+# hunt (exit 1) with the compiler's errors, which the JSON carries.
+build=0
+cargo test --workspace --all-features --no-run --message-format=json >"$out/build.json" \
+    2>"$out/build.log" || build=$?
+python3 - "$out/build.json" "$build" >"$out/all.tsv" <<'PY'
 import json, os, sys
-for line in sys.stdin:
-    try:
-        m = json.loads(line)
-    except ValueError:
-        continue
-    if m.get("reason") == "compiler-artifact" and m.get("profile", {}).get("test") and m.get("executable"):
-        print(m["executable"] + "\t" + os.path.dirname(m["manifest_path"]))
-' | sort -u > "$out/all.tsv"
+failed = sys.argv[2] != "0"
+binaries = set()
+with open(sys.argv[1]) as f:
+    for line in f:
+        try:
+            m = json.loads(line)
+        except ValueError:
+            continue
+        if m.get("reason") == "compiler-artifact" and m.get("profile", {}).get("test") and m.get("executable"):
+            binaries.add(m["executable"] + "\t" + os.path.dirname(m["manifest_path"]))
+        elif failed and m.get("reason") == "compiler-message" and m["message"].get("level") == "error":
+            sys.stderr.write(m["message"].get("rendered") or m["message"].get("message", "") + "\n")
+if binaries:
+    print("\n".join(sorted(binaries)))
+PY
+if [ "$build" -ne 0 ]; then
+    echo "flake-hunt: the test binaries did not build (exit $build; cargo's log: $out/build.log)" >&2
+    exit 1
+fi
 if [ -n "${FLAKE_ONLY:-}" ]; then
     awk -F'\t' -v re="$FLAKE_ONLY" '{ n = $1; sub(/.*\//, "", n); if (n ~ re) print }' "$out/all.tsv" > "$out/binaries.tsv"
 else

@@ -13,6 +13,7 @@ Only a panic handler that reads the location keeps them (panic-probe, defmt), so
 with no location at all is an error too: the check would prove nothing there.
 
     scripts/panic-paths.py ROOT ELF...
+    scripts/panic-paths.py --self-test   the search on made-up `.rodata`
 
 Exit 0: no library location in any ELF; 1: some (listed), or an ELF without locations;
 2: bad usage. Reads the ELFs with pyelftools (scripts/firmware-env.sh installs it).
@@ -40,26 +41,62 @@ def rodata(path):
         return section["sh_addr"], section.data()
 
 
+# A source path as a `Location` names it: printable, no NUL or control bytes (spaces are
+# allowed: a checkout's path may hold them), ending in `.rs`.
+SOURCE_PATH = re.compile(rb"[^\x00-\x1f\x7f]+\.rs")
+
+
 def locations(path):
-    """Every (file, line, column) a `Location` in the ELF's `.rodata` names."""
+    """Every (file, line, column) a `Location` in the ELF's `.rodata` names.
+
+    A `Location` is four aligned words: a pointer to its file's path, the path's length,
+    the line and the column. Every aligned place in `.rodata` is read as one, and kept when
+    its pointer and length name a source path inside `.rodata`: the paths themselves are
+    packed with other strings, with nothing between them, so they are found through the
+    records that point at them rather than by searching the bytes for paths.
+    """
     addr, data = rodata(path)
     found = set()
-    for m in re.finditer(rb"[\w\-./]+\.rs", data):
-        pointer = struct.pack("<I", addr + m.start())
-        for at in (p.start() for p in re.finditer(re.escape(pointer), data)):
-            if at % 4 or at + 16 > len(data):
-                continue
-            _, length, line, column = struct.unpack_from("<IIII", data, at)
-            if 0 < length <= len(m.group(0)) and 0 < line < 1_000_000:
-                name = data[m.start():m.start() + length].decode("utf-8", "replace")
-                found.add((name, line, column))
+    for at in range(-addr % 4, len(data) - 15, 4):
+        pointer, length, line, column = struct.unpack_from("<IIII", data, at)
+        start = pointer - addr
+        if not (0 <= start and 3 < length <= 4096 and start + length <= len(data)):
+            continue
+        if not (0 < line < 1_000_000 and column < 1_000_000):
+            continue
+        name = data[start:start + length]
+        if SOURCE_PATH.fullmatch(name):
+            found.add((name.decode("utf-8", "replace"), line, column))
     return sorted(found)
 
 
+def self_test():
+    """The search on made-up `.rodata`: a path packed right after other text, one with a
+    space, and a path with no `Location` pointing at it. Returns the failures."""
+    addr = 0x0800_1000
+    text = b"out of rangesrc/link/mod.rs/my work/src/geo.rsunused/x.rs"
+    blob = text + b"\0" * (-len(text) % 4) + struct.pack("<IIII", addr + 12, 15, 42, 7)
+    blob += struct.pack("<IIII", addr + 27, 19, 310, 9)
+    want = [("/my work/src/geo.rs", 310, 9), ("src/link/mod.rs", 42, 7)]
+    global rodata
+    real, rodata = rodata, lambda _path: (addr, blob)
+    try:
+        got = locations("self-test")
+    finally:
+        rodata = real
+    return [] if got == want else [f"found {got}, expected {want}"]
+
+
 def main(argv):
+    if argv[1:] == ["--self-test"]:
+        failures = self_test()
+        for f in failures:
+            print(f"panic-paths: self-test: {f}", file=sys.stderr)
+        print("panic-paths: self-test " + ("failed" if failures else "passed"))
+        return 1 if failures else 0
     if len(argv) < 3:
-        print("usage: panic-paths.py ROOT ELF... (ROOT: the repository's root directory)",
-              file=sys.stderr)
+        print("usage: panic-paths.py ROOT ELF... (ROOT: the repository's root directory) "
+              "or panic-paths.py --self-test", file=sys.stderr)
         return 2
     root = argv[1].rstrip("/") + "/"
     library = tuple(root + s for s in LIBRARY_SOURCES)

@@ -11,6 +11,7 @@ cd "$(dirname "$0")/.."
 . scripts/firmware-env.sh
 
 ensure_target
+ensure_bench_toolchain
 ensure_binutils
 
 firmware_cargo benches/mcu "+$BENCH_TOOLCHAIN" build --release --locked --bin footprint_generic
@@ -41,13 +42,24 @@ for pair in "poll_can poll_any_can" "poll_serial poll_any_serial"; do
     if [ -z "$a" ] || [ -z "$b" ]; then
         echo "port-generic: $1 or $2 missing from the build" >&2
         status=1
-    elif [ "$a" = "$b" ]; then
+        continue
+    fi
+    if [ "$a" = "$b" ]; then
         echo "  $2 = $1: one function (the same address)"
-    elif diff <(body "$1") <(body "$2") >/dev/null; then
-        echo "  $2 = $1: the same $(body "$1" | wc -l) instructions"
+        continue
+    fi
+    # Read here, not in a process substitution, so that a failed disassembly stops the
+    # check (set -e) instead of comparing two empty bodies.
+    one=$(body "$1")
+    other=$(body "$2")
+    if [ -z "$one" ] || [ -z "$other" ]; then
+        echo "port-generic: no instructions disassembled for $1 or $2" >&2
+        status=1
+    elif [ "$one" = "$other" ]; then
+        echo "  $2 = $1: the same $(printf '%s\n' "$one" | wc -l) instructions"
     else
         echo "port-generic: $2 differs from $1:" >&2
-        diff <(body "$1") <(body "$2") >&2 || true
+        diff <(printf '%s\n' "$one") <(printf '%s\n' "$other") >&2 || true
         status=1
     fi
 done

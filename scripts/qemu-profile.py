@@ -8,7 +8,8 @@ each executed block's instructions to the function containing its start address
 functions the firmware calls around the code of interest), only blocks executed between
 the first call of START and the next call of END are counted.
 
-  scripts/qemu-profile.py ELF [--between START END] [--top N]
+  scripts/qemu-profile.py ELF [--between START END] [--top N] [--callers SYMBOL]...
+                          [--timeout SECONDS]
 
 Exact for straight-line blocks; a block left early by an exception is still charged whole
 (rare in these benchmarks). Counts are guest instructions, the same unit as the
@@ -63,11 +64,17 @@ def main():
             marks[name] = hits[0]
 
     with tempfile.NamedTemporaryFile(suffix=".log") as log:
-        subprocess.run(["timeout", str(a.timeout), "qemu-system-arm", "-cpu", "cortex-m4",
-                        "-machine", "netduinoplus2", "-nographic", "-icount", "shift=0",
-                        "-semihosting-config", "enable=on,target=native",
-                        "-d", "in_asm,exec,nochain", "-D", log.name, "-kernel", a.elf],
-                       stdout=subprocess.DEVNULL, check=False)
+        run = subprocess.run(["timeout", str(a.timeout), "qemu-system-arm", "-cpu", "cortex-m4",
+                              "-machine", "netduinoplus2", "-nographic", "-icount", "shift=0",
+                              "-semihosting-config", "enable=on,target=native",
+                              "-d", "in_asm,exec,nochain", "-D", log.name, "-kernel", a.elf],
+                             stdout=subprocess.DEVNULL, check=False)
+        # 0 or 1 is the firmware's own verdict (a benchmark over its budget still ran to
+        # its end); anything else (124: the timeout) leaves a partial log.
+        if run.returncode not in (0, 1):
+            why = f" (timed out after {a.timeout} s)" if run.returncode == 124 else ""
+            sys.exit(f"qemu-profile: QEMU ended with status {run.returncode}{why}: "
+                     "the log is partial, no profile given")
         size = {}  # block start pc -> instructions
         per_fn = collections.Counter()
         total = 0

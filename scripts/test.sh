@@ -54,7 +54,10 @@ stage_fast() {
         echo "installing (rustup): the thumbv7em-none-eabihf target"
         rustup target add thumbv7em-none-eabihf >/dev/null
     fi
-    rustup component add rustfmt clippy >/dev/null 2>&1 || true
+    if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+        echo "installing (rustup): rustfmt and clippy"
+        rustup component add rustfmt clippy >/dev/null
+    fi
 
     step "cargo fmt --check"
     cargo fmt --all -- --check

@@ -12,7 +12,7 @@ cd "$(dirname "$0")"
 
 ensure_target
 ensure_qemu
-cargo build --release
+cargo build --release --locked
 # CARGO_TARGET_DIR, when set, is honoured (scripts/firmware-checks.sh passes the board crates'
 # shared target/boards, where scripts/boards.sh has just built this).
 elf="${CARGO_TARGET_DIR:-target}/$TARGET/release/embassy-qemu"
