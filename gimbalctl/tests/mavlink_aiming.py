@@ -234,7 +234,7 @@ def session(gimbalctl, holds, r):
                 f"(worst {worst[0]:.1f} of {during_turn(ap.stall):.1f}, then {ap.vehicle_yaw()}, earth {ap.earth_yaw()})")
         r.check(not locks[0], f"{tag} no YAW_LOCK while the yaw follows the vehicle")
 
-        # 1. The earth-frame yaw (the case): vehicle at 30, earth 100, turn to 120.
+        # 1. The earth-frame yaw (a yaw lock through a turn): vehicle at 30, earth 100, turn to 120.
         ap.turn(30.0)
         ap.setpoint = (EARTH, 100.0, -20.0)
         ap.run(SETTLE_S)

@@ -220,7 +220,7 @@ fn reading_lag(dps: f32) -> f32 {
 #[test]
 fn an_earth_yaw_is_held_while_the_vehicle_turns() {
     for holds in BOTH {
-        // The case: vehicle at 30, earth 100, the vehicle turns to 120.
+        // A yaw lock through a turn: vehicle at 30, earth 100, the vehicle turns to 120.
         let mut rig = Rig::new(holds);
         rig.vehicle_deg = 30.0;
         rig.run(1000);

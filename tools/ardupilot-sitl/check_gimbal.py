@@ -42,7 +42,7 @@ def log(*a):
 def check_deadline():
     if time.monotonic() - T0 > DEADLINE:
         log("FAIL: overall deadline of %.0fs reached" % DEADLINE)
-        sys.exit(3)
+        sys.exit(1)
 
 
 def flag_names(v):
@@ -772,9 +772,14 @@ def main():
             print(ln)
         print("-" * 100)
     log("done; sources seen: %s" % sorted(p.seen_sources))
+    # Exit 1 on either failure (2 is bad usage, argparse's); the line says which.
     if not found:
-        return 2
-    return 0 if turn_ok else 4
+        log("FAIL: ArduPilot did not find the gimbal")
+        return 1
+    if not turn_ok:
+        log("FAIL: the region of interest through the turn")
+        return 1
+    return 0
 
 
 if __name__ == "__main__":

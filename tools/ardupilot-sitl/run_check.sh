@@ -13,7 +13,11 @@
 # BRIDGE_ARGS (extra `gimbalctl mavlink` options, split on spaces, e.g. --sim-lock-holds motor,
 # which only a bridge that has them accepts), RUNS_DIR (where the run dirs go; default ./runs here).
 set -u
-GIMBALCTL=${1:?usage: run_check.sh /path/to/gimbalctl [helper args]}
+if [ $# -lt 1 ] || [ -z "$1" ]; then
+    echo "usage: run_check.sh /path/to/gimbalctl [helper args] (GIMBALCTL: the built gimbalctl)" >&2
+    exit 2
+fi
+GIMBALCTL=$1
 shift
 HERE=$(cd "$(dirname "$0")" && pwd)
 AP_DIR=${AP_DIR:-$HERE/ardupilot}
@@ -30,11 +34,19 @@ if ! "$PY" -c 'import pymavlink' 2>/dev/null; then
     echo "pymavlink missing for $PY; installing" >&2
     "$PY" -m pip install -q pymavlink || exit 1
 fi
-for port in 5760 14560; do
-    if (exec 3<>/dev/tcp/127.0.0.1/$port) 2>/dev/null; then
-        echo "TCP port $port already in use (another SITL?)" >&2; exit 1
-    fi
-done
+# SITL's GCS port is TCP 5760 (a listener answers a connect); the bridge's is UDP 14560
+# (free when it can be bound).
+if (exec 3<>/dev/tcp/127.0.0.1/5760) 2>/dev/null; then
+    echo "TCP port 5760 already in use (another SITL?)" >&2; exit 1
+fi
+if ! "$PY" -c 'import socket, sys
+s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+try:
+    s.bind(("127.0.0.1", 14560))
+except OSError:
+    sys.exit("UDP port 14560 already in use (another bridge?)")' ; then
+    exit 1
+fi
 
 BRIDGE_ARGS=${BRIDGE_ARGS:-}
 RUNS_DIR=${RUNS_DIR:-$HERE/runs}
@@ -56,7 +68,8 @@ trap 'exit 130' INT TERM
 
 echo "== run dir: $RUN"
 echo "== gimbalctl: $GIMBALCTL ($(stat -c '%y' "$GIMBALCTL" 2>/dev/null))"
-[ -d "$(dirname "$GIMBALCTL")/../../.git" ] && echo "== bridge repo HEAD: $(git -C "$(dirname "$GIMBALCTL")/../.." log --oneline -1 2>/dev/null)"
+# -e: in a git worktree .git is a file.
+[ -e "$(dirname "$GIMBALCTL")/../../.git" ] && echo "== bridge repo HEAD: $(git -C "$(dirname "$GIMBALCTL")/../.." log --oneline -1 2>/dev/null)"
 echo "== ArduPilot: $(git -C "$AP_DIR" log --oneline -1 2>/dev/null)"
 echo "== home: $HOME (heading $HEADING)"
 

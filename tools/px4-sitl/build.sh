@@ -12,7 +12,7 @@
 #   PYMAVLINK_URL=/srv/mirror/pymavlink.git LIBEVENTS_URL=/srv/mirror/libevents.git \
 #   HEATSHRINK_URL=/srv/mirror/heatshrink.git bash tools/px4-sitl/build.sh
 # Env: PX4_COMMIT (default below), JOBS (2), NO_APT=1 to skip apt-get.
-set -eu
+set -euo pipefail
 WORK=${1:-$HOME/px4-sitl}
 # The newest commit of PX4's main in the snapshot used whose submodules all exist in theirs
 # (its child a1be954 moves mavlink to a commit the mavlink snapshot lacks, which the next
@@ -28,8 +28,10 @@ SRC=$WORK/PX4-Autopilot
 LABEL=sihmin
 
 if [ -z "${NO_APT:-}" ]; then
-    apt-get update -qq
-    apt-get install -y --no-install-recommends cmake ninja-build g++ gcc make git python3-venv >/dev/null
+    SUDO=
+    [ "$(id -u)" -eq 0 ] || SUDO=sudo
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y --no-install-recommends cmake ninja-build g++ gcc make git python3-venv >/dev/null
 fi
 mkdir -p "$WORK"
 if [ ! -x "$WORK/venv/bin/python" ]; then
@@ -42,19 +44,28 @@ fi
 # mirror: the checkout then reports them and goes on.
 clone_at() {  # url dir commit
     local url=$1 dir=$2 want=$3
+    if [ -z "$want" ]; then
+        echo "error: no commit recorded for $dir in its parent tree" >&2
+        exit 1
+    fi
     if [ ! -e "$dir/.git" ]; then
         rm -rf "$dir"
         git clone -q --no-checkout "$url" "$dir"
     fi
-    if git -C "$dir" cat-file -e "$want^{commit}" 2>/dev/null; then
-        git -C "$dir" checkout -q -f "$want" 2>/dev/null || true
-        echo "$dir at $want"
-    else
+    if ! git -C "$dir" cat-file -e "$want^{commit}" 2>/dev/null; then
         local head
         head=$(git -C "$dir" rev-parse HEAD 2>/dev/null || git -C "$dir" rev-parse FETCH_HEAD)
         echo "WARNING: $want is not in $url; using its HEAD $head instead" >&2
-        git -C "$dir" checkout -q -f "$head" 2>/dev/null || true
+        want=$head
     fi
+    # Missing files are reported and passed over; a checkout that moved nowhere is an error.
+    git -C "$dir" checkout -q -f "$want" ||
+        echo "WARNING: the checkout of $want in $dir reported missing files; going on" >&2
+    if [ "$(git -C "$dir" rev-parse HEAD)" != "$(git -C "$dir" rev-parse "$want^{commit}")" ]; then
+        echo "error: $dir is not at $want after the checkout" >&2
+        exit 1
+    fi
+    echo "$dir at $want"
 }
 sub_commit() { git -C "$1" ls-tree HEAD "$2" | awk '{print $3}'; }
 

@@ -68,7 +68,7 @@ def log(*a):
 def check_deadline():
     if now() > DEADLINE:
         log("FAIL: overall deadline of %.0fs reached" % DEADLINE)
-        sys.exit(3)
+        sys.exit(1)
 
 
 def flag_names(v):
@@ -454,7 +454,9 @@ def phase_setup(a):
     r = command_long(p, mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, [1, 0], wait=3)
     log("PREFLIGHT_REBOOT_SHUTDOWN (reboot) -> %s (SITL is built without CONFIG_BOARDCTL_RESET: "
         "Commander refuses; run_check.sh restarts PX4 itself)" % res_name(r))
-    return 0 if ok else 2
+    if not ok:
+        log("FAIL: the setup's parameters did not all take")
+    return 0 if ok else 1
 
 
 # ------------------------------------------------------------------------------------------
@@ -689,7 +691,7 @@ def phase_check(a):
             p.spin(2.0)
     if not armed:
         log("FAIL: could not arm")
-        return 2
+        return 1
     home_amsl = pos.alt / 1000.0
     r = command_long(p, mavlink.MAV_CMD_NAV_TAKEOFF, [NAN, 0, 0, NAN, NAN, NAN, home_amsl + a.alt])
     log("NAV_TAKEOFF to %.1f m AMSL (%g m up) -> %s" % (home_amsl + a.alt, a.alt, res_name(r)))

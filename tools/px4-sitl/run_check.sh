@@ -19,7 +19,11 @@
 # LINK (normal: the link above; sitl-gimbal: no link of our own, the bridge behind SITL's own
 # gimbal link, mode Gimbal, which sends to UDP 13280), RUN_ROOT (where run directories go).
 set -u
-GIMBALCTL=${1:?usage: run_check.sh /path/to/gimbalctl [helper args]}
+if [ $# -lt 1 ] || [ -z "$1" ]; then
+    echo "usage: run_check.sh /path/to/gimbalctl [helper args] (GIMBALCTL: the built gimbalctl)" >&2
+    exit 2
+fi
+GIMBALCTL=$1
 shift
 HERE=$(cd "$(dirname "$0")" && pwd)
 PX4_DIR=${PX4_DIR:-$HOME/px4-sitl/PX4-Autopilot}
@@ -130,7 +134,8 @@ link_status() {  # the `mavlink status` block of the instance on UDP port $1
 
 echo "== run dir: $RUN"
 echo "== gimbalctl: $GIMBALCTL ($(stat -c '%y' "$GIMBALCTL" 2>/dev/null))"
-[ -d "$(dirname "$GIMBALCTL")/../../.git" ] && echo "== bridge repo HEAD: $(git -C "$(dirname "$GIMBALCTL")/../.." log --oneline -1 2>/dev/null)"
+# -e: in a git worktree .git is a file.
+[ -e "$(dirname "$GIMBALCTL")/../../.git" ] && echo "== bridge repo HEAD: $(git -C "$(dirname "$GIMBALCTL")/../.." log --oneline -1 2>/dev/null)"
 echo "== PX4: $(git -C "$PX4_DIR" log -1 --format='%H %cd %s' --date=short 2>/dev/null), build $PX4_BUILD"
 echo "== link: $LINK, bridge UDP $BRIDGE_PORT, relay $RELAY_LISTEN, PX4 link port $LINK_PORT, rate ${LINK_RATE:-(no -r)}"
 
