@@ -93,9 +93,9 @@ echo
 echo "Flash cost of the CRC variants (bytes; arm-none-eabi-nm --size-sort, qemu_bench build):"
 elf=$(firmware_elf qemu_bench)
 arm-none-eabi-nm -C --size-sort -S -t d "$elf" |
-    awk '/crcs::bench_crc|crcs::NIBBLE|crcs::CRC_CRATE|wire::crc::TABLE|wire::crc::update/ {
+    awk '/crcs::bench_crc|crcs::NIBBLE|crcs::CRC_CRATE|wire::crc::TABLE|wire::crc::checksum|wire::crc::update/ {
         printf "  %6d  %s %s\n", $2 + 0, $3, substr($0, index($0, $4)) }'
-echo "  (bench_crc_crate_table256 is a call into idu_gimbal::wire::crc::update, listed separately)"
+echo "  (bench_crc_crate_table256 is a call into idu_gimbal::wire::crc::checksum, listed separately)"
 
 echo
 scripts/size-report.sh || status=$?

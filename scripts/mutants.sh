@@ -24,11 +24,13 @@
 #   and tests/defmt_format.rs (the driver errors' counters and defmt encoding),
 #   tests/serial.rs (the serial link and port over the mock pipe) and tests/bounds.rs
 #   (the parsers and the link under floods), tests/blocking_adapter.rs (the Blocking
-#   adapter's classifier), tests/next_deadline.rs (the ports' next_deadline) and
-#   tests/aiming.rs (the closed-loop aim against the simulator). Left out: tests/no_panic.rs
-#   (fixed 2000 cases per property, about a minute a run, and it only checks panic-freedom,
-#   which the unit tests' proptests also exercise), tests/geo.rs (src/geo.rs is out of
-#   scope) and doctests (examples, not checks).
+#   adapter's classifier), tests/next_deadline.rs (the ports' next_deadline),
+#   tests/api_contracts.rs (the public API's documented contracts) and tests/aiming.rs (the
+#   closed-loop aim against the simulator). Left out: tests/no_panic.rs (fixed 2000 cases
+#   per property, about a minute a run, and it only checks panic-freedom, which the unit
+#   tests' proptests also exercise), tests/fuzz_corpus.rs (the same, over the fuzz
+#   corpora), tests/geo.rs (src/geo.rs is out of scope) and doctests (examples, not
+#   checks).
 # - PROPTEST_CASES=32 instead of 256: the proptests dominate the test time; 32 cases still
 #   cover each property, and the hand-written vectors do the exact checking.
 # - --all-features: the port tests need the `mock` bus.
@@ -56,7 +58,8 @@ rc=0
 if [ "${1:-}" = bridge ]; then
     shift
     # The bridge: every test but tests/no_panic.rs (its proptests only check panic-freedom,
-    # which the fuzz corpus replayed by tests/fuzz_corpus.rs also covers).
+    # which the fuzz corpus replayed by tests/fuzz_corpus.rs also covers) and
+    # tests/defmt_format.rs (the defmt encoding of types whose logic the others test).
     cargo mutants \
         --package idu-gimbal-mavlink \
         --all-features \

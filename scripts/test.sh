@@ -29,7 +29,7 @@ cd "$(dirname "$0")/.."
 # failing assertion still names its file and line; code generation is the same). Full DWARF
 # for every dependency of the host, MSRV, board and bench builds, with the incremental
 # caches, filled about 8 GB of target/, more than a CI machine had free; without them it
-# peaks near 2.7 GB. The environment overrides each.
+# ends near 3.5 GB. The environment overrides each.
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-0}"
 export CARGO_PROFILE_RELEASE_DEBUG="${CARGO_PROFILE_RELEASE_DEBUG:-0}"

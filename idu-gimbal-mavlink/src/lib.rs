@@ -50,7 +50,8 @@
 //! attitude is pushed, nose otherwise); angular velocities beside it are not followed. A NaN
 //! quaternion with angular velocities becomes the core's rate hold, whose dead-man stops the
 //! gimbal when the stream stops; an earth-frame yaw rate is taken less the vehicle's yaw
-//! rate. NEUTRAL re-centres, RETRACT looks down (the gimbal has no retracted pose).
+//! rate. NEUTRAL holds forward and level in the vehicle frame, RETRACT looks down (the
+//! gimbal has no retracted pose).
 //!
 //! Quaternions are built and read from the gimbal's axis rotations (see [`attitude`]), so
 //! the whole pitch range, past −90° down to −100°, is exact.

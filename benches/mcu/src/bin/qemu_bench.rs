@@ -263,7 +263,7 @@ mod fw {
     /// figure up to 0.006 off the whole count.
     const GOAL_ENCODE: f32 = 15.01;
     /// The closed loop's step (`Link::aim`, every `aim_period_ms`) beyond the same poll
-    /// without an aim (364), and a postback judged against the aim (56.0), on the bench
+    /// without an aim (358), and a postback judged against the aim (55.1), on the bench
     /// toolchain; the budgets leave room for one more branch of logic, not for a second
     /// pass over the state.
     const BUDGET_AIM_STEP: f32 = 400.0;
