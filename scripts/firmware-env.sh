@@ -1,7 +1,8 @@
 # Sourced by the firmware scripts (demo.sh, bench.sh, size-report.sh, firmware-checks.sh,
-# boards.sh). Installs what they need when it is missing: the thumbv7em-none-eabihf Rust
-# target, qemu-system-arm and the ARM binutils (Debian packages, through apt-get; sudo only
-# when not root), and for the bench the C MAVLink library's generator and compiler.
+# boards.sh) and test.sh. Installs what they need when it is missing: the thumbv7em-none-eabihf
+# Rust target, qemu-system-arm and the ARM binutils (Debian packages, through apt-get; sudo
+# only when not root), a Python pip may install into (ensure_python), and for the bench
+# the C MAVLink library's generator and compiler.
 # Nothing is downloaded when everything is already there.
 
 TARGET=thumbv7em-none-eabihf
@@ -90,8 +91,47 @@ ensure_bench_toolchain() {
     fi
 }
 
+# The Python the scripts install into and run: `python3` as found when pip may install
+# into it; otherwise (no pip, or a distribution's Python marked externally managed, as
+# Debian 12's is) a virtual environment under target/py, created once and put first on
+# PATH for this script and everything it runs. PY_VENV overrides the place.
+PY_VENV="${PY_VENV:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/target/py}"
+_python_ready=
+ensure_python() {
+    [ -z "$_python_ready" ] || return 0
+    _python_ready=1
+    if [ -x "$PY_VENV/bin/python3" ]; then
+        export PATH="$PY_VENV/bin:$PATH"
+        return 0
+    fi
+    if ! command -v python3 >/dev/null 2>&1; then
+        echo "installing python3" >&2
+        _apt_install python3
+    fi
+    if python3 -m pip --version >/dev/null 2>&1 && ! _externally_managed; then
+        return 0
+    fi
+    # Debian keeps venv's pip bootstrap (ensurepip) in python3-venv.
+    if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then
+        echo "installing python3-venv" >&2
+        _apt_install python3-venv
+    fi
+    echo "creating a Python environment for the scripts' packages: $PY_VENV" >&2
+    python3 -m venv "$PY_VENV"
+    export PATH="$PY_VENV/bin:$PATH"
+}
+
+# Whether pip would refuse to install into `python3` (PEP 668): outside a virtual
+# environment, with the marker beside its standard library.
+_externally_managed() {
+    python3 -c 'import os, sys, sysconfig
+marker = os.path.join(sysconfig.get_path("stdlib"), "EXTERNALLY-MANAGED")
+sys.exit(0 if sys.prefix == sys.base_prefix and os.path.exists(marker) else 1)'
+}
+
 # `_pip_pinned NAME VERSION WHY`: NAME==VERSION installed with pip unless that version is.
 _pip_pinned() {
+    ensure_python
     local have
     have=$(python3 -c "import importlib.metadata as m; print(m.version('$1'))" 2>/dev/null || true)
     if [ "$have" != "$2" ]; then

@@ -44,6 +44,7 @@ apt_install() {
     _apt_install "$@"
 }
 pip_install() {
+    ensure_python
     echo "installing (pip): $*"
     python3 -m pip install --quiet --disable-pip-version-check "$@"
 }
@@ -144,6 +145,7 @@ stage_firmware() {
 }
 
 stage_e2e() {
+    ensure_python
     python3 -c "import pymavlink" 2>/dev/null || pip_install pymavlink==2.4.50
     python3 -c "import mavsdk" 2>/dev/null || pip_install mavsdk==4.1.0
     # MAVProxy without what its metadata pulls in for the GUI and the 3-D map (vtk,

@@ -41,13 +41,15 @@ have_cantools() {
 }
 PY=$WORK/venv/bin/python
 if ! have_cantools "$PY"; then
-    if python3 -m venv "$WORK/venv" >/dev/null 2>&1 && "$PY" -m pip install -q 'cantools==45.*'; then
-        :
-    else
-        echo "compare: no venv; installing cantools 45 with pip --user" >&2
-        python3 -m pip install -q --user 'cantools==45.*'
-        PY=python3
+    # A venv of its own, so that the pinned cantools never meets the system's packages;
+    # Debian keeps venv's pip bootstrap in python3-venv (scripts/firmware-env.sh's apt-get).
+    if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then
+        . scripts/firmware-env.sh
+        echo "compare: installing python3-venv" >&2
+        _apt_install python3-venv
     fi
+    python3 -m venv "$WORK/venv"
+    "$PY" -m pip install -q 'cantools==45.*'
 fi
 have_cantools "$PY" || { echo "compare: cannot install cantools 45" >&2; exit 1; }
 CANTOOLS_VERSION=$("$PY" -c 'import cantools; print(cantools.__version__)')
