@@ -1166,9 +1166,16 @@ fn streams_are_asked_of_the_autopilot_until_they_come() {
         b.receive_all(&frame(AP, 7, &autopilot_state(10.0)), t(ms));
         assert!(asks(&mut b, ms, ms + 1_000).is_empty(), "at {ms}");
     }
-    // The core now holds and pushes the position.
-    b.link.poll(t(26_000));
-    let _ = queued(&mut b.link);
+    // The core now holds and pushes the position, as the autopilot sent it.
+    b.link.poll(t(35_200));
+    let frames = queued_vehicle_frames(&mut b.link);
+    assert!(
+        frames.iter().any(|f| matches!(
+            f,
+            VehicleFrame::Gps(g) if (g.lat_e7(), g.lon_e7()) == (473_977_420, 85_455_940)
+        )),
+        "{frames:?}"
+    );
 }
 
 #[test]

@@ -152,10 +152,13 @@ fn the_timestamps_sent_go_on_from_the_newest_known() {
         t(10),
     );
     let bytes = b.transmit_bytes().to_vec();
-    // Every frame's timestamp: newer than the newest received, and increasing.
+    // Every frame's timestamp: newer than the newest received, and increasing; the
+    // frames are the request's answers (the ACK and the message asked for).
     let mut rest = &bytes[..];
     let mut last = T + 5_000;
+    let mut ids = Vec::new();
     while rest.len() > 12 {
+        ids.push(u32::from_le_bytes([rest[7], rest[8], rest[9], 0]));
         let len = usize::from(rest[1]);
         let total = 10 + len + 2 + 13;
         let ts = u64::from_le_bytes({
@@ -167,6 +170,8 @@ fn the_timestamps_sent_go_on_from_the_newest_known() {
         last = ts;
         rest = &rest[total..];
     }
+    assert!(rest.is_empty(), "{} bytes after the last frame", rest.len());
+    assert_eq!(ids, [77, 283], "the ACK, then the message asked for");
 }
 
 #[test]
