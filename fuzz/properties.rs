@@ -39,11 +39,14 @@ pub fn stream_parser(data: &[u8]) {
 }
 
 /// Any sequence of (ID selector and length, time step, data) records of 11 bytes: the
-/// assembler never panics, never emits a message whose CRC fails, and every frame is
-/// accounted for.
+/// assembler never panics, emits only the message of the last four whole frames it was
+/// given on the postback ID, their CRC holding, and every frame is accounted for.
 pub fn assembler(data: &[u8]) {
     let mut asm = PostbackAssembler::new();
     let mut t = 0u32;
+    // The last four whole frames on the postback ID, the newest last; `whole` of them so far.
+    let mut last = [[0u8; 8]; 4];
+    let mut whole = 0usize;
     for chunk in data.chunks(11) {
         let [sel, dt, rest @ ..] = chunk else { break };
         t = t.wrapping_add(u32::from(*dt));
@@ -53,8 +56,15 @@ pub fn assembler(data: &[u8]) {
             ids::CONTROL
         };
         let len = usize::from(sel >> 1) % (rest.len() + 1);
-        if let Some(p) = asm.feed(id, &rest[..len], Instant::from_millis(t)) {
-            assert!(Postback::parse(&p.to_can_bytes()).is_ok());
+        let frame = &rest[..len];
+        if let (ids::POSTBACK, Ok(f)) = (id, <[u8; 8]>::try_from(frame)) {
+            last.rotate_left(1);
+            last[3] = f;
+            whole += 1;
+        }
+        if let Some(p) = asm.feed(id, frame, Instant::from_millis(t)) {
+            assert!(whole >= 4, "{p:?} from {whole} whole frames");
+            assert_eq!(Postback::parse(&last.concat()), Ok(p));
         }
     }
     let s = asm.stats();

@@ -288,6 +288,11 @@ fn vehicle(deg: f32) -> Yaw {
     Yaw::Vehicle(Heading::new(deg.rem_euclid(360.0)).unwrap())
 }
 
+/// How far a settled yaw may be off its aim, degrees: the command's rounding to tenths
+/// (0.05°) and the simulator's state in `f32` (every case here settles within 0.051°; a
+/// heading left within the 0.2° dead-band of the last command's would show more).
+const SETTLED_DEG: f32 = 0.06;
+
 /// How far the camera may lag its aim while the vehicle turns at `dps`. The gimbal turns a
 /// command into a motor angle with a vehicle heading up to 170 ms old (the vehicle's
 /// heading set every 20 ms, the attitude pushed every 100 ms, the loop looking every
@@ -308,7 +313,7 @@ fn an_earth_yaw_is_held_through_a_90_degree_turn() {
             rig.run(3000);
             let what = format!("{wire:?}, lock holds {holds:?}");
             assert!(
-                off(rig.earth_yaw(), 20.0) < 0.11,
+                off(rig.earth_yaw(), 20.0) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
@@ -321,12 +326,12 @@ fn an_earth_yaw_is_held_through_a_90_degree_turn() {
             );
             rig.run(1000);
             assert!(
-                off(rig.earth_yaw(), 20.0) < 0.11,
+                off(rig.earth_yaw(), 20.0) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
             assert!(
-                off(rig.motor(), -130.0) < 0.11,
+                off(rig.motor(), -130.0) < SETTLED_DEG,
                 "{what}: motor {}",
                 rig.motor()
             );
@@ -355,7 +360,11 @@ fn a_vehicle_yaw_turns_with_the_vehicle() {
             rig.aim(vehicle(40.0), -10.0).unwrap();
             rig.run(3000);
             let what = format!("{wire:?}, lock holds {holds:?}");
-            assert!(off(rig.motor(), 40.0) < 0.11, "{what}: {}", rig.motor());
+            assert!(
+                off(rig.motor(), 40.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
             let mut worst = 0.0f32;
             rig.turn(150.0, 30.0, |r| worst = worst.max(off(r.motor(), 40.0)));
             assert!(
@@ -363,8 +372,12 @@ fn a_vehicle_yaw_turns_with_the_vehicle() {
                 "{what}: {worst}° off during the turn"
             );
             rig.run(1000);
-            assert!(off(rig.motor(), 40.0) < 0.11, "{what}: {}", rig.motor());
-            assert!(off(rig.earth_yaw(), 190.0) < 0.11, "{what}");
+            assert!(
+                off(rig.motor(), 40.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
+            assert!(off(rig.earth_yaw(), 190.0) < SETTLED_DEG, "{what}");
             let given = Aim {
                 yaw: vehicle(40.0),
                 pitch: Pitch::new(-10.0).unwrap(),
@@ -388,7 +401,7 @@ fn the_first_aim_with_the_first_attitude_lands_in_the_gimbals_reference() {
             rig.run(2000);
             let what = format!("{wire:?}, lock holds {holds:?}");
             assert!(
-                off(rig.motor(), 40.0) < 0.11,
+                off(rig.motor(), 40.0) < SETTLED_DEG,
                 "{what}: motor {}",
                 rig.motor()
             );
@@ -415,12 +428,15 @@ fn a_lost_command_is_sent_again_from_the_postbacks() {
             rig.run(6000);
             let what = format!("{wire:?}, lock holds {holds:?}");
             assert!(
-                off(rig.earth_yaw(), 100.0) < 0.11,
+                off(rig.earth_yaw(), 100.0) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
+            // The aim, then one re-command from the postbacks, both lost; the second
+            // re-command arrives, and is the only heading that does.
             let stats = rig.stats();
-            assert!((1..=3).contains(&stats.aim_recommands), "{what}: {stats:?}");
+            assert_eq!(stats.aim_recommands, 2, "{what}: {stats:?}");
+            assert_eq!(rig.headings.len(), 1, "{what}: {:?}", rig.headings);
             assert_eq!(stats.aim_not_reached, 0, "{what}");
         }
     }
@@ -436,7 +452,7 @@ fn a_gimbal_that_reboots_mid_hold_is_brought_back() {
             rig.aim(earth(300.0), -45.0).unwrap();
             rig.run(4000);
             let what = format!("{wire:?}, lock holds {holds:?}");
-            assert!(off(rig.earth_yaw(), 300.0) < 0.11, "{what}");
+            assert!(off(rig.earth_yaw(), 300.0) < SETTLED_DEG, "{what}");
             rig.reboot();
             rig.run(100);
             assert_eq!(rig.motor(), 0.0, "{what}: at rest after the restart");
@@ -445,7 +461,7 @@ fn a_gimbal_that_reboots_mid_hold_is_brought_back() {
             // at 60°/s).
             rig.run(3000 + 500 + 100 + 3500);
             assert!(
-                off(rig.earth_yaw(), 300.0) < 0.11,
+                off(rig.earth_yaw(), 300.0) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
@@ -539,7 +555,7 @@ fn a_yaw_beyond_the_motors_travel_stops_at_the_limit_reported_and_not_hammered()
             // The vehicle turns right: in reach again.
             rig.turn(30.0, 30.0, |_| {});
             rig.run(3000);
-            assert!(off(rig.earth_yaw(), 175.0) < 0.11, "{what}");
+            assert!(off(rig.earth_yaw(), 175.0) < SETTLED_DEG, "{what}");
             assert!(!rig.aim_state().unwrap().at_yaw_limit, "{what}");
             // The limit itself is in reach; a tenth of a degree past it is not.
             rig.aim(vehicle(170.0), 0.0).unwrap();
@@ -604,12 +620,20 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
             rig.send(GimbalCommand::StopTracking);
             rig.run(3000);
             assert!(!rig.aim_state().unwrap().yielded_to_tracker, "{what}");
-            assert!(off(rig.motor(), 0.0) < 0.11, "{what}: {}", rig.motor());
+            assert!(
+                off(rig.motor(), 0.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
             // A target lost lets go too.
             rig.send(GimbalCommand::StartTracking(track));
             rig.run(12_000);
             assert_eq!(rig.state().targets_lost, 1, "{what}");
-            assert!(off(rig.motor(), 0.0) < 0.11, "{what}: {}", rig.motor());
+            assert!(
+                off(rig.motor(), 0.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
             // Stopped before any postback showed it tracking: the aim is back at once.
             rig.send(GimbalCommand::StartTracking(track));
             assert!(rig.aim_state().unwrap().yielded_to_tracker, "{what}");
@@ -624,7 +648,11 @@ fn the_tracker_owns_the_gimbal_while_it_tracks() {
             assert!(!rig.aim_state().unwrap().yielded_to_tracker, "{what}");
             rig.run(1000);
             assert!(!rig.state().tracking, "{what}");
-            assert!(off(rig.motor(), 10.0) < 0.11, "{what}: {}", rig.motor());
+            assert!(
+                off(rig.motor(), 10.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
         }
     }
 }
@@ -681,7 +709,11 @@ fn an_aim_ends_a_rate_hold_and_a_rate_hold_that_ended_elsewhere_is_corrected() {
             assert!(rig.motor().abs() > 15.0, "{what}: {}", rig.motor());
             // The loop finds the gimbal off and not coming back: it sends the aim again.
             rig.run(3000);
-            assert!(off(rig.motor(), 0.0) < 0.11, "{what}: {}", rig.motor());
+            assert!(
+                off(rig.motor(), 0.0) < SETTLED_DEG,
+                "{what}: {}",
+                rig.motor()
+            );
         }
     }
 }
@@ -707,7 +739,7 @@ fn point_at_holds_a_ground_target_while_the_vehicle_turns_in_place() {
             }
             rig.run(3000);
             assert!(
-                off(rig.earth_yaw(), bearing) < 0.11,
+                off(rig.earth_yaw(), bearing) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
@@ -718,7 +750,7 @@ fn point_at_holds_a_ground_target_while_the_vehicle_turns_in_place() {
             assert!(worst < turn_lag(30.0), "{what}: {worst}");
             rig.run(2000);
             assert!(
-                off(rig.earth_yaw(), bearing) < 0.11,
+                off(rig.earth_yaw(), bearing) < SETTLED_DEG,
                 "{what}: {}",
                 rig.earth_yaw()
             );
@@ -763,7 +795,7 @@ fn a_point_at_moving_with_the_vehicle_leaves_the_gimbal_to_a_tracker_started_thr
         let bearing = wrap(look_at(&here, &target).unwrap().bearing_deg as f32);
         assert!(bearing < -26.0 && bearing > -27.0, "{bearing}");
         assert!(
-            off(rig.earth_yaw(), bearing) < 0.11,
+            off(rig.earth_yaw(), bearing) < SETTLED_DEG,
             "{what}: {} against {bearing}",
             rig.earth_yaw()
         );

@@ -187,7 +187,13 @@ fn rate_hold_turns_the_gimbal_and_the_dead_man_stops_it() {
     }
     let last_refresh = b.host.now - 30;
     let yaw_turned = b.sim.state().motor_yaw_deg;
-    assert!(yaw_turned > 15.0, "turned {yaw_turned}° in 1 s at 20°/s");
+    // 20°/s from the first command's arrival, 1 ms after it left at 100 ms, to 1,120 ms:
+    // 1,019 ms, 20.38° (the simulator integrates exactly; `f32` sums keep 3e-4 of it). A
+    // hold refreshed too seldom for the simulator's 200 ms rate timeout would fall short.
+    assert!(
+        (yaw_turned - 20.38).abs() < 0.01,
+        "turned {yaw_turned}° in 1,019 ms at 20°/s"
+    );
     // Dead-man 250 ms + one repeat period 50 ms.
     b.run(last_refresh + 300 - b.host.now);
     let stopped_at = b.sim.state().motor_yaw_deg;
@@ -228,7 +234,8 @@ fn vehicle_frames_at_their_rates_stop_when_stale_and_resume() {
     assert!(b.sim.state().north_referenced);
     // No new data: pushed until 1 s old, then nothing.
     b.run(3000);
-    assert!(b.count(ids::ATTITUDE, 10_000, 13_000) <= 10);
+    // The last data is stamped 9,980 and pushed until 1 s old: at 10,000, 10,100, … 10,900.
+    assert_eq!(b.count(ids::ATTITUDE, 10_000, 13_000), 10);
     assert_eq!(b.count(ids::ATTITUDE, 11_001, 13_000), 0);
     assert!(
         !b.sim.state().north_referenced,

@@ -1,7 +1,7 @@
 //! Point-at in closed loop: the vehicle orbits a ground target at 200 m while the driver
 //! keeps the simulated gimbal on it, whether the gimbal holds its north heading in lock or
-//! its motor angle. The simulator's reported heading and pitch must stay within 1° of the
-//! true bearing and elevation (exact WGS84) once settled.
+//! its motor angle. The simulator's reported heading and pitch must stay within 1° and
+//! 0.07° of the true bearing and elevation (exact WGS84) once settled.
 
 #![cfg(feature = "mock")]
 
@@ -86,6 +86,18 @@ fn fly(config: Config, push_attitude_to_gimbal: bool, holds: LockHolds) -> (usiz
     (checked, worst_heading, worst_pitch)
 }
 
+/// How far the reported heading may be off the true bearing: the orbit turns the vehicle
+/// at 3.44°/s (12 m/s on a 200 m radius), and a gimbal whose lock holds its motor angle
+/// lags by what `tests/aiming.rs`'s `turn_lag` allows at that rate, 255 ms of turn plus
+/// the command's 0.1°: 0.98° (0.40° seen; 0.06° and 0.10° where the gimbal holds north or
+/// references the nose).
+const HEADING_TOL_DEG: f64 = 1.0;
+
+/// How far the reported pitch may be off the true elevation: the command's rounding to
+/// tenths (0.05°), the postback's hundredths (0.005°), and the elevation's change between
+/// aims (the vehicle's position at the aim against the truth at the postback): 0.051° seen.
+const PITCH_TOL_DEG: f64 = 0.07;
+
 #[test]
 fn orbit_at_200_m_north_referenced() {
     for holds in [LockHolds::North, LockHolds::Motor] {
@@ -93,10 +105,13 @@ fn orbit_at_200_m_north_referenced() {
         println!("north-referenced, lock holds {holds:?}: {checked} postbacks, worst heading error {worst_heading:.3}°, pitch {worst_pitch:.3}°");
         assert!(checked > 400);
         assert!(
-            worst_heading < 1.0,
+            worst_heading < HEADING_TOL_DEG,
             "{holds:?}: heading off by {worst_heading}°"
         );
-        assert!(worst_pitch < 1.0, "{holds:?}: pitch off by {worst_pitch}°");
+        assert!(
+            worst_pitch < PITCH_TOL_DEG,
+            "{holds:?}: pitch off by {worst_pitch}°"
+        );
     }
 }
 
@@ -114,6 +129,9 @@ fn orbit_at_200_m_nose_referenced() {
     );
     println!("nose-referenced: {checked} postbacks, worst heading error {worst_heading:.3}°, pitch {worst_pitch:.3}°");
     assert!(checked > 400);
-    assert!(worst_heading < 1.0, "heading off by {worst_heading}°");
-    assert!(worst_pitch < 1.0, "pitch off by {worst_pitch}°");
+    assert!(
+        worst_heading < HEADING_TOL_DEG,
+        "heading off by {worst_heading}°"
+    );
+    assert!(worst_pitch < PITCH_TOL_DEG, "pitch off by {worst_pitch}°");
 }

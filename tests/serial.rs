@@ -279,7 +279,9 @@ fn the_dead_man_stops_the_gimbal_over_serial() {
     assert_eq!(expired, [last_refresh + 251]);
     // The gimbal turned while held and stopped: yaw at 20°/s for about 1 s, and the zero
     // rate reached it within the dead-man (250 ms) plus the sim's own 200 ms rate timeout.
-    assert!(yaw_at_release > 15.0, "{yaw_at_release}");
+    // Read at 1,000 ms: 20°/s since the first command's 24 bytes arrived, 1 ms after it
+    // left, so 999 ms, 19.98° (the simulator integrates exactly; `f32` sums keep 3e-4 of it).
+    assert!((yaw_at_release - 19.98).abs() < 0.01, "{yaw_at_release}");
     let stopped = b.sim.sim().state().motor_yaw_deg;
     b.run(500);
     assert_eq!(b.sim.sim().state().motor_yaw_deg, stopped);

@@ -41,28 +41,29 @@ fn feed_vehicle<const Q: usize, const T: usize>(link: &mut Link<Q, T>, at: u32) 
 fn vehicle_frames_at_their_periods_without_drift() {
     let mut link: Link = Link::new(Config::default());
     let mut log = Vec::new();
-    // Fresh data every 20 ms; poll every 7 ms (not a divisor of the periods) for 10 s.
+    // Fresh data at every poll; a poll every 7 ms (not a divisor of the periods) for 10 s,
+    // so that a poll comes after most deadlines, as a schedule that drifted would show.
     let mut t = 0u32;
     while t < 10_000 {
-        if t.is_multiple_of(20) {
-            feed_vehicle(&mut link, t);
-        }
+        feed_vehicle(&mut link, t);
         log.extend(run(&mut link, t, t + 1, 1));
-        t += 1;
+        t += 7;
     }
-    assert_eq!(count(&log, ids::ATTITUDE), 100);
-    assert_eq!(count(&log, ids::GPS), 50);
-    assert_eq!(count(&log, ids::ALTITUDE), 50);
-    // Deadlines, not poll times: attitude k is sent at 100·k ms exactly.
-    let att: Vec<u32> = log
-        .iter()
-        .filter(|(_, f)| f.id == ids::ATTITUDE)
-        .map(|(t, _)| *t)
-        .collect();
-    assert!(
-        att.iter().enumerate().all(|(k, &t)| t == 100 * k as u32),
-        "{att:?}"
-    );
+    // Deadlines, not poll times: frame k of a period p is due at p·k ms and goes at the
+    // first poll at or after it, ⌈p·k / 7⌉·7 (a next deadline counted from the late poll
+    // would fall behind by up to 6 ms a frame).
+    let at = |id, period: u32, n: u32| {
+        let sent: Vec<u32> = log
+            .iter()
+            .filter(|(_, f)| f.id == id)
+            .map(|(t, _)| *t)
+            .collect();
+        let due: Vec<u32> = (0..n).map(|k| (period * k).div_ceil(7) * 7).collect();
+        assert_eq!(sent, due, "{id:#x}");
+    };
+    at(ids::ATTITUDE, 100, 100);
+    at(ids::GPS, 200, 50);
+    at(ids::ALTITUDE, 200, 50);
 }
 
 #[test]

@@ -343,6 +343,7 @@ impl Iterator for Feed<'_, '_> {
 mod tests {
     use super::*;
     use crate::wire::postback::tests::{arb_postback, sample};
+    use crate::wire::postback::{ControlMode, DataId, GimbalType};
     use proptest::prelude::*;
 
     /// the protocol notes: look down 90° over TCP, 24 bytes.
@@ -425,11 +426,19 @@ mod tests {
         assert_eq!((stats.invalid_frames, stats.crc_errors), (1, 0));
     }
 
+    /// The hand-built sample (`wire::postback`'s, its CRC from the document's nibble table)
+    /// on the stream: its fields as built.
     #[test]
     fn postback_on_the_stream() {
-        let pb = Postback::parse(&sample()).unwrap();
         let (items, _) = parse_all(&sample()[..27]);
-        assert_eq!(items, [StreamItem::Postback(pb)]);
+        let [StreamItem::Postback(p)] = items[..] else {
+            panic!("{items:?}")
+        };
+        assert_eq!(
+            (p.data_id, p.gimbal_type, p.tracking, p.mode),
+            (DataId::Attitude, GimbalType::X30T, true, ControlMode::Lock)
+        );
+        assert_eq!((p.pitch, p.heading, p.motor_heading), (-4500, 9000, -1234));
     }
 
     #[test]
@@ -472,11 +481,10 @@ mod tests {
             46, 235, 144, 65, 65, 235, 144, 10, 46, 235, 144, 10, 46, 144, 144, 235, 10, 0, 0, 0,
             0, 46, 144, 113, 235, 144, 144, 235, 144, 10, 0, 144, 235, 144, 10, 0, 0, 65,
         ];
-        for item in parse_all(data).0 {
-            if let StreamItem::Control(d) = item {
-                assert!(data.windows(24).any(|w| w == control_frame(&d)));
-            }
-        }
+        // None of its 15 candidate frames has the fixed bytes: no frame, no CRC run.
+        let (items, stats) = parse_all(data);
+        assert!(items.is_empty(), "{items:?}");
+        assert_eq!((stats.invalid_frames, stats.crc_errors), (15, 0));
     }
 
     #[test]
@@ -589,14 +597,33 @@ mod tests {
             }
         }
 
+        /// Frames, postbacks and near-frames with one bit flipped anywhere: whatever is
+        /// yielded stands whole in the input with its CRC holding (a control frame equal to
+        /// the one its data makes, a postback that parses from 27 bytes of the input).
         #[test]
-        fn never_yields_a_bad_crc(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        fn never_yields_a_bad_crc(
+            parts in proptest::collection::vec(prop_oneof![
+                proptest::collection::vec(prop_oneof![any::<u8>(), Just(0xEB), Just(0x90), Just(0x0A), Just(0x0C)], 0..30),
+                any::<[u8; 8]>().prop_map(|d| control_frame(&d).to_vec()),
+                arb_postback().prop_map(|p| p.to_stream_bytes().to_vec()),
+            ], 1..12),
+            flip in any::<(prop::sample::Index, u8)>(),
+        ) {
+            let mut bytes = parts.concat();
+            if !bytes.is_empty() {
+                let i = flip.0.index(bytes.len());
+                bytes[i] ^= 1 << (flip.1 % 8);
+            }
             let (items, _) = parse_all(&bytes);
             for item in items {
-                if let StreamItem::Control(d) = item {
-                    // It must be a frame present in the input with a good CRC.
-                    let f = control_frame(&d);
-                    prop_assert!(bytes.windows(24).any(|w| w == f));
+                match item {
+                    StreamItem::Control(d) => {
+                        let f = control_frame(&d);
+                        prop_assert!(bytes.windows(24).any(|w| w == f), "{:?}", d);
+                    }
+                    StreamItem::Postback(p) => {
+                        prop_assert!(bytes.windows(27).any(|w| Postback::parse(w) == Ok(p)), "{:?}", p);
+                    }
                 }
             }
         }

@@ -741,40 +741,46 @@ proptest! {
         }
     }
 
+    // Each value on the wire is the nearest step: within half a step of the angle or ratio
+    // given, plus `f32`'s rounding of the scaled value (below 1e-4 at these magnitudes). Any `f32`, and as
+    // often one in and around the range, so that its ends are drawn.
     #[test]
-    fn pitch_accepts_exactly_its_range(v in any::<f32>()) {
+    fn pitch_accepts_exactly_its_range(v in prop_oneof![any::<f32>(), -100.5f32..60.5]) {
         let r = Pitch::new(v);
         prop_assert_eq!(r.is_ok(), (-100.0..=60.0).contains(&v));
         if let Ok(p) = r {
-            prop_assert_eq!(p.deci(), libm::roundf(v * 10.0) as i16);
+            prop_assert!((f32::from(p.deci()) / 10.0 - v).abs() <= 0.05 + 1e-4, "{} {}", v, p.deci());
         }
     }
 
     #[test]
-    fn heading_accepts_exactly_its_range(v in any::<f32>()) {
+    fn heading_accepts_exactly_its_range(v in prop_oneof![any::<f32>(), -0.5f32..360.5]) {
         let r = Heading::new(v);
         prop_assert_eq!(r.is_ok(), (0.0..=360.0).contains(&v));
         if let Ok(h) = r {
-            prop_assert_eq!(h.deci(), libm::roundf(v * 10.0) as u16);
+            prop_assert!((f32::from(h.deci()) / 10.0 - v).abs() <= 0.05 + 1e-4, "{} {}", v, h.deci());
         }
     }
 
     #[test]
-    fn zoom_ratio_accepts_exactly_its_range(v in any::<f32>()) {
+    fn zoom_ratio_accepts_exactly_its_range(v in prop_oneof![any::<f32>(), 0.5f32..35.5]) {
         let r = ZoomRatio::new(v);
         prop_assert_eq!(r.is_ok(), (1.0..=35.0).contains(&v));
         if let Ok(z) = r {
-            prop_assert_eq!(z.centi(), libm::roundf(v * 100.0) as u16);
+            prop_assert!((f32::from(z.centi()) / 100.0 - v).abs() <= 0.005 + 1e-4, "{} {}", v, z.centi());
         }
     }
 
     #[test]
-    fn rate_accepts_exactly_its_range(y in any::<f32>(), p in -100.0f32..=100.0) {
+    fn rate_accepts_exactly_its_range(
+        y in prop_oneof![any::<f32>(), -100.5f32..100.5],
+        p in -100.0f32..=100.0,
+    ) {
         let r = Rate::new(y, p);
         prop_assert_eq!(r.is_ok(), (-100.0..=100.0).contains(&y));
         if let Ok(r) = r {
-            prop_assert_eq!(r.yaw_centi(), libm::roundf(y * 100.0) as i16);
-            prop_assert_eq!(r.pitch_centi(), libm::roundf(p * 100.0) as i16);
+            prop_assert!((f32::from(r.yaw_centi()) / 100.0 - y).abs() <= 0.005 + 1e-4, "{} {}", y, r.yaw_centi());
+            prop_assert!((f32::from(r.pitch_centi()) / 100.0 - p).abs() <= 0.005 + 1e-4, "{} {}", p, r.pitch_centi());
         }
     }
 
