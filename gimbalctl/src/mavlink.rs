@@ -762,7 +762,9 @@ mod tests {
         assert!((att.heading_deg() - 30.0).abs() < 0.01, "{att:?}");
         let gps = state.gps.expect("the position pushed on CAN");
         assert_eq!((gps.lat_e7(), gps.lon_e7()), (473_977_420, 85_455_940));
-        assert!(state.altitude.is_some());
+        // MAVLink's millimetres above sea level, 488 123, in the document's centimetres:
+        // 48 812.
+        assert_eq!(state.altitude.map(|a| a.cm()), Some(48_812));
         assert!(state.north_referenced, "headings north-referenced on CAN");
         assert!(link.is_link_up());
         assert!(link.north_referenced(t(3_000)));

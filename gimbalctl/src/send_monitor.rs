@@ -508,25 +508,22 @@ mod tests {
             ["00000F01#0F08018403000000", "00000F01#0F08023FFE000000"]
         );
         // Vehicle and text frames, which only CAN carries, through the link's push and
-        // text queue.
-        let gps = sent_on_can(&["gps", "47.397742", "8.545594"], None);
-        let expected = spec(&["gps", "47.397742", "8.545594"])
-            .build()
-            .unwrap()
-            .frames();
-        assert_eq!(gps.len(), 1, "{gps:?}");
+        // text queue, as computed by hand: latitude and longitude in 1e-7 degrees
+        // (473977420, 85455940) as little-endian i32; pitch, roll and heading in 0.01°
+        // (100, -200, 3000) as little-endian i16, i16, u16; the text in 8-byte chunks, the
+        // last on its own ID and padded with zeros (`tests/encode.rs`'s golden vector).
         assert_eq!(
-            gps[0],
-            format!("{:08X}#{}", expected[0].id, crate::hex(&expected[0].data))
+            sent_on_can(&["gps", "47.397742", "8.545594"], None),
+            ["0000FF15#4C52401C44F41705"]
         );
-        let att = sent_on_can(&["attitude", "1", "-2", "30"], None);
-        assert!(att[0].starts_with("0000FF13#"), "{att:?}");
-        let txt = sent_on_can(&["text", "HELLO, GIMBAL"], None);
-        let frames: Vec<String> = text::chunks(b"HELLO, GIMBAL")
-            .unwrap()
-            .map(|f| format!("{:08X}#{}", f.id, crate::hex(&f.data)))
-            .collect();
-        assert_eq!(txt, frames);
+        assert_eq!(
+            sent_on_can(&["attitude", "1", "-2", "30"], None),
+            ["0000FF13#640038FFB80B0000"]
+        );
+        assert_eq!(
+            sent_on_can(&["text", "HELLO, GIMBAL"], None),
+            ["02008201#48454C4C4F2C2047", "02008202#494D42414C000000"]
+        );
     }
 
     #[test]

@@ -136,7 +136,10 @@ fn runtime_failures_exit_1() {
     );
     // No serial server there.
     let addr = format!("127.0.0.1:{}", closed_port());
-    failure_naming(&["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"], &[]);
+    failure_naming(
+        &["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"],
+        &["cannot connect to", &addr],
+    );
     // A peer's name with no address (`.invalid`, RFC 6761): a failure at run time, not a
     // usage error.
     failure_naming(

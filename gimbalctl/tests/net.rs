@@ -103,13 +103,12 @@ fn sim_serves_several_clients_tolerates_garbage_and_bounds_clients() {
     thread::sleep(Duration::from_millis(20));
     a.write_all(&good[7..]).unwrap();
 
-    // Both clients get postbacks, 500 ms apart, and see the pitch move to -30. What b
-    // holds already is read first, so that the two timed are both sent from now on.
+    // Both clients get postbacks and see the pitch move to -30. (Their period is the
+    // simulator's, tested on its own clock: here a stalled machine may bunch two.) What b
+    // holds already is read first, so that what it reads is sent from now on.
     drain(&mut b);
     let start = Instant::now();
     let first = read_postbacks(&mut b, 2);
-    let elapsed = start.elapsed();
-    assert!(elapsed >= Duration::from_millis(300), "{elapsed:?}");
     read_postbacks(&mut a, 1);
     let mut seen = first.iter().map(|m| postback_pitch(m)).collect::<Vec<_>>();
     while !seen.contains(&-3000) {

@@ -16,8 +16,9 @@ use mavio::dialects::common::enums::{
     CameraMode, MavCmd, MavParamExtType, MavResult, ParamAck, VideoStreamStatusFlags,
 };
 use mavio::dialects::common::messages::{
-    CameraSettings, CommandAck, FileTransferProtocol, ParamExtAck, ParamExtRequestList,
-    ParamExtRequestRead, ParamExtSet, ParamExtValue, VideoStreamInformation, VideoStreamStatus,
+    CameraInformation, CameraSettings, CommandAck, FileTransferProtocol, ParamExtAck,
+    ParamExtRequestList, ParamExtRequestRead, ParamExtSet, ParamExtValue, VideoStreamInformation,
+    VideoStreamStatus,
 };
 use mavio::protocol::{Frame, V2};
 
@@ -537,8 +538,14 @@ fn the_definitions_model_is_the_camera_informations() {
             got.extend_from_slice(&p[12..12 + p[4] as usize]);
         }
         assert_eq!(got, want);
-        let text = String::from_utf8(got).unwrap();
-        assert!(text.contains(&format!("<model>{model}</model>")), "{model}");
+        let xml = String::from_utf8(got).unwrap();
+        assert!(xml.contains(&format!("<model>{model}</model>")), "{model}");
+        // And CAMERA_INFORMATION (REQUEST_MESSAGE 259, as QGroundControl asks) names the same.
+        let (r, frames) = ask(&mut b, MavCmd::RequestMessage, 259.0, 0.0);
+        assert_eq!(r, MavResult::Accepted);
+        let info: Vec<CameraInformation> = of(&frames);
+        assert_eq!(info.len(), 1);
+        assert_eq!(text(&info[0].model_name), model);
     }
 }
 
