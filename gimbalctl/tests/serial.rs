@@ -135,38 +135,44 @@ fn a_port_that_goes_away_is_exit_1() {
 /// The sim going away under `send --repeat-ms` and `mavlink` ends them too.
 #[test]
 fn the_sim_exiting_ends_a_session_with_exit_1() {
-    let (sim, path, log) = start_pty_sim();
-    let (mut bridge, _out, stderr) = spawn(&[
-        "mavlink",
-        "--serial",
-        &path,
-        "--listen",
-        "127.0.0.1:0",
-        "--exit-after-ms",
-        "20000",
-    ]);
-    // Gone once the bridge has the port (else it could not open it, a different error).
-    log.wait(&format!("{path} opened"), Duration::from_secs(10));
-    drop(sim);
-    went_away(&mut bridge, stderr);
-
-    // A rate held for 20 s: gone once the sim has had its first repeat.
-    let (sim, path, log) = start_pty_sim();
-    let (mut send, _out, stderr) = spawn(&[
-        "send",
-        "--serial",
-        &path,
-        "--repeat-ms",
-        "50",
-        "--for-ms",
-        "20000",
-        "rate",
-        "0",
-        "10",
-    ]);
-    log.wait(&format!("{path}: rate 0 10"), Duration::from_secs(10));
-    drop(sim);
-    went_away(&mut send, stderr);
+    // Each session, and what the sim logs once it is under way: the bridge once it has the
+    // port (else it could not open it, a different error); a rate held for 20 s once its
+    // first command came.
+    type Session = (&'static [&'static str], fn(&str) -> String);
+    let sessions: [Session; 2] = [
+        (
+            &[
+                "mavlink",
+                "--listen",
+                "127.0.0.1:0",
+                "--exit-after-ms",
+                "20000",
+            ],
+            |path| format!("{path} opened"),
+        ),
+        (
+            &[
+                "send",
+                "--repeat-ms",
+                "50",
+                "--for-ms",
+                "20000",
+                "rate",
+                "0",
+                "10",
+            ],
+            |path| format!("{path}: rate 0 10"),
+        ),
+    ];
+    for (args, under_way) in sessions {
+        let (sim, path, log) = start_pty_sim();
+        let mut full = vec![args[0], "--serial", &path];
+        full.extend_from_slice(&args[1..]);
+        let (mut session, _out, stderr) = spawn(&full);
+        log.wait(&under_way(&path), Duration::from_secs(10));
+        drop(sim);
+        went_away(&mut session, stderr);
+    }
 }
 
 /// Bytes that hold no frame (what a wrong baud rate gives): counted and said on stderr
