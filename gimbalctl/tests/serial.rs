@@ -262,10 +262,11 @@ fn serial_usage_and_open_errors() {
 }
 
 /// A tty the user may not open: exit 1 naming the group to join, tried as `nobody` through
-/// `runuser`, which needs root: run by `scripts/test.sh` when it is root (CI is), by hand
-/// with `sudo cargo test -p gimbalctl --test serial -- --ignored`.
+/// `runuser`, which needs root and a binary `nobody` can reach: run by `scripts/test.sh`
+/// when both hold (it says so when not), by hand with
+/// `sudo cargo test -p gimbalctl --test serial -- --ignored`.
 #[test]
-#[ignore = "needs root and runuser: scripts/test.sh runs it when root"]
+#[ignore = "needs root and runuser: scripts/test.sh runs it when it can"]
 fn permission_denied_names_the_group() {
     let root = Command::new("id")
         .arg("-u")
