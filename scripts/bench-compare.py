@@ -5,7 +5,9 @@ Usage: bench-compare.py OTHER.txt THIS.txt OTHER_NAME THIS_NAME
 
 Every Markdown table row with a number in its second cell is a measurement, named by its
 first cell (prefixed with its table's name when that table is not the guest-instruction
-table, so that the size tables' "flash" rows stay apart). Rows appear in THIS's order, then
+table, so that the size tables' "flash" rows stay apart); in a table of two measured
+columns (the C library beside the bridge) each column is a measurement of its own, named
+with its header. Rows appear in THIS's order, then
 those only OTHER has; a missing number shows as "-".
 """
 import re
@@ -14,9 +16,17 @@ import sys
 NUMBER = re.compile(r"^-?[0-9][0-9.,]*")
 
 
+# Header cells of columns that are not measurements.
+NOT_MEASURED = {"budget", "verdict", "margin", ""}
+
+
 def rows(path):
     out = {}
     table = ""
+    # The measured columns after the first, as (index, header), of the table being read: a
+    # comparison table (`| measurement | C MAVLink library | bridge | budget | verdict |`)
+    # has two, each kept apart as "name (header)".
+    measured = [(1, "")]
     with open(path, encoding="utf-8", errors="replace") as f:
         for line in f:
             line = line.strip()
@@ -25,14 +35,21 @@ def rows(path):
             cells = [c.strip() for c in line.strip("|").split("|")]
             if len(cells) < 2 or set(cells[1]) <= set("-: "):
                 continue
-            m = NUMBER.match(cells[1])
-            if not m:
+            if not NUMBER.match(cells[1]):
                 # A header row: its first cell names the table.
-                table = "" if cells[0] == "measurement" else cells[0]
+                table = "" if cells[0].startswith("measurement") else cells[0]
+                heads = [(i, c) for i, c in enumerate(cells) if i >= 1 and c.lower() not in NOT_MEASURED]
+                measured = heads if len(heads) > 1 else [(1, "")]
                 continue
-            name = f"{table}: {cells[0]}" if table else cells[0]
-            unit = cells[1][m.end():].strip()
-            out.setdefault(name, (m.group(0).replace(",", ""), unit))
+            base = f"{table}: {cells[0]}" if table else cells[0]
+            for i, head in measured:
+                m = NUMBER.match(cells[i]) if i < len(cells) else None
+                if not m:
+                    continue
+                name = f"{base} ({head})" if head else base
+                # A unit follows the number; a ratio in parentheses is not one.
+                unit = cells[i][m.end():].split("(")[0].strip()
+                out.setdefault(name, (m.group(0).replace(",", ""), unit))
     return out
 
 
