@@ -412,11 +412,36 @@ impl<C: Controller> embedded_can::nb::Can for Adapter<C> {
 /// CAN. See the [module documentation](self) and `boards/stm32h743_fdcan/` in the
 /// repository for a whole program.
 ///
-/// ```ignore
-/// // stm32h7xx-hal (feature `can`): configure in ConfigMode (bit timing, a filter storing
-/// // the postback in FIFO 0), then wrap the controller in normal operation.
-/// let can = idu_gimbal_fdcan::FdCan::new(fdcan_in_config_mode.into_normal());
-/// let mut port = idu_gimbal::port::CanPort::new(can);
+/// The controller comes from the HAL (stm32h7xx-hal's `FDCAN1.fdcan(tx, rx, rec)`, feature
+/// `can`) in configuration mode; what the port needs of it is set there, then it is wrapped
+/// in normal operation:
+///
+/// ```
+/// use fdcan::config::{GlobalFilter, NominalBitTiming};
+/// use fdcan::filter::{Action, ExtendedFilter, ExtendedFilterSlot, FilterType};
+/// use fdcan::{ConfigMode, Instance};
+/// use idu_gimbal::port::CanPort;
+/// use idu_gimbal_fdcan::FdCan;
+///
+/// /// `can` as the HAL hands it out; `timing` for 1 Mbit/s at its kernel clock.
+/// fn gimbal_port<I: Instance>(
+///     mut can: fdcan::FdCan<I, ConfigMode>,
+///     timing: NominalBitTiming,
+/// ) -> Option<CanPort<FdCan<I>>> {
+///     can.set_nominal_bit_timing(timing);
+///     // The postback in receive FIFO 0, where the adapter reads; every other frame
+///     // rejected in hardware.
+///     let postback = fdcan::id::ExtendedId::new(idu_gimbal::wire::ids::POSTBACK)?;
+///     can.set_extended_filter(
+///         ExtendedFilterSlot::_0,
+///         ExtendedFilter {
+///             filter: FilterType::DedicatedSingle(postback),
+///             action: Action::StoreInFifo0,
+///         },
+///     );
+///     can.set_global_filter(GlobalFilter::reject_all());
+///     Some(CanPort::new(FdCan::new(can.into_normal())))
+/// }
 /// ```
 pub struct FdCan<I: fdcan::Instance>(Adapter<fdcan::FdCan<I, NormalOperationMode>>);
 
