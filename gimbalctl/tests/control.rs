@@ -273,7 +273,8 @@ fn control_needs_a_terminal_and_valid_arguments() {
 /// A server that is not there: exit 1 before the panel is drawn, stderr naming it.
 #[test]
 fn control_without_a_server_is_a_runtime_failure() {
-    let port = closed_port();
+    let closed = closed_port();
+    let port = closed.port();
     let tmux = Tmux::new();
     let err = std::env::temp_dir().join(format!(
         "gimbalctl-control-refused-{}.err",

@@ -243,7 +243,8 @@ fn runtime_failures_exit_1() {
     failure_naming(&["decode", missing], &[missing]);
 
     // A port with nobody listening.
-    let target = format!("127.0.0.1:{}", closed_port());
+    let closed = closed_port();
+    let target = format!("127.0.0.1:{}", closed.port());
     for args in [
         vec!["send", "--tcp", &target, "pitch", "-30"],
         vec!["monitor", "--tcp", &target, "--count", "1"],

@@ -135,7 +135,8 @@ fn runtime_failures_exit_1() {
         &["cannot listen on"],
     );
     // No serial server there.
-    let addr = format!("127.0.0.1:{}", closed_port());
+    let closed = closed_port();
+    let addr = format!("127.0.0.1:{}", closed.port());
     failure_naming(
         &["mavlink", "--tcp", &addr, "--listen", "127.0.0.1:0"],
         &["cannot connect to", &addr],

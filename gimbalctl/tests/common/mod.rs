@@ -176,10 +176,33 @@ fn assert_names(args: &[&str], out: &Out, words: &[&str]) {
     }
 }
 
-/// A loopback TCP port that nobody listens on: bound, then freed.
-pub fn closed_port() -> u16 {
-    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    l.local_addr().unwrap().port()
+/// A loopback TCP port that nobody listens on, held for as long as this lives: bound and
+/// never listening, so that a connection to it is refused (the kernel answers with a reset)
+/// and no other test or process can take the port in the meantime, as one could a port
+/// bound and freed.
+pub struct ClosedPort {
+    socket: socket2::Socket,
+}
+
+impl ClosedPort {
+    /// The port's number.
+    pub fn port(&self) -> u16 {
+        self.socket
+            .local_addr()
+            .unwrap()
+            .as_socket()
+            .unwrap()
+            .port()
+    }
+}
+
+/// A [`ClosedPort`] on 127.0.0.1.
+pub fn closed_port() -> ClosedPort {
+    use socket2::{Domain, Socket, Type};
+    let socket = Socket::new(Domain::IPV4, Type::STREAM, None).unwrap();
+    let any: std::net::SocketAddr = "127.0.0.1:0".parse().unwrap();
+    socket.bind(&any.into()).unwrap();
+    ClosedPort { socket }
 }
 
 /// CRC-16/MODBUS, bit by bit, from its definition (reflected 0xA001, init 0xFFFF, no
