@@ -89,6 +89,28 @@ stage_fast() {
 
     step "docs, warnings denied"
     RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --all-features
+    # docs.rs builds each crate alone, with the features its [package.metadata.docs.rs]
+    # lists: each library crate lists every optional feature (so that nothing behind one is
+    # missing from its published docs), and its docs build so, warnings denied.
+    docs_rs=$(cargo metadata --no-deps --format-version 1 | python3 -c '
+import json, sys
+bad = 0
+for p in json.load(sys.stdin)["packages"]:
+    name = p["name"]
+    if name not in ("idu-gimbal", "idu-gimbal-mavlink", "idu-gimbal-fdcan"):
+        continue
+    docs_rs = ((p.get("metadata") or {}).get("docs") or {}).get("rs") or {}
+    listed = docs_rs.get("features", [])
+    optional = set(p["features"]) - {"default"}
+    if set(listed) != optional:
+        print(f"{name}: docs.rs features {sorted(listed)}, optional features {sorted(optional)}", file=sys.stderr)
+        bad = 1
+    print(name, ",".join(listed))
+sys.exit(bad)
+')
+    while read -r crate features; do
+        RUSTDOCFLAGS="-D warnings" cargo doc --quiet -p "$crate" --no-deps --features "$features"
+    done <<<"$docs_rs"
 
     step "packages: cargo publish --dry-run of the library crates (idu-gimbal, idu-gimbal-mavlink, idu-gimbal-fdcan)"
     # The bridge depends on the unpublished core: cargo packages the workspace's crates
