@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Mutation testing: runs cargo-mutants over the protocol code of `idu-gimbal`
 # (src/wire, src/link, src/port), or with `bridge` first over the whole of
-# `idu-gimbal-mavlink`'s library, and fails when fewer than 95% of the viable mutants are
-# caught. Not part of CI: too slow. Results and the survivor triage are in TESTING.md,
+# `idu-gimbal-mavlink`'s library, or with `geometry` first over the core's geodesy and
+# trigonometry (src/geo.rs, src/math.rs), and fails when fewer than 95% of the viable
+# mutants are caught. Not part of CI: too slow. Results and the survivor triage are in TESTING.md,
 # "Mutation testing".
 #
-# Usage: scripts/mutants.sh [bridge] [extra cargo-mutants args, e.g. --shard 0/16 --sharding round-robin]
+# Usage: scripts/mutants.sh [bridge|geometry] [extra cargo-mutants args, e.g. --shard 0/16 --sharding round-robin]
 #   scripts/mutants.sh bridge --re 'src/framing/'   # the bridge's framing only
 #   MUTANTS_JOBS=2 scripts/mutants.sh    # parallel jobs (default 1: the machine has 2 cores)
 #   MUTANTS_TIMEOUT=60                   # per-mutant test timeout, seconds (default 30)
@@ -29,8 +30,9 @@
 #   closed-loop aim against the simulator). Left out: tests/no_panic.rs (fixed 2000 cases
 #   per property, about a minute a run, and it only checks panic-freedom, which the unit
 #   tests' proptests also exercise), tests/fuzz_corpus.rs (the same, over the fuzz
-#   corpora), tests/geo.rs (src/geo.rs is out of scope) and doctests (examples, not
-#   checks).
+#   corpora), tests/geo.rs (src/geo.rs is the `geometry` scope's) and doctests (examples,
+#   not checks). The `geometry` scope runs the unit tests, tests/geo.rs and the two that
+#   aim through it (tests/point_at.rs, tests/aiming.rs).
 # - PROPTEST_CASES=32 instead of 256: the proptests dominate the test time; 32 cases still
 #   cover each property, and the hand-written vectors do the exact checking.
 # - --all-features: the port tests need the `mock` bus.
@@ -72,6 +74,19 @@ if [ "${1:-}" = bridge ]; then
         -- --lib --test aiming --test bridge --test burst --test camera --test camera_control \
         --test camera_fov --test camera_settings --test codec --test commands --test framing \
         --test fuzz_corpus --test signing || rc=$?
+elif [ "${1:-}" = geometry ]; then
+    shift
+    cargo mutants \
+        --package idu-gimbal \
+        --all-features \
+        --file src/geo.rs \
+        --file src/math.rs \
+        --timeout "$timeout" \
+        --build-timeout 600 \
+        --jobs "$jobs" \
+        --output . \
+        "$@" \
+        -- --lib --test geo --test point_at --test aiming || rc=$?
 else
 # #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
 cargo mutants \

@@ -594,6 +594,21 @@ mod tests {
         assert!(GeoError::SamePosition.to_string().contains("0.001 m"));
     }
 
+    /// A range error is its `GeoError`'s source (what an error chain reports beneath it);
+    /// the same position has none.
+    #[cfg(feature = "std")]
+    #[test]
+    fn error_source() {
+        use std::error::Error as _;
+        let e = Position::new(91.0, 0.0, 0.0).unwrap_err();
+        let source = e.source().and_then(|s| s.downcast_ref::<RangeError>());
+        assert_eq!(
+            source.map(|r| (r.field, r.value, r.min, r.max)),
+            Some(("latitude", 91.0, -90.0, 90.0))
+        );
+        assert!(GeoError::SamePosition.source().is_none());
+    }
+
     /// A hit fed back through the exact `f64` [`look_at`] from a vehicle at `lon`: how far
     /// it lies off the line of sight (metres, the bearing's error weighed by the horizontal
     /// reach: it is undefined straight down), its range error, and its exact range.
