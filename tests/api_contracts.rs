@@ -182,6 +182,28 @@ mod state {
     }
 }
 
+/// The port's CAN driver, reached through the port: what is done there passes the link by.
+#[test]
+fn the_can_driver_is_reachable_through_the_port_and_passes_the_link_by() {
+    let bus: Bus<2, 16> = Bus::new(7);
+    let mut gimbal: Link = Link::new(Config::default());
+    let mut port = CanPort::new(bus.endpoint(0).unwrap());
+    let mut other = bus.endpoint(1).unwrap();
+    // Sent through the driver: on the bus, in no count of the link's.
+    let mine = MockFrame::extended(0x123, &[1, 2, 3]).unwrap();
+    assert_eq!(Can::transmit(port.can_mut(), &mine), Ok(None));
+    assert_eq!(Can::receive(&mut other), Ok(mine));
+    // A postback frame taken through the driver never reaches the link.
+    let first = a2000().to_can_frames()[0];
+    let frame = MockFrame::extended(ids::POSTBACK, &first).unwrap();
+    Can::transmit(&mut other, &frame).unwrap();
+    assert_eq!(Can::receive(port.can_mut()), Ok(frame));
+    port.poll(&mut gimbal, t(0)).unwrap();
+    let s = gimbal.stats();
+    assert_eq!((s.frames_sent, s.frames_received), (0, 0));
+    assert_eq!(port.stats().driver_errors.total(), 0);
+}
+
 /// What reception does with frames that are not a postback's: remote, short, broken.
 mod reception {
     use super::*;

@@ -606,6 +606,30 @@ fn the_io_adapter_never_calls_what_would_block() {
     assert!(link.has_transmit());
 }
 
+/// The port's UART, reached through the port: what is written or read there passes the
+/// link by.
+#[test]
+fn the_uart_is_reachable_through_the_port_and_passes_the_link_by() {
+    let pipe: Pipe<N> = Pipe::new(13);
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut port = SerialPort::new(io_port(&pipe, 0));
+    let mut other = io_port(&pipe, 1);
+    assert_eq!(port.uart_mut().write(b"hello"), Ok(5));
+    let mut got = [0u8; 8];
+    assert_eq!(other.read(&mut got), Ok(5));
+    assert_eq!(&got[..5], b"hello");
+    // A postback read through the UART never reaches the link.
+    let bytes = Postback::default().to_stream_bytes();
+    assert_eq!(other.write(&bytes), Ok(MESSAGE_LEN));
+    let mut taken = [0u8; MESSAGE_LEN];
+    assert_eq!(port.uart_mut().read(&mut taken), Ok(MESSAGE_LEN));
+    assert_eq!(taken, bytes);
+    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+    let s = link.stats();
+    assert_eq!((s.frames_sent, s.postbacks), (0, 0));
+    assert!(!link.is_link_up());
+}
+
 /// A backlog larger than one poll reads (`max_rx_per_poll` reads of up to 32 bytes) is
 /// taken over the following polls, every byte of it: the bound spreads the work, it
 /// never drops anything.

@@ -330,6 +330,14 @@ impl<C: Can> CanPort<C> {
         &self.can
     }
 
+    /// The CAN driver, for what the port does not do with it: its controller's error
+    /// counters, interrupts, filters (`idu_gimbal_fdcan::FdCan::inner`, say). Frames
+    /// received or sent through it pass the link by: a postback taken here never reaches
+    /// it, and a frame sent here is not in its counts.
+    pub fn can_mut(&mut self) -> &mut C {
+        &mut self.can
+    }
+
     /// Gives back the CAN driver.
     pub fn release(self) -> C {
         self.can

@@ -271,6 +271,13 @@ impl<U: Uart> SerialPort<U> {
         &self.uart
     }
 
+    /// The UART, for what the port does not do with it. Bytes read or written through it
+    /// pass the link by: what is read here never reaches the stream parser, and bytes
+    /// written here could fall inside a frame the port has part-written.
+    pub fn uart_mut(&mut self) -> &mut U {
+        &mut self.uart
+    }
+
     /// Gives back the UART.
     pub fn release(self) -> U {
         self.uart
