@@ -451,7 +451,8 @@ impl<I: fdcan::Instance> FdCan<I> {
         FdCan(Adapter::new(can))
     }
 
-    /// The controller, for what the adapter does not wrap (error counters, interrupts).
+    /// The controller, for what the adapter does not wrap (error counters, interrupts);
+    /// inside idu-gimbal's `CanPort`, through `port.can_mut().inner()`.
     pub fn inner(&mut self) -> &mut fdcan::FdCan<I, NormalOperationMode> {
         &mut self.0.can
     }
