@@ -506,16 +506,21 @@ fn the_nb_adapter_keeps_an_error_that_follows_words() {
     let mut buf = [0u8; 8];
     assert_eq!(port.read(&mut buf), Ok(2));
     assert_eq!(&buf[..2], &[1, 2]);
-    assert_eq!(port.read(&mut buf), Err(Fault(1)));
+    // An empty read hands out the kept error and moves nothing (what `release` asks).
+    assert_eq!(port.read(&mut []), Err(Fault(1)));
     assert_eq!(port.read(&mut buf), Ok(1));
     assert_eq!(buf[0], 3);
     assert_eq!(port.read(&mut buf), Ok(0));
     assert_eq!(port.write(&[10, 11, 12, 13]), Ok(2));
-    assert_eq!(port.write(&[12, 13]), Err(Fault(2)));
+    assert_eq!(port.write(&[]), Err(Fault(2)));
     assert_eq!(port.write(&[12, 13]), Ok(1));
     assert_eq!(port.write(&[13]), Ok(1));
+    // The halves, reached through the adapter: a word written there is not the adapter's.
+    let (_, tx) = port.halves_mut();
+    tx.steps.push_back(Ok(()));
+    assert_eq!(embedded_hal_nb::serial::Write::write(tx, 14), Ok(()));
     let (_, tx) = port.release();
-    assert_eq!(tx.written, [10, 11, 12, 13]);
+    assert_eq!(tx.written, [10, 11, 12, 13, 14]);
 }
 
 /// An error before any word was moved is returned by that same call, not a moment later
@@ -591,6 +596,11 @@ fn the_io_adapter_never_calls_what_would_block() {
     // An empty write or read asks nothing of the port.
     assert_eq!(port.write(&[]), Ok(0));
     assert_eq!(port.read(&mut []), Ok(0));
+    // The halves, reached through the adapter: a half made not ready is not called.
+    let (rx, tx) = port.halves_mut();
+    (rx.ready, tx.ready) = (false, false);
+    assert_eq!(port.read(&mut buf), Ok(0));
+    assert_eq!(port.write(&[1, 2, 3, 4]), Ok(0));
     let (rx, tx) = port.release();
     assert_eq!((rx.calls, tx.calls), (1, 1));
 

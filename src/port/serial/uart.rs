@@ -53,6 +53,12 @@ where
     pub fn release(self) -> (R, W) {
         (self.rx, self.tx)
     }
+
+    /// The halves, for what the adapter does not do with them (a HAL's interrupts, say).
+    /// What is read or written there passes the adapter, and its port's link, by.
+    pub fn halves_mut(&mut self) -> (&mut R, &mut W) {
+        (&mut self.rx, &mut self.tx)
+    }
 }
 
 impl<R, W> Uart for Io<R, W>
@@ -106,9 +112,16 @@ where
         }
     }
 
-    /// Gives back the halves.
+    /// Gives back the halves. An error kept for the next call (above) goes with the
+    /// adapter: an empty `read` or `write` first hands it out and moves nothing.
     pub fn release(self) -> (R, W) {
         (self.rx, self.tx)
+    }
+
+    /// The halves, for what the adapter does not do with them (a HAL's interrupts, say).
+    /// What is read or written there passes the adapter, and its port's link, by.
+    pub fn halves_mut(&mut self) -> (&mut R, &mut W) {
+        (&mut self.rx, &mut self.tx)
     }
 }
 
