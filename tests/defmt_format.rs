@@ -1,6 +1,7 @@
-//! The `defmt` encoding of driver errors, captured by a host logger: every error kind must
-//! come out distinct in the log, or an operator cannot tell an acknowledge error (no other
-//! node on the bus) from a CRC error (noise).
+//! The `defmt` encoding of what a log must get right, captured by a host logger: every
+//! driver error kind distinct (or an operator cannot tell an acknowledge error, no other
+//! node on the bus, from a CRC error, noise), a range error's value, and the camera's
+//! credentials without their password.
 #![cfg(feature = "defmt")]
 
 use embedded_can::ErrorKind;
@@ -52,4 +53,21 @@ fn a_range_error_encodes_its_value() {
             "a name and three f64s: {r:?}"
         );
     }
+}
+
+/// Camera credentials log their user and never their password: the record holds the
+/// user's bytes and not the password's, and two passwords log alike.
+#[test]
+fn credentials_log_the_user_and_never_the_password() {
+    use idu_gimbal::video::Credentials;
+    let contains =
+        |haystack: &[u8], needle: &[u8]| haystack.windows(needle.len()).any(|w| w == needle);
+    let a = record(&Credentials::new("operator", "hunter2-secret"));
+    assert!(contains(&a, b"operator"), "{a:?}");
+    assert!(
+        !contains(&a, b"hunter2"),
+        "the password is in the record: {a:?}"
+    );
+    assert_eq!(a, record(&Credentials::new("operator", "another-one")));
+    assert_ne!(a, record(&Credentials::new("viewer", "hunter2-secret")));
 }
