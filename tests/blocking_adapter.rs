@@ -360,6 +360,19 @@ fn without_the_classifier_every_error_is_a_fault() {
     assert!(port.stats().driver_errors.other > 0);
 }
 
+/// The driver behind the adapter, reached through the port: a frame its transmit buffers
+/// take there is not the link's.
+#[test]
+fn the_driver_is_reachable_through_the_adapter() {
+    let (gimbal, mut port, chip) = setup(would_block);
+    assert!(Rc::ptr_eq(&port.can().can().0, &chip));
+    let id = ExtendedId::new(0x123).unwrap();
+    let frame = StubFrame::new(id, &[1, 2]).unwrap();
+    embedded_can::blocking::Can::transmit(port.can_mut().can_mut(), &frame).unwrap();
+    assert_eq!(chip.borrow().tx_buffers.len(), 1);
+    assert_eq!(gimbal.stats().frames_sent, 0);
+}
+
 /// A classifier of a type of its own, as a firmware keeping state in it would write: it
 /// counts the "would block" errors it saw.
 #[derive(Default)]

@@ -127,6 +127,18 @@ where
         self.can
     }
 
+    /// The driver.
+    pub fn can(&self) -> &B {
+        &self.can
+    }
+
+    /// The driver, for what the adapter does not do with it (a controller's interrupt
+    /// flags or error counters). Frames moved there pass the adapter, and its port's
+    /// link, by.
+    pub fn can_mut(&mut self) -> &mut B {
+        &mut self.can
+    }
+
     fn classify(&mut self, error: B::Error) -> nb::Error<B::Error> {
         if self.would_block.would_block(&error) {
             nb::Error::WouldBlock
