@@ -290,6 +290,11 @@ pub struct CanRig<'a> {
     port: CanPort<Endpoint<'a, 2, 32>>,
     sim: Simulator,
     sim_can: Endpoint<'a, 2, 32>,
+    /// The simulated gimbal's frames the bus did not take (a transmit error, as the mock
+    /// bus injects): counted and said in the summary, never lost quietly. (A full receive
+    /// FIFO on the port's side is not one: the bus takes the frame and the port counts an
+    /// overrun.)
+    sim_unsent: u32,
 }
 
 impl<'a> CanRig<'a> {
@@ -304,6 +309,7 @@ impl<'a> CanRig<'a> {
             port: CanPort::new(bus.endpoint(0)?),
             sim: Simulator::new(config, now),
             sim_can: bus.endpoint(1)?,
+            sim_unsent: 0,
         })
     }
 }
@@ -317,12 +323,18 @@ impl<'a> Rig for CanRig<'a> {
     }
     fn run_gimbal(&mut self, now: Instant) {
         while let Ok(f) = Can::receive(&mut self.sim_can) {
+            // A frame the simulator refuses is in its own counts (`SimStats::rejected`).
             let _ = self.sim.receive(f.raw_id(), f.data(), now);
         }
+        // The postback it returns is also queued as frames, taken below.
         let _ = self.sim.poll(now);
         while let Some(f) = self.sim.pop_frame() {
-            if let Some(frame) = MockFrame::extended(f.id, &f.data) {
-                let _ = Can::transmit(&mut self.sim_can, &frame);
+            // The demo's bus delivers at once, so a transmit never hands a frame back;
+            // one that did would be lost too, and is counted with the refused.
+            let sent = MockFrame::extended(f.id, &f.data)
+                .is_some_and(|frame| Can::transmit(&mut self.sim_can, &frame) == Ok(None));
+            if !sent {
+                self.sim_unsent = self.sim_unsent.wrapping_add(1);
             }
         }
     }
@@ -338,12 +350,13 @@ impl<'a> Rig for CanRig<'a> {
     fn summary(&self, s: &LinkStats, out: &mut dyn Write) {
         let _ = writeln!(
             out,
-            "frames sent {} received {}; postbacks {}; superseded vehicle frames {}; driver errors {}",
+            "frames sent {} received {}; postbacks {}; superseded vehicle frames {}; driver errors {}; gimbal frames the bus refused {}",
             s.frames_sent,
             s.frames_received,
             s.postbacks,
             s.superseded,
-            self.port.stats().driver_errors.total()
+            self.port.stats().driver_errors.total(),
+            self.sim_unsent
         );
     }
 }
@@ -555,5 +568,35 @@ impl<R: Rig, W: Write> Script<R, W> {
         }
         say_verdict(&mut self.out, self.failures);
         self.failures
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use idu_gimbal::mock::Faults;
+
+    /// The simulated gimbal's frames for 6 s (a postback every 500 ms), on `bus`: how many
+    /// it made and how many the bus did not take.
+    fn gimbal_frames(bus: &DemoBus) -> (u32, u32) {
+        let mut rig = CanRig::new(bus, Instant::from_millis(0)).unwrap();
+        for ms in (0..=6000).step_by(10) {
+            rig.run_gimbal(Instant::from_millis(ms));
+        }
+        (rig.sim_stats().postbacks * 4, rig.sim_unsent)
+    }
+
+    /// A frame the bus refuses to the simulated gimbal is counted, none lost quietly; on a
+    /// bus without faults none is refused.
+    #[test]
+    fn the_gimbal_frames_the_bus_refuses_are_counted() {
+        let refusing = DemoBus::new(1).with_faults(Faults {
+            tx_error: 1.0,
+            ..Faults::NONE
+        });
+        let (made, unsent) = gimbal_frames(&refusing);
+        assert!(made >= 48, "{made}");
+        assert_eq!(unsent, made);
+        assert_eq!(gimbal_frames(&DemoBus::new(1)).1, 0);
     }
 }
