@@ -57,55 +57,51 @@ export CARGO_PROFILE_DEV_DEBUG="${CARGO_PROFILE_DEV_DEBUG:-0}"
 echo "$(cargo mutants --version), jobs $jobs, timeout ${timeout}s, PROPTEST_CASES $PROPTEST_CASES"
 start=$(date +%s)
 rc=0
+# cargo-mutants with the options every scope shares; the scope's own (package, files,
+# excludes), the caller's extra arguments and, after `--`, its tests follow.
+mutants() {
+    cargo mutants \
+        --all-features \
+        --timeout "$timeout" \
+        --build-timeout 600 \
+        --jobs "$jobs" \
+        --output . \
+        "$@"
+}
 if [ "${1:-}" = bridge ]; then
     shift
     # The bridge: every test but tests/no_panic.rs (its proptests only check panic-freedom,
     # which the fuzz corpus replayed by tests/fuzz_corpus.rs also covers) and
     # tests/defmt_format.rs (the defmt encoding of types whose logic the others test).
-    cargo mutants \
+    mutants \
         --package idu-gimbal-mavlink \
-        --all-features \
         --file 'idu-gimbal-mavlink/src/**' \
-        --timeout "$timeout" \
-        --build-timeout 600 \
-        --jobs "$jobs" \
-        --output . \
         "$@" \
         -- --lib --test aiming --test bridge --test burst --test camera --test camera_control \
         --test camera_fov --test camera_settings --test codec --test commands --test framing \
         --test fuzz_corpus --test signing || rc=$?
 elif [ "${1:-}" = geometry ]; then
     shift
-    cargo mutants \
+    mutants \
         --package idu-gimbal \
-        --all-features \
         --file src/geo.rs \
         --file src/math.rs \
-        --timeout "$timeout" \
-        --build-timeout 600 \
-        --jobs "$jobs" \
-        --output . \
         "$@" \
         -- --lib --test geo --test point_at --test aiming || rc=$?
 else
-# #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
-cargo mutants \
-    --package idu-gimbal \
-    --all-features \
-    --file 'src/wire/**' \
-    --file 'src/link/**' \
-    --file 'src/port/**' \
-    --exclude src/link/tests.rs \
-    --exclude src/link/deadline_tests.rs \
-    --exclude src/port/idle_tests.rs \
-    --timeout "$timeout" \
-    --build-timeout 600 \
-    --jobs "$jobs" \
-    --output . \
-    "$@" \
-    -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
-    --test serial --test bounds --test api_contracts --test blocking_adapter \
-    --test next_deadline --test aiming || rc=$?
+    # #[cfg(test)] modules are skipped by cargo-mutants; src/link/tests.rs is one by path.
+    mutants \
+        --package idu-gimbal \
+        --file 'src/wire/**' \
+        --file 'src/link/**' \
+        --file 'src/port/**' \
+        --exclude src/link/tests.rs \
+        --exclude src/link/deadline_tests.rs \
+        --exclude src/port/idle_tests.rs \
+        "$@" \
+        -- --lib --test driver_sim --test point_at --test driver_errors --test defmt_format \
+        --test serial --test bounds --test api_contracts --test blocking_adapter \
+        --test next_deadline --test aiming || rc=$?
 fi
 echo "wall time: $(($(date +%s) - start)) s"
 
