@@ -13,7 +13,7 @@
 use core::fmt::Write;
 
 use embedded_can::{nb::Can, Frame as _};
-use idu_gimbal::link::{LinkStats, Medium, Serial};
+use idu_gimbal::link::{LinkStats, Medium, Serial, TextQueueError};
 use idu_gimbal::mock::serial::{Pipe, Rx, Tx};
 use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
 use idu_gimbal::port::{CanPort, Io, Port, SerialPort};
@@ -275,8 +275,11 @@ pub trait Rig {
     fn port(&mut self) -> &mut Self::Port;
     /// Moves what the port sent to the gimbal, runs it, and sends back its postbacks.
     fn run_gimbal(&mut self, now: Instant);
-    /// Queues a text: `None` when the transport carries none, `Some(false)` when refused.
-    fn send_text(link: &mut Link<8, 8, Self::Medium>, text: &[u8]) -> Option<bool>;
+    /// Queues a text: `None` when the transport carries none, `Some(Err(_))` when refused.
+    fn send_text(
+        link: &mut Link<8, 8, Self::Medium>,
+        text: &[u8],
+    ) -> Option<Result<(), TextQueueError>>;
     /// The simulated gimbal's state and counters.
     fn sim_state(&self) -> &SimState;
     /// The simulated gimbal's counters.
@@ -338,8 +341,8 @@ impl<'a> Rig for CanRig<'a> {
             }
         }
     }
-    fn send_text(link: &mut Link<8, 8>, text: &[u8]) -> Option<bool> {
-        Some(link.send_text(text).is_ok())
+    fn send_text(link: &mut Link<8, 8>, text: &[u8]) -> Option<Result<(), TextQueueError>> {
+        Some(link.send_text(text))
     }
     fn sim_state(&self) -> &SimState {
         self.sim.state()
@@ -392,7 +395,10 @@ impl<'a> Rig for SerialRig<'a> {
     fn run_gimbal(&mut self, now: Instant) {
         let _ = self.sim.serve(&mut self.sim_port, now);
     }
-    fn send_text(_link: &mut Link<8, 8, Serial>, _text: &[u8]) -> Option<bool> {
+    fn send_text(
+        _link: &mut Link<8, 8, Serial>,
+        _text: &[u8],
+    ) -> Option<Result<(), TextQueueError>> {
         None
     }
     fn sim_state(&self) -> &SimState {
@@ -527,14 +533,16 @@ impl<R: Rig, W: Write> Script<R, W> {
 
     fn text(&mut self, timeout_ms: u32) {
         match R::send_text(&mut self.link, TEXT) {
-            Some(queued) => {
+            Some(Ok(())) => {
                 let _ = writeln!(self.out, "> text message");
-                if !queued {
-                    self.failures += 1;
-                }
                 self.expect("text received", timeout_ms, |_, s| {
                     s.last_text.as_bytes() == TEXT
                 });
+            }
+            Some(Err(e)) => {
+                let _ = writeln!(self.out, "> text message");
+                let _ = writeln!(self.out, "  FAIL text not queued: {e}");
+                self.failures += 1;
             }
             None => {
                 let _ = writeln!(self.out, "> text message: not carried by this transport");
@@ -572,31 +580,4 @@ impl<R: Rig, W: Write> Script<R, W> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use idu_gimbal::mock::Faults;
-
-    /// The simulated gimbal's frames for 6 s (a postback every 500 ms), on `bus`: how many
-    /// it made and how many the bus did not take.
-    fn gimbal_frames(bus: &DemoBus) -> (u32, u32) {
-        let mut rig = CanRig::new(bus, Instant::from_millis(0)).unwrap();
-        for ms in (0..=6000).step_by(10) {
-            rig.run_gimbal(Instant::from_millis(ms));
-        }
-        (rig.sim_stats().postbacks * 4, rig.sim_unsent)
-    }
-
-    /// A frame the bus refuses to the simulated gimbal is counted, none lost quietly; on a
-    /// bus without faults none is refused.
-    #[test]
-    fn the_gimbal_frames_the_bus_refuses_are_counted() {
-        let refusing = DemoBus::new(1).with_faults(Faults {
-            tx_error: 1.0,
-            ..Faults::NONE
-        });
-        let (made, unsent) = gimbal_frames(&refusing);
-        assert!(made >= 48, "{made}");
-        assert_eq!(unsent, made);
-        assert_eq!(gimbal_frames(&DemoBus::new(1)).1, 0);
-    }
-}
+mod tests;
