@@ -36,3 +36,57 @@ pub fn next_wake<const Q: usize, const T: usize, M: Medium>(
         deadline
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use idu_gimbal::Config;
+
+    const WRAP_MS: u64 = 1 << 32;
+
+    /// The tick is embassy's millisecond count modulo 2³².
+    #[test]
+    fn the_tick_wraps_with_embassy_time() {
+        let at = |ms| tick(embassy_time::Instant::from_millis(ms));
+        assert_eq!(at(0), Instant::from_millis(0));
+        assert_eq!(at(WRAP_MS - 1), Instant::from_millis(u32::MAX));
+        assert_eq!(at(WRAP_MS + 5), Instant::from_millis(5));
+        assert_eq!(at(3 * WRAP_MS + 7), Instant::from_millis(7));
+    }
+
+    /// A deadline ahead of `now` in ticks is as far ahead in embassy time, across the
+    /// tick's wrap too.
+    #[test]
+    fn a_deadline_is_as_far_ahead_in_embassy_time() {
+        let now = embassy_time::Instant::from_millis(WRAP_MS + 1_000);
+        assert_eq!(
+            embassy_at(Instant::from_millis(1_250), now),
+            embassy_time::Instant::from_millis(WRAP_MS + 1_250)
+        );
+        assert_eq!(embassy_at(Instant::from_millis(1_000), now), now);
+        // 10 ms before the wrap, a deadline 20 ms after it.
+        let now = embassy_time::Instant::from_millis(2 * WRAP_MS - 10);
+        assert_eq!(
+            embassy_at(Instant::from_millis(20), now),
+            embassy_time::Instant::from_millis(2 * WRAP_MS + 20)
+        );
+    }
+
+    /// A link due now (a fresh one: its schedules run at once) wakes its task a millisecond
+    /// later; one whose next deadline is ahead wakes it then.
+    #[test]
+    fn a_task_wakes_at_the_deadline_or_a_millisecond_on() {
+        let link: Link<8, 8> = Link::new(Config::default());
+        let now = Instant::from_millis(u32::MAX);
+        assert_eq!(link.next_deadline(now), now);
+        assert_eq!(next_wake(&link, now), Instant::from_millis(0));
+        let mut link: Link<8, 8> = Link::new(Config::default());
+        link.poll(now);
+        while link.next_transmit().is_some() {
+            link.transmit_done(None);
+        }
+        let deadline = link.next_deadline(now);
+        assert_ne!(deadline, now);
+        assert_eq!(next_wake(&link, now), deadline);
+    }
+}

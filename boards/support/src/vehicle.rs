@@ -42,3 +42,29 @@ pub fn vehicle_stand_in(now: Instant) -> Option<Vehicle> {
         stamp: now,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stand-in yaws a degree every 100 ms from −180°, round to −180° again every 36 s,
+    /// at a fixed place, height and tilt, stamped when asked.
+    #[test]
+    fn the_stand_in_yaws_a_degree_every_100_ms() {
+        let heading = |ms| {
+            let v = vehicle_stand_in(Instant::from_millis(ms)).unwrap();
+            assert_eq!(v.stamp, Instant::from_millis(ms));
+            assert_eq!((v.gps.lat_e7(), v.gps.lon_e7()), (473_977_420, 85_455_940));
+            assert_eq!(v.altitude.cm(), 48_800);
+            assert_eq!(v.attitude.pitch_centideg(), 150);
+            assert_eq!(v.attitude.roll_centideg(), -40);
+            v.attitude.heading_centideg()
+        };
+        assert_eq!(heading(0), -18_000);
+        assert_eq!(heading(99), -18_000);
+        assert_eq!(heading(100), -17_900);
+        assert_eq!(heading(18_000), 0);
+        assert_eq!(heading(35_999), 17_900);
+        assert_eq!(heading(36_000), -18_000);
+    }
+}
