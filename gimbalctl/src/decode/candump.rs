@@ -1,7 +1,14 @@
 //! The three text forms a CAN log line comes in: candump `-L` (`(SECS.FRAC) IFACE ID#DATA`),
-//! cansend's `ID#DATA`, and candump's default screen form (`IFACE ID [DLC] BYTES`, with or
+//! cansend's `ID#DATA`, and candump's default screen form (`IFACE ID [LEN] BYTES`, with or
 //! without a leading `(timestamp)`). [`parse_line`] takes any of them; the `-L` form, which
 //! nearly every line of a long log has, on a one-pass fast path.
+//!
+//! As can-utils writes them (`lib.c`, `lib.h`): a classic frame's length is one digit in
+//! the screen form (`[8]`), or its raw DLC in hex with `-8` (`{F}`: 9 to F carry 8 bytes),
+//! and an 8-byte frame's raw DLC follows its data as `_9` to `_F` in the compact form. CAN
+//! FD frames have a two-digit length (`[08]`) or `##` in the compact form, CAN XL frames a
+//! four-digit one (`[0064]`) or `VCIDPRIO#FLAGS:SDT:AF#DATA`: both are foreign to the
+//! protocol, which is classic CAN.
 
 use idu_gimbal::wire::ids;
 use idu_gimbal::Instant;
@@ -117,7 +124,7 @@ pub(super) enum Line<'a> {
     Blank,
     /// Not a CAN frame in any of the three forms.
     Malformed,
-    /// A frame the protocol cannot own: standard ID, remote, CAN FD or error frame.
+    /// A frame the protocol cannot own: standard ID, remote, CAN FD, CAN XL or error frame.
     Foreign,
     /// A classic data frame with an extended ID.
     Frame {
@@ -143,6 +150,7 @@ fn parse_frame_token<'a>(tok: &[u8], ts: Option<&'a [u8]>) -> Line<'a> {
     };
     match id_text.len() {
         3 => return Line::Foreign,
+        5 if is_xl_header(data_text) => return Line::Foreign,
         8 => {}
         _ => return Line::Malformed,
     }
@@ -161,6 +169,8 @@ fn parse_frame_token<'a>(tok: &[u8], ts: Option<&'a [u8]>) -> Line<'a> {
         match rest {
             [] => break,
             [b'.', tail @ ..] => rest = tail,
+            // An 8-byte frame's raw DLC, 9 to F: the data is all there.
+            [b'_', dlc] if len == 8 && matches!(HEX[usize::from(*dlc)], 9..=15) => break,
             [hi, lo, tail @ ..] => {
                 let Some(b) = hex_byte(*hi, *lo) else {
                     return Line::Malformed;
@@ -176,6 +186,15 @@ fn parse_frame_token<'a>(tok: &[u8], ts: Option<&'a [u8]>) -> Line<'a> {
         }
     }
     Line::Frame { ts, id, data, len }
+}
+
+/// `FLAGS:SDT:AF#`, what follows a CAN XL frame's `VCIDPRIO#`: two, two and eight hex digits.
+fn is_xl_header(s: &[u8]) -> bool {
+    let hex = |t: &[u8]| t.iter().all(|&b| HEX[usize::from(b)] != 0xFF);
+    match s.get(..15) {
+        Some([f0, f1, b':', t0, t1, b':', af @ .., b'#']) => hex(&[*f0, *f1, *t0, *t1]) && hex(af),
+        _ => false,
+    }
 }
 
 /// Parses a line in candump `-L` form, cansend form or candump's default screen form (with
@@ -282,27 +301,36 @@ fn parse_line_general(line: &[u8]) -> Line<'_> {
     // Screen form: `can0  030F0001   [8]  EB 90 ...`, possibly with `-x` flags
     // (`TX - -`) between the interface and the ID.
     let mut id_text = second;
-    let mut dlc_text = None;
+    let mut len_text = None;
     for _ in 0..5 {
         let Some(tok) = tokens.next() else {
             return Line::Malformed;
         };
-        if tok.len() >= 3 && tok[0] == b'[' && tok[tok.len() - 1] == b']' {
-            dlc_text = Some(&tok[1..tok.len() - 1]);
-            break;
+        if let [open, inner @ .., close] = tok {
+            if !inner.is_empty() && matches!((open, close), (b'[', b']') | (b'{', b'}')) {
+                len_text = Some((*open, inner));
+                break;
+            }
         }
         id_text = tok;
     }
-    let Some(dlc_text) = dlc_text else {
+    let Some(len_text) = len_text else {
         return Line::Malformed;
     };
     let Some(id) = hex_u32(id_text) else {
         return Line::Malformed;
     };
-    let dlc = match dlc_text {
-        [d] if d.is_ascii_digit() => usize::from(d - b'0'),
-        [a, b] if a.is_ascii_digit() && b.is_ascii_digit() => {
-            usize::from(a - b'0') * 10 + usize::from(b - b'0')
+    let dlc = match len_text {
+        (b'[', [d]) if d.is_ascii_digit() => Some(usize::from(d - b'0')),
+        // `-8`: the raw DLC in hex; 9 to F carry 8 bytes.
+        (b'{', [d]) if HEX[usize::from(*d)] != 0xFF => {
+            Some(usize::from(HEX[usize::from(*d)]).min(8))
+        }
+        // CAN FD (two digits) and CAN XL (four).
+        (b'[', digits)
+            if matches!(digits.len(), 2 | 4) && digits.iter().all(u8::is_ascii_digit) =>
+        {
+            None
         }
         _ => return Line::Malformed,
     };
@@ -311,9 +339,9 @@ fn parse_line_general(line: &[u8]) -> Line<'_> {
         8 => {}
         _ => return Line::Malformed,
     }
-    if id > ids::EXTENDED_MAX || dlc > 8 {
+    let Some(dlc) = dlc.filter(|&d| d <= 8 && id <= ids::EXTENDED_MAX) else {
         return Line::Foreign;
-    }
+    };
     let mut data = [0u8; 8];
     for slot in data.iter_mut().take(dlc) {
         match tokens.next() {
@@ -352,6 +380,18 @@ mod tests {
         }
     }
 
+    /// Asserts that each of `lines` parses as `expected`.
+    fn each_parses_as(expected: &Line<'_>, lines: &[&[u8]]) {
+        for line in lines {
+            assert_eq!(
+                &parse_line(line),
+                expected,
+                "{}",
+                String::from_utf8_lossy(line)
+            );
+        }
+    }
+
     #[test]
     fn three_forms() {
         let bytes = [0xEB, 0x90, 0x0C, 0, 0, 0, 0, 0];
@@ -386,6 +426,142 @@ mod tests {
             frame(None, 0xF01, &[0x0F, 0x07])
         );
         assert_eq!(parse_line(b"00000F01#"), frame(None, 0xF01, &[]));
+    }
+
+    /// Hex digits in either case, in the ID and the data, in every form.
+    #[test]
+    fn hex_in_either_case() {
+        let bytes = [0xAB, 0xCD, 0xEF, 0x0F, 0x9A, 0xBC, 0xDE, 0xF0];
+        let expected = frame(None, 0x1ABCDEF0, &bytes);
+        each_parses_as(
+            &expected,
+            &[
+                b"1abcdef0#abcdef0f9abcdef0",
+                b"1ABCDEF0#ABCDEF0F9ABCDEF0",
+                b"1aBcDeF0#aBcDeF0f9AbCdEf0",
+                b"  can0  1abcdef0   [8]  ab cd ef 0f 9a bc de f0",
+                b"  can0  1ABCDEF0   [8]  AB CD EF 0F 9A BC DE F0",
+            ],
+        );
+        let timestamped = frame(Some("1.5"), 0x1ABCDEF0, &bytes);
+        assert_eq!(
+            parse_line(b"(1.5) can0 1abcdef0#abcdef0f9abcdef0"),
+            timestamped
+        );
+        assert_eq!(
+            parse_line(b"(1.5) can0 1ABCDEF0#ABCDEF0F9ABCDEF0"),
+            timestamped
+        );
+    }
+
+    /// Every byte that is no hex digit (`:` and `g` sit next to the digits and the letters)
+    /// makes the ID or the data malformed, in every form.
+    #[test]
+    fn no_other_byte_is_a_hex_digit() {
+        for b in 0..=255u8 {
+            if b.is_ascii_hexdigit() {
+                continue;
+            }
+            let b = char::from(b);
+            for line in [
+                format!("0000{b}F01#0F07"),
+                format!("00000F01#0{b}07"),
+                format!("(1.5) can0 00000F0{b}#0F07"),
+                format!("(1.5) can0 00000F01#0{b}07"),
+                format!("  can0  00000F01   [2]  0F {b}7"),
+                format!("  can0  00000F{b}1   [2]  0F 07"),
+            ] {
+                let line = line.as_bytes();
+                if let Line::Frame { .. } = parse_line(line) {
+                    panic!("{:?} parsed as a frame", String::from_utf8_lossy(line));
+                }
+            }
+        }
+    }
+
+    /// A classic frame's raw DLC as can-utils writes it: after 8 bytes of data (`_9` to
+    /// `_F`) in the compact form, in braces (`-8`) in the screen form, where 9 to F carry 8
+    /// bytes.
+    #[test]
+    fn raw_dlc() {
+        let eight = [1, 2, 3, 4, 5, 6, 7, 8];
+        let f01 = |bytes: &[u8]| frame(None, 0xF01, bytes);
+        assert_eq!(parse_line(b"00000F01#0102030405060708_9"), f01(&eight));
+        assert_eq!(parse_line(b"00000F01#0102030405060708_f"), f01(&eight));
+        assert_eq!(
+            parse_line(b"(1.5) can0 00000F01#0102030405060708_E"),
+            frame(Some("1.5"), 0xF01, &eight)
+        );
+        each_parses_as(
+            &Line::Malformed,
+            &[
+                b"00000F01#0102030405060708_8",
+                b"00000F01#0102030405060708_G",
+                b"00000F01#0102030405060708_",
+                b"00000F01#0102030405060708_EE",
+                b"00000F01#01020304050607_E",
+            ],
+        );
+        assert_eq!(
+            parse_line(b"  can0  00000F01   {8}  01 02 03 04 05 06 07 08"),
+            f01(&eight)
+        );
+        assert_eq!(
+            parse_line(b"  can0  00000F01   {F}  01 02 03 04 05 06 07 08"),
+            f01(&eight)
+        );
+        assert_eq!(parse_line(b"  can0  00000F01   {2}  01 02"), f01(&[1, 2]));
+        // What follows the data is not read (candump `-a` writes it as ASCII).
+        assert_eq!(
+            parse_line(b"  can0  00000F01   [2]  01 02  remote"),
+            f01(&[1, 2])
+        );
+        assert_eq!(parse_line(b"  can0  00000F01   {}  01 02"), Line::Malformed);
+        assert_eq!(
+            parse_line(b"  can0  00000F01   {x}  01 02 03 04 05 06 07 08"),
+            Line::Malformed
+        );
+    }
+
+    /// CAN FD and CAN XL frames, in both forms, are foreign: the protocol is classic CAN.
+    /// A two-digit length is CAN FD's even when it is 8 or less.
+    #[test]
+    fn can_fd_and_xl_are_foreign() {
+        each_parses_as(
+            &Line::Foreign,
+            &[
+                b"  can0  00000F01  [08]  01 02 03 04 05 06 07 08",
+                b"  can0  00000F01  [00]",
+                b"  can0  00000F01  [64]  01 02",
+                b"  can0  123  [12]  01 02 03 04 05 06 07 08 09 0A 0B 0C",
+                b"  can0  123 [0064] (00|11:22:12345678) 01 02 03",
+                b"  can0  00000F01  [0008]  01 02 03 04 05 06 07 08",
+                b"00000F01##00102",
+                b"45123#81:00:12345678#11223344.556677",
+                b"(1.5) can0 45123#81:00:12345678#11",
+                // Not CAN FD or XL, but not the protocol's either: a classic length past 8,
+                // an error frame's flags above the ID bits, a remote request.
+                b"  can0  00000F01  [9]  01 02 03 04 05 06 07 08 09",
+                b"  can0  20000004  [8]  00 00 00 00 00 00 00 00",
+                b"  can0  00000F01   [3]  remote request",
+            ],
+        );
+        each_parses_as(
+            &Line::Malformed,
+            &[
+                // Three digits is no length can-utils writes, nor a non-digit.
+                b"  can0  00000F01  [008]  01 02 03 04 05 06 07 08",
+                b"  can0  00000F01  [0x]  01",
+                b"  can0  00000F01  [x]  01",
+                // A token closed by `]` alone is no length: here the ID is then `0F`.
+                b"  can0  00000F01  x1]  0F",
+                // A CAN XL header that is not one.
+                b"45123#81:00:1234567#11",
+                b"45123#81-00:12345678#11",
+                b"45123#8G:00:12345678#11",
+                b"45123#81:00:12345678",
+            ],
+        );
     }
 
     #[test]
@@ -429,7 +605,7 @@ mod tests {
             b"(1700000000.123456) can0 00000f01#0f08023efe000000",
             b"(1700000000.123456) any 20000000#00",
         ];
-        let alphabet = b"0123456789abcdefABCDEF#.()[] \t\rRrx-";
+        let alphabet = b"0123456789abcdefABCDEF#.()[]{}_: \t\rRrxgG-";
         let mut seed = 0x2545_F491_4F6C_DD1Du64;
         let mut next = |n: usize| {
             seed ^= seed << 13;
