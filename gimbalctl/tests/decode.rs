@@ -216,6 +216,7 @@ fn bad_frames_on_protocol_ids_are_malformed_not_fatal() {
         // Wrong length.
         "00000F01#0F07",
         "0000FF16#01020304",
+        "030F0001#EB90",
         // Altitude with non-zero padding.
         "0000FF16#0100000000000001",
         // Non-ASCII text byte.
@@ -233,14 +234,17 @@ fn bad_frames_on_protocol_ids_are_malformed_not_fatal() {
     ]
     .map(str::to_owned)
     .to_vec();
+    // And a line too long to keep (malformed, whatever it holds).
+    let mut lines = lines;
+    lines.push(format!("00000F01#0F07{}", "0".repeat(5000)));
     let out = decode_log(&lines, &["--stats"]);
     let msgs = out.json();
     assert_eq!(msgs.len(), 2, "{}", out.stdout);
     assert_eq!(msgs[0]["command"], "look-down");
     assert_json_eq(
         &msgs[1],
-        &json!({"type": "stats", "lines": 13, "frames": 10, "messages": 1, "crc_errors": 0,
-               "incomplete": 0, "malformed_lines": 9, "foreign_frames": 3}),
+        &json!({"type": "stats", "lines": 15, "frames": 11, "messages": 1, "crc_errors": 0,
+               "incomplete": 0, "malformed_lines": 11, "foreign_frames": 3}),
     );
 }
 

@@ -238,6 +238,94 @@ mod tests {
         .would_block());
     }
 
+    /// A reader that fails with `Interrupted` on every third call, as a read cut short by a
+    /// signal does; it is retried.
+    struct Interrupting<R> {
+        inner: R,
+        calls: u32,
+    }
+
+    impl<R: Read> Read for Interrupting<R> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            self.calls += 1;
+            if self.calls.is_multiple_of(3) {
+                return Err(std::io::ErrorKind::Interrupted.into());
+            }
+            self.inner.read(buf)
+        }
+    }
+
+    /// The lines `for_each_line` gives equal the input split at each newline (a last line
+    /// without one included, nothing after the last newline not), a line longer than `MAX_LINE` as
+    /// `None`: for lines of every length around `MAX_LINE`, read in blocks of every size
+    /// around it and much smaller, whichever reads are interrupted.
+    #[test]
+    fn lines_are_the_input_split_at_newlines() {
+        let lengths = [
+            0,
+            1,
+            25,
+            MAX_LINE - 1,
+            MAX_LINE,
+            MAX_LINE + 1,
+            2 * MAX_LINE + 3,
+        ];
+        let mut rng = fastrand::Rng::with_seed(7);
+        for capacity in [1, 7, 64, MAX_LINE - 1, MAX_LINE, MAX_LINE + 1, READ_BLOCK] {
+            for _ in 0..12 {
+                let mut input = Vec::new();
+                for _ in 0..rng.usize(1..8) {
+                    let len = lengths[rng.usize(..lengths.len())];
+                    input.extend((0..len).map(|_| rng.u8(b' '..=b'~')));
+                    input.push(b'\n');
+                }
+                if rng.bool() {
+                    input.pop();
+                }
+                let mut expected: Vec<Option<&[u8]>> = input
+                    .split(|&b| b == b'\n')
+                    .map(|l| (l.len() <= MAX_LINE).then_some(l))
+                    .collect();
+                // What follows the last newline is a line unless it is empty (an empty
+                // input has no line at all).
+                if input.last().is_none_or(|&b| b == b'\n') {
+                    expected.pop();
+                }
+                let reader = std::io::BufReader::with_capacity(
+                    capacity,
+                    Interrupting {
+                        inner: &input[..],
+                        calls: 0,
+                    },
+                );
+                let mut seen: Vec<Option<Vec<u8>>> = Vec::new();
+                let mut blocks = 0;
+                for_each_line(
+                    reader,
+                    &mut (&mut seen, &mut blocks),
+                    |(seen, _), l| {
+                        seen.push(l.map(<[u8]>::to_vec));
+                        Ok(())
+                    },
+                    |(_, blocks)| {
+                        **blocks += 1;
+                        Ok(())
+                    },
+                )
+                .unwrap();
+                let seen: Vec<Option<&[u8]>> = seen.iter().map(Option::as_deref).collect();
+                assert_eq!(seen, expected, "capacity {capacity}");
+                // A block each fill of the buffer: the input's length over the capacity,
+                // rounded up.
+                assert_eq!(
+                    blocks,
+                    input.len().div_ceil(capacity),
+                    "capacity {capacity}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn long_lines_do_not_grow_memory() {
         let mut input = Vec::new();
@@ -260,5 +348,121 @@ mod tests {
         assert_eq!(seen[0].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));
         assert_eq!(seen[1], None);
         assert_eq!(seen[2].as_deref(), Some(&b"00000F01#0F07000000000000"[..]));
+    }
+
+    /// A short read is noted, a full one not.
+    #[test]
+    fn short_reads_are_noted() {
+        let short = std::rc::Rc::new(std::cell::Cell::new(false));
+        let mut reader = NoteShortReads {
+            inner: &[1u8; 12][..],
+            short: short.clone(),
+        };
+        let mut buf = [0u8; 8];
+        assert_eq!(reader.read(&mut buf).unwrap(), 8);
+        assert!(!short.get());
+        assert_eq!(reader.read(&mut buf).unwrap(), 4);
+        assert!(short.get());
+        assert_eq!(reader.read(&mut buf[..0]).unwrap(), 0);
+        assert!(!short.get(), "an empty buffer read whole");
+    }
+
+    /// The messages a sink got, and how many it had each time it was told the input
+    /// paused.
+    #[derive(Default)]
+    struct Pauses {
+        messages: u32,
+        paused_at: Vec<u32>,
+    }
+
+    impl Sink for Pauses {
+        fn record(&mut self, record: super::super::Record<'_>) -> Result<(), Failure> {
+            use super::super::Record;
+            if matches!(record, Record::Postback(..) | Record::Command(..)) {
+                self.messages += 1;
+            }
+            Ok(())
+        }
+
+        fn input_paused(&mut self) -> Result<(), Failure> {
+            self.paused_at.push(self.messages);
+            Ok(())
+        }
+    }
+
+    /// `input` as a file would be read (never about to block: the poll looks at the file
+    /// returned, which must outlive the input), each third read interrupted.
+    fn file_like(input: Vec<u8>) -> (Input, std::fs::File) {
+        #[cfg(unix)]
+        use std::os::fd::AsRawFd;
+        let file = std::fs::File::open(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml")).unwrap();
+        let poll = Poll {
+            #[cfg(unix)]
+            fd: file.as_raw_fd(),
+        };
+        let input = Input {
+            reader: Box::new(Interrupting {
+                inner: std::io::Cursor::new(input),
+                calls: 0,
+            }),
+            poll,
+        };
+        (input, file)
+    }
+
+    /// From an input that never blocks, the sink hears of a pause exactly when a read
+    /// returned less than a whole block: once for a block and a bit, after the bit, in
+    /// both modes; and interrupted reads are retried.
+    #[test]
+    fn a_pause_is_a_short_read_when_nothing_blocks() {
+        // Serial postbacks, 27 bytes each, past one whole block.
+        let postback = idu_gimbal::wire::postback::Postback::default().to_stream_bytes();
+        let stream: Vec<u8> = postback
+            .iter()
+            .copied()
+            .cycle()
+            .take(READ_BLOCK + 27 * 10)
+            .collect();
+        let mut sink = Pauses::default();
+        let (input, _file) = file_like(stream);
+        let stats = decode_into(input, true, &mut sink).unwrap();
+        assert_eq!(sink.paused_at, [sink.messages]);
+        assert_eq!(u64::from(sink.messages), stats.messages);
+        assert_eq!(stats.messages, ((READ_BLOCK + 270) / 27) as u64);
+        // A log of command lines, 26 bytes each, past one whole block.
+        let line = b"00000F01#0F07000000000000\n";
+        let log: Vec<u8> = line
+            .iter()
+            .copied()
+            .cycle()
+            .take(READ_BLOCK + 26 * 10)
+            .collect();
+        let mut sink = Pauses::default();
+        let (input, _file) = file_like(log);
+        let stats = decode_into(input, false, &mut sink).unwrap();
+        assert_eq!(sink.paused_at, [sink.messages]);
+        assert_eq!(stats.messages, ((READ_BLOCK + 260) / 26) as u64);
+        assert_eq!(u64::from(sink.messages), stats.messages);
+    }
+
+    /// A read that fails (other than interrupted) ends decoding with the error, in both
+    /// modes.
+    #[test]
+    fn a_failed_read_is_an_error() {
+        struct Failing;
+        impl Read for Failing {
+            fn read(&mut self, _: &mut [u8]) -> std::io::Result<usize> {
+                Err(std::io::Error::other("the device went away"))
+            }
+        }
+        for stream in [true, false] {
+            let (mut input, _file) = file_like(Vec::new());
+            input.reader = Box::new(Failing);
+            let Err(Failure::Runtime(text)) = decode_into(input, stream, &mut Pauses::default())
+            else {
+                panic!("a failed read not a runtime failure (stream {stream})");
+            };
+            assert_eq!(text, "cannot read input: the device went away");
+        }
     }
 }

@@ -215,4 +215,23 @@ mod tests {
             (17, 17, 2, 1, 2)
         );
     }
+
+    /// A capture that ends inside a frame reports it lost when it is finished; one that
+    /// ends on a frame's last byte reports nothing more.
+    #[test]
+    fn a_capture_ending_mid_frame_reports_it_lost() {
+        let bytes = Postback::default().to_stream_bytes();
+        for (cut, want) in [
+            (bytes.len(), &["postback"][..]),
+            (bytes.len() - 1, &["lost"][..]),
+            (1, &["lost"][..]),
+        ] {
+            let mut dec = StreamDecoder::default();
+            let mut words = Words::default();
+            dec.bytes(&bytes[..cut], &mut words).unwrap();
+            dec.finish(&mut words).unwrap();
+            assert_eq!(words.0, want, "{cut} bytes");
+            assert_eq!(dec.stats().incomplete, u64::from(cut < bytes.len()));
+        }
+    }
 }
