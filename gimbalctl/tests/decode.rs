@@ -208,7 +208,7 @@ fn unknown_codes_survive_decoding() {
 
 #[test]
 fn bad_frames_on_protocol_ids_are_malformed_not_fatal() {
-    let lines: Vec<String> = [
+    let mut lines: Vec<String> = [
         // Pitch 3276.7 deg: out of range.
         "00000F01#0F0802FF7F000000",
         // Unknown command.
@@ -235,7 +235,6 @@ fn bad_frames_on_protocol_ids_are_malformed_not_fatal() {
     .map(str::to_owned)
     .to_vec();
     // And a line too long to keep (malformed, whatever it holds).
-    let mut lines = lines;
     lines.push(format!("00000F01#0F07{}", "0".repeat(5000)));
     let out = decode_log(&lines, &["--stats"]);
     let msgs = out.json();

@@ -190,9 +190,10 @@ fn parse_frame_token<'a>(tok: &[u8], ts: Option<&'a [u8]>) -> Line<'a> {
 
 /// `FLAGS:SDT:AF#`, what follows a CAN XL frame's `VCIDPRIO#`: two, two and eight hex digits.
 fn is_xl_header(s: &[u8]) -> bool {
-    let hex = |t: &[u8]| t.iter().all(|&b| HEX[usize::from(b)] != 0xFF);
     match s.get(..15) {
-        Some([f0, f1, b':', t0, t1, b':', af @ .., b'#']) => hex(&[*f0, *f1, *t0, *t1]) && hex(af),
+        Some([f0, f1, b':', t0, t1, b':', af @ .., b'#']) => {
+            hex_u32(&[*f0, *f1, *t0, *t1]).is_some() && hex_u32(af).is_some()
+        }
         _ => false,
     }
 }

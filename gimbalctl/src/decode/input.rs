@@ -256,9 +256,9 @@ mod tests {
     }
 
     /// The lines `for_each_line` gives equal the input split at each newline (a last line
-    /// without one included, nothing after the last newline not), a line longer than `MAX_LINE` as
-    /// `None`: for lines of every length around `MAX_LINE`, read in blocks of every size
-    /// around it and much smaller, whichever reads are interrupted.
+    /// without one included, nothing after the last newline not), a line longer than
+    /// `MAX_LINE` as `None`: for lines of every length around `MAX_LINE`, read in blocks of
+    /// every size around it and much smaller, whichever reads are interrupted.
     #[test]
     fn lines_are_the_input_split_at_newlines() {
         let lengths = [
@@ -415,34 +415,28 @@ mod tests {
     /// both modes; and interrupted reads are retried.
     #[test]
     fn a_pause_is_a_short_read_when_nothing_blocks() {
-        // Serial postbacks, 27 bytes each, past one whole block.
+        // Serial postbacks (27 bytes each) and a log of command lines (26 bytes each), each
+        // past one whole block by ten of them.
         let postback = idu_gimbal::wire::postback::Postback::default().to_stream_bytes();
-        let stream: Vec<u8> = postback
-            .iter()
-            .copied()
-            .cycle()
-            .take(READ_BLOCK + 27 * 10)
-            .collect();
-        let mut sink = Pauses::default();
-        let (input, _file) = file_like(stream);
-        let stats = decode_into(input, true, &mut sink).unwrap();
-        assert_eq!(sink.paused_at, [sink.messages]);
-        assert_eq!(u64::from(sink.messages), stats.messages);
-        assert_eq!(stats.messages, ((READ_BLOCK + 270) / 27) as u64);
-        // A log of command lines, 26 bytes each, past one whole block.
         let line = b"00000F01#0F07000000000000\n";
-        let log: Vec<u8> = line
-            .iter()
-            .copied()
-            .cycle()
-            .take(READ_BLOCK + 26 * 10)
-            .collect();
-        let mut sink = Pauses::default();
-        let (input, _file) = file_like(log);
-        let stats = decode_into(input, false, &mut sink).unwrap();
-        assert_eq!(sink.paused_at, [sink.messages]);
-        assert_eq!(stats.messages, ((READ_BLOCK + 260) / 26) as u64);
-        assert_eq!(u64::from(sink.messages), stats.messages);
+        for (stream, unit) in [(true, &postback[..]), (false, &line[..])] {
+            let input: Vec<u8> = unit
+                .iter()
+                .copied()
+                .cycle()
+                .take(READ_BLOCK + unit.len() * 10)
+                .collect();
+            let mut sink = Pauses::default();
+            let (input, _file) = file_like(input);
+            let stats = decode_into(input, stream, &mut sink).unwrap();
+            assert_eq!(sink.paused_at, [sink.messages], "stream {stream}");
+            assert_eq!(u64::from(sink.messages), stats.messages, "stream {stream}");
+            assert_eq!(
+                stats.messages,
+                ((READ_BLOCK + unit.len() * 10) / unit.len()) as u64,
+                "stream {stream}"
+            );
+        }
     }
 
     /// A read that fails (other than interrupted) ends decoding with the error, in both

@@ -62,7 +62,8 @@ pub struct Stats {
     /// Lines that are no CAN frame in any of the three forms, and frames on the protocol's
     /// IDs whose content does not decode (wrong length, value out of range, bad text byte).
     pub malformed_lines: u64,
-    /// Frames of other devices: other IDs, standard IDs, remote, CAN FD, CAN XL and error frames.
+    /// Frames of other devices: other IDs, standard IDs, remote, CAN FD, CAN XL and error
+    /// frames.
     pub foreign_frames: u64,
 }
 
