@@ -13,9 +13,9 @@
 #   PROPTEST_CASES=256                   # proptest cases per property (default 32 here)
 #
 # How long: the core's scope is about 1,260 mutants, the bridge's about 1,570, the
-# geometry's 312. Without debug info (CARGO_PROFILE_DEV_DEBUG=0, set here) a core mutant costs a few seconds' incremental
-# rebuild and about 6 s of tests; with it the rebuild was ~12 s. See TESTING.md for the
-# measured wall time of each scope.
+# geometry's 312. Without debug info (CARGO_PROFILE_DEV_DEBUG=0, set here) a core mutant
+# costs a few seconds' incremental rebuild and about 6 s of tests; with it the rebuild was
+# ~12 s. See TESTING.md for the measured wall time of each scope.
 # Narrow a run with `--shard k/n`, `--re REGEX` or `--exclude GLOB` to get an answer sooner
 # (an extra `--file` widens the scope: cargo-mutants ORs them).
 #

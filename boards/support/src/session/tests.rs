@@ -1,5 +1,8 @@
+extern crate std;
+
 use super::*;
 use idu_gimbal::mock::Faults;
+use std::string::String;
 
 /// The simulated gimbal's frames for 6 s (a postback every 500 ms), on `bus`: how many
 /// it made and how many the bus did not take.
@@ -24,9 +27,6 @@ fn the_gimbal_frames_the_bus_refuses_are_counted() {
     assert_eq!(unsent, made);
     assert_eq!(gimbal_frames(&DemoBus::new(1)).1, 0);
 }
-
-extern crate std;
-use std::string::String;
 
 /// Plays the script over `rig`: the failures it counts and its transcript.
 fn play<R: Rig>(rig: R) -> (u32, String) {
