@@ -324,9 +324,10 @@ fn parse_line_general(line: &[u8]) -> Line<'_> {
     let dlc = match len_text {
         (b'[', [d]) if d.is_ascii_digit() => Some(usize::from(d - b'0')),
         // `-8`: the raw DLC in hex; 9 to F carry 8 bytes.
-        (b'{', [d]) if HEX[usize::from(*d)] != 0xFF => {
-            Some(usize::from(HEX[usize::from(*d)]).min(8))
-        }
+        (b'{', [d]) => match HEX[usize::from(*d)] {
+            0xFF => return Line::Malformed,
+            raw => Some(usize::from(raw).min(8)),
+        },
         // CAN FD (two digits) and CAN XL (four).
         (b'[', digits)
             if matches!(digits.len(), 2 | 4) && digits.iter().all(u8::is_ascii_digit) =>
