@@ -457,7 +457,7 @@ fn serve<S: Pump>(
     let start = StdInstant::now();
     let mut clients = Clients {
         peers: Peers::new(PEER_CAPACITY, PEER_TIMEOUT),
-        log: PeerLog::new(start),
+        log: PeerLog::new(start, std::io::stderr()),
         splitter: FrameReader::new(),
         unsent: Unsent::default(),
     };

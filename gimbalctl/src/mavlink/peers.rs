@@ -86,7 +86,7 @@ impl Peers {
         let Some(oldest) = self
             .slots
             .iter_mut()
-            .reduce(|a, b| if b.heard < a.heard { b } else { a })
+            .min_by_key(|p| p.heard)
             .filter(|p| now.saturating_duration_since(p.heard) >= timeout)
         else {
             return Some(Change::Refused(from));
@@ -219,6 +219,7 @@ mod tests {
     fn a_full_table_of_live_peers_refuses_the_newcomer() {
         let t0 = Instant::now();
         let mut peers = Peers::new(NonZeroUsize::new(3).unwrap(), PEER_TIMEOUT);
+        assert_eq!(peers.capacity(), 3);
         peers.heard(addr(1), 1, t0);
         peers.heard(addr(2), 1, t0 + S);
         peers.heard(addr(3), 1, t0 + 2 * S);

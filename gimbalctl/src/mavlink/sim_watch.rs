@@ -136,4 +136,62 @@ mod tests {
             ["simulated gimbal: tracking stopped"]
         );
     }
+
+    /// Every other line, each once: a lost target, the focus's four states, the thermal
+    /// zoom's three, a calibration started, restarted and done; nothing while nothing
+    /// changes.
+    #[test]
+    fn the_other_changes_are_said_once_each() {
+        let config = SimConfig {
+            tracking_lost_ms: 1000,
+            ..SimConfig::default()
+        };
+        let mut sim: Simulator = Simulator::new(config, Instant::from_millis(0));
+        let mut w = SimWatch::default();
+        let b = TrackingBox::from_raw(ImagePoint::new(4096, 4096).unwrap(), 16, 16);
+        send(&mut sim, GimbalCommand::StartTracking(b), 1);
+        assert_eq!(w.changes(sim.state()).len(), 1);
+        sim.poll(Instant::from_millis(1002));
+        assert_eq!(w.changes(sim.state()), ["simulated gimbal: target lost"]);
+
+        let mut after = |sim: &mut Simulator, c: Command, ms: u32| {
+            send(sim, c, ms);
+            w.changes(sim.state())
+        };
+        let focus = |f| Command::from(GimbalCommand::Focus(f));
+        let zoom = |z| Command::from(DualLightCommand::ElectronicZoom(z));
+        let steps = [
+            (focus(Focus::Minus), "focusing -"),
+            (focus(Focus::Auto), "auto-focus"),
+            (focus(Focus::Plus), "focusing +"),
+            (focus(Focus::Stop), "focus held"),
+            (zoom(ElectronicZoom::In), "thermal zooming in"),
+            (zoom(ElectronicZoom::Out), "thermal zooming out"),
+            (zoom(ElectronicZoom::Stop), "thermal zoom held"),
+            (GimbalCommand::FastCalibration.into(), "calibrating"),
+        ];
+        let mut ms = 1100;
+        for (command, line) in steps {
+            ms += 10;
+            assert_eq!(
+                after(&mut sim, command, ms),
+                [format!("simulated gimbal: {line}")]
+            );
+        }
+        // Still calibrating: nothing new; a second calibration restarts it, and is said.
+        sim.poll(Instant::from_millis(ms + 1000));
+        assert!(w.changes(sim.state()).is_empty());
+        send(&mut sim, GimbalCommand::FastCalibration, ms + 1000);
+        assert_eq!(w.changes(sim.state()), ["simulated gimbal: calibrating"]);
+        // Done CALIBRATION_MS after the last command, said once.
+        let done = ms + 1000 + idu_gimbal::sim::CALIBRATION_MS;
+        sim.poll(Instant::from_millis(done - 10));
+        assert!(w.changes(sim.state()).is_empty());
+        sim.poll(Instant::from_millis(done + 10));
+        assert_eq!(
+            w.changes(sim.state()),
+            ["simulated gimbal: calibration done"]
+        );
+        assert!(w.changes(sim.state()).is_empty());
+    }
 }

@@ -198,18 +198,37 @@ pub(super) fn receive_udp<M: Medium>(
                 // five zoom steps a command) never finds the gimbal's queue still full.
                 move_gimbal(link)?;
             }
-            Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(true),
-            // A peer that went away (ICMP port unreachable) must not stop the bridge.
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused
-                ) => {}
-            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(Failure::io("UDP socket", e)),
+            Err(e) => match recv_error(e.kind()) {
+                RecvError::Emptied => return Ok(true),
+                RecvError::ReadOn => {}
+                RecvError::Fatal => return Err(Failure::io("UDP socket", e)),
+            },
         }
     }
     Ok(false)
+}
+
+/// What an error from the socket's `recv_from` means to [`receive_udp`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RecvError {
+    /// Nothing more to read this tick.
+    Emptied,
+    /// Nothing lost: read on.
+    ReadOn,
+    /// The socket cannot be read: `gimbalctl mavlink` stops.
+    Fatal,
+}
+
+fn recv_error(kind: ErrorKind) -> RecvError {
+    match kind {
+        ErrorKind::WouldBlock => RecvError::Emptied,
+        // A peer that went away (ICMP port unreachable, reported by some systems on the
+        // next read) must not stop the bridge; nor a signal.
+        ErrorKind::ConnectionReset | ErrorKind::ConnectionRefused | ErrorKind::Interrupted => {
+            RecvError::ReadOn
+        }
+        _ => RecvError::Fatal,
+    }
 }
 
 #[cfg(test)]
@@ -262,5 +281,56 @@ mod tests {
                 && latest[0].ends_with("(a broadcast address is not sent to)"),
             "{latest:?}"
         );
+    }
+
+    /// The remedy for a loopback listener is given only where it applies: a destination
+    /// off this host, from a socket that listens on a loopback address.
+    #[test]
+    fn the_loopback_remedy_is_said_only_where_it_applies() {
+        let hint = "(listening on 127.0.0.1:";
+        let reason = |listen: &str, to: &str| {
+            let socket = UdpSocket::bind(listen).unwrap();
+            let mut unsent = Unsent::default();
+            let to: SocketAddr = to.parse().unwrap();
+            unsent.count(&socket, to, &io::Error::from(ErrorKind::NetworkUnreachable));
+            let lines = unsent.lines(StdInstant::now(), true);
+            assert_eq!(lines.len(), 1);
+            lines[0].clone()
+        };
+        let off_host = reason("127.0.0.1:0", "192.0.2.1:14550");
+        assert!(
+            off_host.contains(hint)
+                && off_host
+                    .ends_with("a loopback address: --listen 0.0.0.0:PORT reaches other hosts)"),
+            "{off_host}"
+        );
+        let on_host = reason("127.0.0.1:0", "127.0.0.1:14550");
+        assert!(!on_host.contains("(listening on"), "{on_host}");
+        let all_addresses = reason("0.0.0.0:0", "192.0.2.1:14550");
+        assert!(!all_addresses.contains("(listening on"), "{all_addresses}");
+    }
+
+    /// Only an empty socket ends a tick's reading; a peer gone or a signal is read past;
+    /// anything else stops the bridge.
+    #[test]
+    fn each_receive_error_is_read_past_or_fatal() {
+        assert_eq!(recv_error(ErrorKind::WouldBlock), RecvError::Emptied);
+        for kind in [
+            ErrorKind::ConnectionReset,
+            ErrorKind::ConnectionRefused,
+            ErrorKind::Interrupted,
+        ] {
+            assert_eq!(recv_error(kind), RecvError::ReadOn, "{kind:?}");
+        }
+        for kind in [
+            ErrorKind::PermissionDenied,
+            ErrorKind::NotConnected,
+            ErrorKind::InvalidInput,
+            ErrorKind::TimedOut,
+            ErrorKind::OutOfMemory,
+            ErrorKind::Other,
+        ] {
+            assert_eq!(recv_error(kind), RecvError::Fatal, "{kind:?}");
+        }
     }
 }
