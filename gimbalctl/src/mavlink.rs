@@ -166,14 +166,13 @@ fn signing_line(s: &SigningStats) -> String {
     )
 }
 
-/// Now as MAVLink 2 signing counts time: 10 µs units since 2015-01-01 00:00 GMT.
-fn signing_timestamp() -> u64 {
+/// `at` as MAVLink 2 signing counts time: 10 µs units since 2015-01-01 00:00 GMT (0 for
+/// a clock set before then).
+fn signing_timestamp(at: std::time::SystemTime) -> u64 {
     const EPOCH_2015_S: u64 = 1_420_070_400;
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| {
-            (d.as_micros() / 10).saturating_sub(u128::from(EPOCH_2015_S) * 100_000) as u64
-        })
+    at.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| {
+        (d.as_micros() / 10).saturating_sub(u128::from(EPOCH_2015_S) * 100_000) as u64
+    })
 }
 
 /// What `gimbalctl mavlink` was asked to do.
@@ -499,7 +498,7 @@ fn serve<S: Pump>(
         // The host's clock, when signing: the first signed frames already carry the time
         // receivers know.
         if bridge.signing_stats().is_some() {
-            bridge.signing_time_at_least(signing_timestamp());
+            bridge.signing_time_at_least(signing_timestamp(std::time::SystemTime::now()));
         }
         let clock = StdInstant::now();
         let drained = match &mut port {
@@ -678,6 +677,76 @@ mod tests {
         let mut buf = [0u8; 300];
         let n = f.serialize(&mut buf).unwrap();
         buf[..n].to_vec()
+    }
+
+    /// Each 1-65535 pixels, as `WIDTHxHEIGHT`; anything else is a usage error.
+    #[test]
+    fn a_camera_resolution_is_width_x_height() {
+        assert_eq!(parse_resolution("1920x1080").unwrap(), (1920, 1080));
+        assert_eq!(parse_resolution("1x65535").unwrap(), (1, 65535));
+        for bad in [
+            "0x1080",
+            "1920x0",
+            "65536x1",
+            "1920",
+            "1920X1080",
+            "x",
+            "-1x1",
+            "",
+        ] {
+            assert!(
+                matches!(parse_resolution(bad), Err(Failure::Usage(_))),
+                "{bad:?}"
+            );
+        }
+    }
+
+    /// Degrees, `HFOV,VFOV`, each more than 0 and less than 180.
+    #[test]
+    fn a_camera_fov_is_two_angles() {
+        let fov = parse_fov("61.9, 37.2").unwrap();
+        assert_eq!(fov, FieldOfView::from_degrees(61.9, 37.2).unwrap());
+        for bad in ["60", "60,180", "0,30", "60,", "a,b", ""] {
+            assert!(matches!(parse_fov(bad), Err(Failure::Usage(_))), "{bad:?}");
+        }
+    }
+
+    /// MAVLink 2 signing's clock: 10 µs units from 2015-01-01 00:00 UTC (Unix time
+    /// 1,420,070,400 s); none before.
+    #[test]
+    fn the_signing_timestamp_counts_10_us_from_2015() {
+        use std::time::{Duration, UNIX_EPOCH};
+        let epoch_2015 = UNIX_EPOCH + Duration::from_secs(1_420_070_400);
+        assert_eq!(signing_timestamp(epoch_2015), 0);
+        assert_eq!(signing_timestamp(epoch_2015 + Duration::from_micros(19)), 1);
+        assert_eq!(signing_timestamp(epoch_2015 + Duration::from_micros(20)), 2);
+        assert_eq!(
+            signing_timestamp(epoch_2015 + Duration::from_secs(1)),
+            100_000
+        );
+        // 2026-11-28 00:00 UTC: Unix time 1,795,824,000 s.
+        let day = UNIX_EPOCH + Duration::from_secs(1_795_824_000);
+        assert_eq!(signing_timestamp(day), 37_575_360_000_000);
+        assert_eq!(signing_timestamp(epoch_2015 - Duration::from_secs(1)), 0);
+        assert_eq!(signing_timestamp(UNIX_EPOCH), 0);
+    }
+
+    #[test]
+    fn the_signing_line_names_each_count() {
+        let stats = SigningStats {
+            accepted: 1,
+            unsigned: 2,
+            bad_signature: 3,
+            replayed: 4,
+            streams_full: 5,
+        };
+        assert_eq!(
+            signing_line(&stats),
+            format!(
+                "frames accepted: 1; turned away: 2 unsigned, 3 with a bad signature, \
+                 4 replayed, 5 from a new stream while {STREAMS} were remembered"
+            )
+        );
     }
 
     #[test]

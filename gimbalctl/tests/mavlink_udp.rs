@@ -51,15 +51,22 @@ struct Bridge {
 
 impl Bridge {
     fn start() -> Bridge {
+        Bridge::start_with(&[])
+    }
+
+    /// The bridge with `extra` arguments.
+    fn start_with(extra: &[&str]) -> Bridge {
+        let mut args = vec![
+            "mavlink",
+            "--sim",
+            "--listen",
+            "127.0.0.1:0",
+            "--exit-after-ms",
+            RUN_LIMIT_MS,
+        ];
+        args.extend_from_slice(extra);
         let (guard, line, stderr) = start(
-            &[
-                "mavlink",
-                "--sim",
-                "--listen",
-                "127.0.0.1:0",
-                "--exit-after-ms",
-                RUN_LIMIT_MS,
-            ],
+            &args,
             "gimbalctl mavlink: listening on ",
             Duration::from_secs(10),
         );
@@ -826,4 +833,49 @@ fn said_after(stderr: &str, before: &str, after: &str) -> u64 {
             rest.split(' ').next()?.parse::<u64>().ok()
         })
         .sum()
+}
+
+/// `--system-id` pins the autopilot followed: another's heartbeat, though heard first, is
+/// ignored and said; the pinned one's is not.
+#[test]
+fn system_id_pins_the_autopilot_followed() {
+    let bridge = Bridge::start_with(&["--system-id", "2"]);
+    let client = socket();
+    let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
+    for d in [frame((1, 1), 0, &quadrotor), frame((2, 1), 0, &quadrotor)] {
+        client.send_to(&d, bridge.addr).expect("send");
+    }
+    bridge.stderr.wait(
+        "warning: 1 heartbeat of another autopilot ignored: following system 2 (--system-id pins it)",
+        Duration::from_secs(5),
+    );
+    client
+        .send_to(&frame((2, 1), 1, &quadrotor), bridge.addr)
+        .expect("send");
+    let stderr = bridge.stop();
+    assert!(!stderr.contains("following system 1"), "{stderr}");
+    assert!(!stderr.contains("2 heartbeats of another"), "{stderr}");
+}
+
+/// With a signing key, an unsigned frame is turned away and said at the next note, with
+/// what signing has counted.
+#[test]
+fn signing_says_the_frames_it_turns_away() {
+    let bridge = Bridge::start_with(&["--signing-passphrase", "correct horse"]);
+    let client = socket();
+    let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
+    client
+        .send_to(&frame((1, 1), 0, &quadrotor), bridge.addr)
+        .expect("send");
+    bridge.stderr.wait(
+        &format!(
+            "warning: signing: frames accepted: 0; turned away: 1 unsigned, 0 with a bad \
+             signature, 0 replayed, 0 from a new stream while {} were remembered",
+            idu_gimbal_mavlink::signing::STREAMS
+        ),
+        Duration::from_secs(5),
+    );
+    let stderr = bridge.stop();
+    // Said as the count grows: once.
+    assert_eq!(stderr.matches("warning: signing:").count(), 1, "{stderr}");
 }
