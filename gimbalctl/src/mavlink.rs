@@ -749,6 +749,46 @@ mod tests {
         );
     }
 
+    /// The gimbal side's notes: a postback whose CRC fails is said once, at the next
+    /// note after it, with the count.
+    #[test]
+    fn a_real_gimbals_lost_postbacks_are_noted_as_they_grow() {
+        use idu_gimbal::wire::ids;
+        use idu_gimbal::wire::postback::Postback;
+        let bus: Bus<2, 64> = Bus::new(5);
+        let mut gimbal_end = bus.endpoint(1).unwrap();
+        let mut side = TransportSide(CanTransport::new(
+            bus.endpoint(0).unwrap(),
+            "mock0",
+            Mode::Drive,
+        ));
+        let mut link: Link = Link::new(Config::default());
+        let t = Instant::from_millis;
+        let mut send = |frames: [[u8; 8]; 4]| {
+            for data in frames {
+                gimbal_end
+                    .transmit(&MockFrame::extended(ids::POSTBACK, &data).unwrap())
+                    .unwrap();
+            }
+        };
+        send(Postback::default().to_can_frames());
+        side.pump(&mut link, t(10)).unwrap();
+        assert!(side.notes(&link.stats()).is_empty());
+        let mut bad = Postback::default().to_can_frames();
+        // A payload byte of the second frame flipped: the CRC no longer holds.
+        bad[1][4] ^= 0x01;
+        send(bad);
+        side.pump(&mut link, t(20)).unwrap();
+        let notes = side.notes(&link.stats());
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with("mock0: postbacks lost: 1 with a bad CRC, 0 cut short")
+                && notes[0].ends_with("postbacks so far: 1"),
+            "{notes:?}"
+        );
+        assert!(side.notes(&link.stats()).is_empty());
+    }
+
     #[test]
     fn the_autopilots_attitude_gps_and_altitude_reach_the_can_gimbal() {
         let bus: Bus<2, 64> = Bus::new(5);

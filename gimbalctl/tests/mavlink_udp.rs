@@ -857,25 +857,29 @@ fn system_id_pins_the_autopilot_followed() {
     assert!(!stderr.contains("2 heartbeats of another"), "{stderr}");
 }
 
-/// With a signing key, an unsigned frame is turned away and said at the next note, with
-/// what signing has counted.
+/// With a signing key, unsigned frames are turned away and said at the notes (once a
+/// second) as their count grows, with what signing has counted.
 #[test]
 fn signing_says_the_frames_it_turns_away() {
     let bridge = Bridge::start_with(&["--signing-passphrase", "correct horse"]);
     let client = socket();
     let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
-    client
-        .send_to(&frame((1, 1), 0, &quadrotor), bridge.addr)
-        .expect("send");
+    // Five within 100 ms: one note, or two should a note fall among them.
+    for seq in 0..5 {
+        client
+            .send_to(&frame((1, 1), seq, &quadrotor), bridge.addr)
+            .expect("send");
+        thread::sleep(Duration::from_millis(20));
+    }
     bridge.stderr.wait(
         &format!(
-            "warning: signing: frames accepted: 0; turned away: 1 unsigned, 0 with a bad \
+            "warning: signing: frames accepted: 0; turned away: 5 unsigned, 0 with a bad \
              signature, 0 replayed, 0 from a new stream while {} were remembered",
             idu_gimbal_mavlink::signing::STREAMS
         ),
         Duration::from_secs(5),
     );
     let stderr = bridge.stop();
-    // Said as the count grows: once.
-    assert_eq!(stderr.matches("warning: signing:").count(), 1, "{stderr}");
+    let said = stderr.matches("warning: signing:").count();
+    assert!((1..=2).contains(&said), "{stderr}");
 }
