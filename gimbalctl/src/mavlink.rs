@@ -60,6 +60,7 @@ use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 use crate::counts::{counted, grown};
 use crate::error::Failure;
 use crate::tcp::{address, resolve, DefaultPort};
+use crate::transport::stream::Ended;
 use crate::transport::{
     self, clock, Job, Mode, SerialSpec, Session, StreamPort, Target, Transport,
 };
@@ -513,9 +514,14 @@ fn serve<S: Pump>(
                 clock,
                 |link| side.pump(link, t),
             )?,
-            Port::Serial(serial) => {
-                receive_serial(&mut bridge, &mut link, serial, &mut buf, &mut held, t)?
-            }
+            Port::Serial(serial) => receive_serial(
+                &mut bridge,
+                &mut link,
+                |b| serial.read_now(b),
+                &mut buf,
+                &mut held,
+                t,
+            )?,
         };
         side.pump(&mut link, t)?;
         bridge.poll(&mut link, t);
@@ -610,12 +616,13 @@ fn serve<S: Pump>(
     }
 }
 
-/// Reads what the serial port has (bounded) into the bridge as a byte stream; whether the
-/// port was emptied. A port that went away ends the run.
+/// Reads what the serial port has (bounded; `read` is the port's non-blocking read) into
+/// the bridge as a byte stream; whether the port was emptied. A port that went away ends
+/// the run.
 fn receive_serial<M: Medium>(
     bridge: &mut Bridge,
     link: &mut Link<8, 8, M>,
-    port: &mut StreamPort,
+    mut read: impl FnMut(&mut [u8]) -> Result<usize, Ended>,
     buf: &mut [u8],
     held: &mut Vec<u8>,
     t: Instant,
@@ -631,7 +638,7 @@ fn receive_serial<M: Medium>(
     }
     let chunk = buf.len().min(4096);
     for _ in 0..SERIAL_READS_PER_TICK {
-        match port.read_now(&mut buf[..chunk]) {
+        match read(&mut buf[..chunk]) {
             Ok(0) => return Ok(true),
             Ok(n) => {
                 let taken = bridge.receive(link, &buf[..n], t);
@@ -747,6 +754,67 @@ mod tests {
                  4 replayed, 5 from a new stream while {STREAMS} were remembered"
             )
         );
+    }
+
+    /// The autopilot's serial bytes that wait for room in the bridge's outbox go before
+    /// anything newer: while they wait, the port is not read; once they are taken, it is.
+    #[test]
+    fn serial_bytes_held_for_the_outbox_go_first() {
+        use mavio::dialects::common::enums::MavCmd;
+        use mavio::dialects::common::messages::{CommandLong, GimbalDeviceInformation};
+        let mut bridge = Bridge::new(BridgeConfig::default().check().unwrap());
+        let mut link: Link = Link::new(Config::default());
+        let now = Instant::from_millis(0);
+        let request = CommandLong {
+            target_system: 1,
+            target_component: 154,
+            command: MavCmd::RequestMessage,
+            param1: GimbalDeviceInformation::spec().id() as f32,
+            ..Default::default()
+        };
+        // More requests than the outbox has room to answer, in one read.
+        let mut stream = Vec::new();
+        for seq in 0..64 {
+            stream.extend(frame(seq, &request));
+        }
+        let reads = std::cell::Cell::new(0);
+        let mut port = vec![stream.clone(), frame(64, &request)];
+        port.reverse();
+        let mut read = |buf: &mut [u8]| -> Result<usize, Ended> {
+            reads.set(reads.get() + 1);
+            let Some(chunk) = port.pop() else {
+                return Ok(0);
+            };
+            buf[..chunk.len()].copy_from_slice(&chunk);
+            Ok(chunk.len())
+        };
+        let (mut buf, mut held) = (vec![0u8; 4096], Vec::new());
+        let emptied = receive_serial(&mut bridge, &mut link, &mut read, &mut buf, &mut held, now);
+        assert!(emptied.unwrap());
+        assert_eq!(reads.get(), 1);
+        assert!(
+            !held.is_empty() && held.len() < stream.len(),
+            "{}",
+            held.len()
+        );
+        assert!(stream.ends_with(&held));
+        // The outbox still full: the held bytes wait, and the port is not read.
+        let before = held.len();
+        let emptied = receive_serial(&mut bridge, &mut link, &mut read, &mut buf, &mut held, now);
+        assert!(emptied.unwrap());
+        assert_eq!((reads.get(), held.len()), (1, before));
+        // Room made as the answers are sent: the held requests are taken, then the port
+        // is read on.
+        for _ in 0..stream.len() {
+            if held.is_empty() {
+                break;
+            }
+            let n = bridge.transmit_bytes().len();
+            bridge.transmit_written(n);
+            receive_serial(&mut bridge, &mut link, &mut read, &mut buf, &mut held, now).unwrap();
+        }
+        assert!(held.is_empty());
+        assert!(reads.get() >= 2, "{}", reads.get());
     }
 
     /// The gimbal side's notes: a postback whose CRC fails is said once, at the next
