@@ -864,22 +864,50 @@ fn signing_says_the_frames_it_turns_away() {
     let bridge = Bridge::start_with(&["--signing-passphrase", "correct horse"]);
     let client = socket();
     let quadrotor = heartbeat(MavType::Quadrotor, MavAutopilot::Px4);
-    // Five within 100 ms: one note, or two should a note fall among them.
-    for seq in 0..5 {
-        client
-            .send_to(&frame((1, 1), seq, &quadrotor), bridge.addr)
-            .expect("send");
-        thread::sleep(Duration::from_millis(20));
-    }
-    bridge.stderr.wait(
-        &format!(
-            "warning: signing: frames accepted: 0; turned away: 5 unsigned, 0 with a bad \
-             signature, 0 replayed, 0 from a new stream while {} were remembered",
+    let said = |unsigned: u32| {
+        format!(
+            "warning: signing: frames accepted: 0; turned away: {unsigned} unsigned, 0 with a \
+             bad signature, 0 replayed, 0 from a new stream while {} were remembered",
             idu_gimbal_mavlink::signing::STREAMS
-        ),
-        Duration::from_secs(5),
-    );
+        )
+    };
+    // Two batches of five, each within 100 ms, the second just after a note: each said
+    // in one line, or two should a note fall among its frames.
+    for batch in 0..2u8 {
+        for seq in 0..5 {
+            client
+                .send_to(&frame((1, 1), 5 * batch + seq, &quadrotor), bridge.addr)
+                .expect("send");
+            thread::sleep(Duration::from_millis(20));
+        }
+        let total = 5 * (u32::from(batch) + 1);
+        bridge.stderr.wait(&said(total), Duration::from_secs(5));
+    }
     let stderr = bridge.stop();
-    let said = stderr.matches("warning: signing:").count();
-    assert!((1..=2).contains(&said), "{stderr}");
+    let lines = stderr.matches("warning: signing:").count();
+    assert!((2..=4).contains(&lines), "{stderr}");
+}
+
+/// `--camera dual-light` simulates a gimbal of that family: its postback names the 30×
+/// dual light, and GIMBAL_DEVICE_INFORMATION its model.
+#[test]
+fn the_simulated_gimbal_is_of_the_cameras_family() {
+    let bridge = Bridge::start_with(&["--camera", "dual-light"]);
+    bridge.stderr.wait("gimbal link up", Duration::from_secs(5));
+    let client = socket();
+    client
+        .send_to(&frame(GCS, 0, &request_information(1)), bridge.addr)
+        .expect("send");
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let info = loop {
+        let f = recv_frame(&client, deadline).expect("GIMBAL_DEVICE_INFORMATION");
+        if f.message_id() == GimbalDeviceInformation::ID {
+            let info: GimbalDeviceInformation = f.decode_message().expect("decodes");
+            break info;
+        }
+    };
+    let model = b"30x dual light";
+    assert_eq!(&info.model_name[..model.len()], model, "{info:?}");
+    assert!(info.model_name[model.len()..].iter().all(|&b| b == 0));
+    bridge.stop();
 }
