@@ -660,7 +660,7 @@ mod tests {
     use super::*;
     use crate::transport::can::CanTransport;
     use embedded_can::{nb::Can, Frame as _};
-    use idu_gimbal::mock::{Bus, MockFrame};
+    use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
     use idu_gimbal_mavlink::attitude::YawPitch;
     use idu_gimbal_mavlink::mavio;
     use mavio::dialects::common::enums::{GimbalDeviceFlags, MavAutopilot, MavType};
@@ -817,6 +817,19 @@ mod tests {
         assert!(reads.get() >= 2, "{}", reads.get());
     }
 
+    type MockEnd<'a> = Endpoint<'a, 2, 64>;
+
+    /// The gimbal's end of `bus` (endpoint 1), the bridge's gimbal side over CAN on the
+    /// other (named `mock0`), and a new link.
+    fn can_side(bus: &Bus<2, 64>) -> (MockEnd<'_>, TransportSide<CanTransport<MockEnd<'_>>>, Link) {
+        let side = TransportSide(CanTransport::new(
+            bus.endpoint(0).unwrap(),
+            "mock0",
+            Mode::Drive,
+        ));
+        (bus.endpoint(1).unwrap(), side, Link::new(Config::default()))
+    }
+
     /// The gimbal side's notes: a postback whose CRC fails is said once, at the next
     /// note after it, with the count.
     #[test]
@@ -824,13 +837,7 @@ mod tests {
         use idu_gimbal::wire::ids;
         use idu_gimbal::wire::postback::Postback;
         let bus: Bus<2, 64> = Bus::new(5);
-        let mut gimbal_end = bus.endpoint(1).unwrap();
-        let mut side = TransportSide(CanTransport::new(
-            bus.endpoint(0).unwrap(),
-            "mock0",
-            Mode::Drive,
-        ));
-        let mut link: Link = Link::new(Config::default());
+        let (mut gimbal_end, mut side, mut link) = can_side(&bus);
         let t = Instant::from_millis;
         let mut send = |frames: [[u8; 8]; 4]| {
             for data in frames {
@@ -860,13 +867,7 @@ mod tests {
     #[test]
     fn the_autopilots_attitude_gps_and_altitude_reach_the_can_gimbal() {
         let bus: Bus<2, 64> = Bus::new(5);
-        let mut gimbal_end = bus.endpoint(1).unwrap();
-        let mut side = TransportSide(CanTransport::new(
-            bus.endpoint(0).unwrap(),
-            "mock0",
-            Mode::Drive,
-        ));
-        let mut link: Link = Link::new(Config::default());
+        let (mut gimbal_end, mut side, mut link) = can_side(&bus);
         let mut bridge = Bridge::new(BridgeConfig::default().check().unwrap());
         let t = Instant::from_millis;
         let mut sim: Simulator = Simulator::new(SimConfig::default(), t(0));
