@@ -125,3 +125,94 @@ pub fn close_gently(mut stream: TcpStream) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+    use std::net::TcpListener;
+
+    fn usage(option: &str, target: &str, default: DefaultPort) -> bool {
+        matches!(address(option, target, default), Err(Failure::Usage(_)))
+    }
+
+    /// The forms each option takes, the serial server's port added where a host is alone
+    /// (a bare IPv6 address in brackets), and every other form refused.
+    #[test]
+    fn addresses_take_their_forms_and_refuse_the_rest() {
+        let serial = DefaultPort::SerialServer;
+        for (target, with_port) in [
+            ("127.0.0.1:2001", "127.0.0.1:2001"),
+            ("[::1]:2001", "[::1]:2001"),
+            ("gimbal.local:2001", "gimbal.local:2001"),
+            ("gimbal.local", "gimbal.local:2000"),
+            ("::1", "[::1]:2000"),
+            ("fe80::1", "[fe80::1]:2000"),
+        ] {
+            assert_eq!(address("--tcp", target, serial).unwrap(), with_port);
+        }
+        for target in [
+            "",
+            ":2000",
+            "gimbal.local:",
+            "gimbal.local:65536",
+            "[::1]",
+            "[::1]:x",
+        ] {
+            assert!(usage("--tcp", target, serial), "{target:?}");
+        }
+        let mavlink = DefaultPort::None;
+        for target in ["127.0.0.1:14550", "[::1]:14550", "localhost:14550"] {
+            assert_eq!(address("--to", target, mavlink).unwrap(), target);
+        }
+        for target in [
+            "",
+            "localhost",
+            "::1",
+            "a:b:14550",
+            ":14550",
+            "localhost:-1",
+        ] {
+            assert!(usage("--to", target, mavlink), "{target:?}");
+        }
+        let Err(Failure::Usage(e)) = address("--to", "localhost", mavlink) else {
+            panic!("a usage error");
+        };
+        assert_eq!(
+            e,
+            "--to \"localhost\": expected HOST:PORT with PORT in [0, 65535]"
+        );
+    }
+
+    /// Closing gently: what we sent reaches a server that had written to us unread (a
+    /// plain close would reset the connection, and the server lose it), and a server
+    /// that never closes keeps us no longer than the grace period.
+    #[test]
+    fn a_gentle_close_loses_nothing_and_waits_a_bounded_time() {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let server = std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            // Postbacks the client never reads.
+            s.write_all(&[0x55; 4096]).unwrap();
+            std::thread::sleep(Duration::from_millis(50));
+            let mut got = Vec::new();
+            let read = s.read_to_end(&mut got).map(|_| got);
+            // Open after the client's FIN: the client waits out its grace, no longer.
+            std::thread::sleep(Duration::from_secs(1));
+            read
+        });
+        let mut client = TcpStream::connect(addr).unwrap();
+        client.write_all(b"frame").unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        let started = Instant::now();
+        close_gently(client);
+        let waited = started.elapsed();
+        // The grace period, plus the scheduler's slack on a loaded machine.
+        assert!(
+            waited >= CLOSE_GRACE && waited < Duration::from_secs(1),
+            "{waited:?}"
+        );
+        assert_eq!(server.join().unwrap().unwrap(), b"frame");
+    }
+}
