@@ -130,6 +130,51 @@ fn out_of_range_values_exit_2_naming_the_argument_and_range() {
     }
 }
 
+/// Whole messages: the COMMAND first, then the argument, the value as typed (in exponent
+/// form when very large, plain when 0) and the range the library's constructor checks.
+#[test]
+fn out_of_range_messages_say_the_value_as_typed() {
+    for (args, message) in [
+        (
+            &["encode", "pitch", "1e300"][..],
+            "pitch: pitch = 1e300 is out of range [-100, 60]",
+        ),
+        // Beyond f32: narrowed for the check, said as typed.
+        (
+            &["encode", "pitch", "1e39"],
+            "pitch: pitch = 1e39 is out of range [-100, 60]",
+        ),
+        (
+            &["encode", "pitch", "nan"],
+            "pitch: pitch must be a finite number in [-100, 60], got NaN",
+        ),
+        (
+            &["encode", "zoom-to", "0"],
+            "zoom-to: zoom_ratio = 0 is out of range [1, 35]",
+        ),
+        // Beyond i32 and below u32: the same.
+        (
+            &["encode", "ir-point-zoom", "99999999999", "0"],
+            "ir-point-zoom: x = 99999999999 is out of range [-10000, 10000]",
+        ),
+        (
+            &["encode", "photo", "timelapse", "-1"],
+            "photo: seconds = -1 is out of range [1, 255]",
+        ),
+        (
+            &["encode", "altitude", "1e300"],
+            "altitude: altitude = 1e300 is out of range [-21474836.48, 21474836.47]",
+        ),
+    ] {
+        let out = usage_error(args);
+        assert_eq!(
+            out.stderr,
+            format!("gimbalctl: error: {message}\n"),
+            "gimbalctl {args:?}"
+        );
+    }
+}
+
 #[test]
 fn bad_usage_exits_2() {
     for args in [
