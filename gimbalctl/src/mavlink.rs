@@ -778,11 +778,10 @@ mod tests {
             stream.extend(frame(seq, &request));
         }
         let reads = std::cell::Cell::new(0);
-        let mut port = vec![stream.clone(), frame(64, &request)];
-        port.reverse();
+        let mut port = [stream.clone(), frame(64, &request)].into_iter();
         let mut read = |buf: &mut [u8]| -> Result<usize, Ended> {
             reads.set(reads.get() + 1);
-            let Some(chunk) = port.pop() else {
+            let Some(chunk) = port.next() else {
                 return Ok(0);
             };
             buf[..chunk.len()].copy_from_slice(&chunk);
