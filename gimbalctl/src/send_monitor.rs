@@ -54,29 +54,32 @@ pub fn send(
     spec: &Spec,
     repeat: Option<(NonZeroU64, u64)>,
 ) -> Result<(), Failure> {
-    let message = spec.build()?;
+    let job = SendJob::new(spec, repeat)?;
     if !target.carries_vehicle() {
         // Vehicle and text frames exist only on CAN: a usage error before connecting.
         control_commands(spec)?;
     }
-    let text = match spec {
-        Spec::Text { text } => Some(text.clone()),
-        _ => None,
-    };
-    target.run(
-        Mode::Drive,
-        SendJob {
-            message,
-            text,
-            repeat,
-        },
-    )
+    target.run(Mode::Drive, job)
 }
 
 struct SendJob {
     message: Message,
     text: Option<String>,
     repeat: Option<(NonZeroU64, u64)>,
+}
+
+impl SendJob {
+    /// `spec`'s message, checked, and its text for the link's text queue.
+    fn new(spec: &Spec, repeat: Option<(NonZeroU64, u64)>) -> Result<SendJob, Failure> {
+        Ok(SendJob {
+            message: spec.build()?,
+            text: match spec {
+                Spec::Text { text } => Some(text.clone()),
+                _ => None,
+            },
+            repeat,
+        })
+    }
 }
 
 impl Job for SendJob {
@@ -238,18 +241,27 @@ impl Job for MonitorJob {
     fn run<T: Transport>(self, s: Session<T>) -> Result<(), Failure> {
         let stdout = std::io::stdout();
         let mut out = stdout.lock();
-        watch(s, self.json, self.count, &mut out, None)
+        watch(
+            s,
+            self.json,
+            self.count,
+            &mut out,
+            &mut std::io::stderr(),
+            None,
+        )
     }
 }
 
-/// `monitor`'s loop over any session, writing to `out`; `until`, for tests, ends it after
-/// that long (Ok). Each postback is printed once: a monitor session completes at most one
-/// per poll.
+/// `monitor`'s loop over any session, writing what it sees to `out` and its warnings (the
+/// transport's notes, silence) to `warn`, as `eprintln!` would: a warning that cannot be
+/// written is not a reason to stop watching. `until`, for tests, ends it after that long
+/// (Ok). Each postback is printed once: a monitor session completes at most one per poll.
 pub fn watch<T: Transport>(
     mut s: Session<T>,
     json: bool,
     count: Option<u64>,
     out: &mut impl Write,
+    warn: &mut impl Write,
     until: Option<Duration>,
 ) -> Result<(), Failure> {
     let start = Instant::now();
@@ -311,12 +323,13 @@ pub fn watch<T: Transport>(
         let clock_now = Instant::now();
         if clock_now >= notes_at {
             for note in s.take_notes() {
-                eprintln!("gimbalctl: warning: {note}");
+                let _ = writeln!(warn, "gimbalctl: warning: {note}");
             }
             notes_at = clock_now + NOTE_EVERY;
         }
         if clock_now >= warn_at {
-            eprintln!(
+            let _ = writeln!(
+                warn,
                 "gimbalctl: warning: no postback from {} for {:.1} s",
                 s.transport.name(),
                 (clock_now - last).as_secs_f64()
@@ -351,9 +364,9 @@ pub fn describe_frame(
         }
         None => out.extend_from_slice(
             format!(
-                "{class:<8} {}  [{}] {hex}: {why}\n",
+                "{class:<8} {}  {}: {why}\n",
                 f.id_text(),
-                f.data.len()
+                length_and_data(f, &hex)
             )
             .as_bytes(),
         ),
@@ -403,19 +416,30 @@ pub fn describe_frame(
                 let mut o = Obj::start(out, "foreign", Some(t), Some(id));
                 o.bool("extended", matches!(f.id, embedded_can::Id::Extended(_)))
                     .bool("remote", f.remote)
+                    .int("dlc", f.dlc as i64)
                     .str("data", &hex);
                 o.end();
             }
             None => out.extend_from_slice(
                 format!(
-                    "foreign  {}  {}[{}] {hex}\n",
+                    "foreign  {}  {}{}\n",
                     f.id_text(),
                     if f.remote { "remote " } else { "" },
-                    f.data.len()
+                    length_and_data(f, &hex)
                 )
                 .as_bytes(),
             ),
         },
+    }
+}
+
+/// `[DLC]` and the data in hex after a space, as candump writes them; a remote frame, or a
+/// data frame of no bytes, has the length alone.
+fn length_and_data(f: &Seen, hex: &str) -> String {
+    if hex.is_empty() {
+        format!("[{}]", f.dlc)
+    } else {
+        format!("[{}] {hex}", f.dlc)
     }
 }
 
@@ -448,7 +472,7 @@ fn vehicle_text(v: &VehicleFrame) -> String {
 mod tests {
     use super::*;
     use crate::transport::can::CanTransport;
-    use embedded_can::{nb::Can, Frame as _};
+    use embedded_can::{nb::Can, ExtendedId, Frame as _};
     use idu_gimbal::mock::{Bus, MockFrame};
     use idu_gimbal::sim::{SimConfig, Simulator};
     use idu_gimbal::wire::text;
@@ -475,18 +499,14 @@ mod tests {
 
     /// What `gimbalctl send --can` puts on the bus for `args`, as `ID#DATA`.
     fn sent_on_can(args: &[&str], repeat: Option<(NonZeroU64, u64)>) -> Vec<String> {
-        let bus: Bus<2, 64> = Bus::new(1);
+        sent_on(&Bus::new(1), args, repeat)
+    }
+
+    /// What `gimbalctl send --can` puts on `bus` for `args`, as `ID#DATA`.
+    fn sent_on(bus: &Bus<2, 64>, args: &[&str], repeat: Option<(NonZeroU64, u64)>) -> Vec<String> {
         let mut gimbal = bus.endpoint(1).unwrap();
-        let session = mock_session(&bus, Mode::Drive);
-        let s = spec(args);
-        let job = SendJob {
-            message: s.build().unwrap(),
-            text: match &s {
-                Spec::Text { text } => Some(text.clone()),
-                _ => None,
-            },
-            repeat,
-        };
+        let session = mock_session(bus, Mode::Drive);
+        let job = SendJob::new(&spec(args), repeat).unwrap();
         job.run(session).expect("sent");
         let mut frames = Vec::new();
         while let Ok(f) = gimbal.receive() {
@@ -536,9 +556,100 @@ mod tests {
         assert!(held.iter().all(|f| f == "00000F01#0F04E80300000000"));
     }
 
+    #[test]
+    fn send_on_can_repeats_a_message_of_two_frames_whole() {
+        let frames = sent_on_can(
+            &["look-at", "0", "0", "1000", "0", "0.009", "0"],
+            NonZeroU64::new(50).zip(Some(100)),
+        );
+        // The first, then a repeat at 50 and 100 ms; no zero rate (not a rate command).
+        let look_at = ["00000F01#0F08018403000000", "00000F01#0F08023FFE000000"];
+        assert_eq!(frames, [look_at, look_at, look_at].concat());
+    }
+
+    /// A bus whose transmitter fails half its calls (seeded, so the same calls each run):
+    /// `send` polls on until every frame of a six-frame text is on the bus, each once and
+    /// in order, as on a bus without faults.
+    #[test]
+    fn send_on_can_retries_until_the_bus_takes_every_frame() {
+        let text = ["text", "THE QUICK BROWN FOX JUMPS OVER THE LAZY DOG"];
+        let clean = sent_on_can(&text, None);
+        assert_eq!(clean.len(), 6, "{clean:?}");
+        let faulty = Bus::new(7).with_faults(idu_gimbal::mock::Faults {
+            tx_error: 0.5,
+            ..idu_gimbal::mock::Faults::NONE
+        });
+        assert_eq!(sent_on(&faulty, &text, None), clean);
+        assert!(faulty.stats().injected_errors >= 3, "{:?}", faulty.stats());
+    }
+
+    /// A writer that keeps, with what is written, when each line was ended (from `start`).
+    struct Stamped {
+        start: Instant,
+        text: String,
+        ended: Vec<Duration>,
+    }
+
+    impl Write for Stamped {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.text.push_str(std::str::from_utf8(buf).unwrap());
+            let at = self.start.elapsed();
+            self.ended
+                .extend(buf.iter().filter(|&&b| b == b'\n').map(|_| at));
+            Ok(buf.len())
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    /// A silent bus and one bus error before the start: the error's note at the first
+    /// second (notes are said at most once a second), the silence warned of after 1.5 s and
+    /// not again before 3 s. Only lower bounds are timed: the run ends at 2.5 s, a second
+    /// after the last line is due.
+    #[test]
+    fn monitor_says_notes_each_second_and_silence_each_1_5_s() {
+        let bus: Bus<2, 64> = Bus::new(6);
+        let session = mock_session(&bus, Mode::Monitor);
+        bus.inject_error(0, embedded_can::ErrorKind::Crc);
+        let mut warn = Stamped {
+            start: Instant::now(),
+            text: String::new(),
+            ended: Vec::new(),
+        };
+        let mut out = Vec::new();
+        watch(
+            session,
+            false,
+            None,
+            &mut out,
+            &mut warn,
+            Some(Duration::from_millis(2500)),
+        )
+        .unwrap();
+        assert!(out.is_empty());
+        let lines: Vec<&str> = warn.text.lines().collect();
+        assert_eq!(lines.len(), 2, "{}", warn.text);
+        assert!(
+            lines[0].starts_with("gimbalctl: warning: mock0: ")
+                && lines[0].ends_with("(1 new, 1 in all)"),
+            "{}",
+            lines[0]
+        );
+        assert!(
+            lines[1].starts_with("gimbalctl: warning: no postback from mock0 for 1."),
+            "{}",
+            lines[1]
+        );
+        assert!(warn.ended[0] >= NOTE_EVERY, "{:?}", warn.ended);
+        assert!(warn.ended[1] >= SILENCE_WARNING, "{:?}", warn.ended);
+    }
+
     /// Puts on the bus, from endpoint 1: another controller's command, the flight
-    /// controller's attitude, a text, a foreign standard frame and a remote frame, then the
-    /// simulated gimbal's postbacks.
+    /// controller's attitude, a text, a foreign standard frame, remote frames on the control,
+    /// GPS and text IDs, a control and an attitude frame too short, then the simulated gimbal's
+    /// postbacks.
     fn traffic(bus: &Bus<2, 64>) -> idu_gimbal::mock::Endpoint<'_, 2, 64> {
         let mut other = bus.endpoint(1).unwrap();
         let mut put = |f: MockFrame| other.transmit(&f).unwrap();
@@ -554,6 +665,14 @@ mod tests {
             put(ext(f.id, &f.data));
         }
         put(MockFrame::standard(0x123, &[1, 2, 3]).unwrap());
+        // Remote frames on three of the protocol's IDs: requests, not its frames.
+        let remote = |id, dlc| MockFrame::new_remote(ExtendedId::new(id).unwrap(), dlc).unwrap();
+        put(remote(ids::CONTROL, 8));
+        put(remote(ids::GPS, 0));
+        put(remote(ids::TEXT, 8));
+        // A control frame of no bytes and an attitude frame of two: malformed.
+        put(ext(ids::CONTROL, &[]));
+        put(ext(ids::ATTITUDE, &[1, 2]));
         let mut sim: Simulator =
             Simulator::new(SimConfig::default(), idu_gimbal::Instant::from_millis(0));
         for ms in [500, 1000] {
@@ -576,6 +695,7 @@ mod tests {
             false,
             Some(2),
             &mut out,
+            &mut std::io::sink(),
             Some(Duration::from_secs(5)),
         )
         .unwrap();
@@ -591,6 +711,11 @@ mod tests {
                 "text     02008201  (part) 48454C4C4F2C2047",
                 "text     02008202  \"HELLO, GIMBAL\"",
                 "foreign  123  [3] 010203",
+                "foreign  00000F01  remote [8]",
+                "foreign  0000FF15  remote [0]",
+                "foreign  02008201  remote [8]",
+                "control  00000F01  [0]: control frame must be 8 bytes, got 0",
+                "vehicle  0000FF13  [2] 0102: vehicle frame has 2 bytes, expected 8",
                 postback,
                 postback,
             ],
@@ -609,6 +734,7 @@ mod tests {
             true,
             Some(1),
             &mut out,
+            &mut std::io::sink(),
             Some(Duration::from_secs(5)),
         )
         .unwrap();
@@ -623,14 +749,46 @@ mod tests {
             .collect();
         assert_eq!(
             kinds,
-            ["command", "attitude", "text", "foreign", "postback"]
+            [
+                "command",
+                "attitude",
+                "text",
+                "foreign",
+                "foreign",
+                "foreign",
+                "foreign",
+                "malformed",
+                "malformed",
+                "postback"
+            ]
         );
         assert_eq!(objects[0]["command"], "pitch");
         assert_eq!(objects[2]["text"], "HELLO, GIMBAL");
         assert_eq!(objects[3]["id"], 0x123);
         assert_eq!(objects[3]["extended"], false);
-        assert_eq!(objects[4]["id"], 0x030F_0001);
-        assert_eq!(objects[4]["gimbal_model"], "X30/X30GT");
+        assert_eq!(
+            (
+                &objects[3]["remote"],
+                &objects[3]["dlc"],
+                &objects[3]["data"]
+            ),
+            (&false.into(), &3.into(), &"010203".into())
+        );
+        assert_eq!(objects[4]["id"], 0x0000_0F01);
+        assert_eq!(
+            (&objects[4]["extended"], &objects[4]["remote"]),
+            (&true.into(), &true.into())
+        );
+        assert_eq!(
+            (&objects[4]["dlc"], &objects[4]["data"]),
+            (&8.into(), &"".into())
+        );
+        assert_eq!(
+            (&objects[7]["class"], &objects[7]["data"]),
+            (&"control".into(), &"".into())
+        );
+        assert_eq!(objects[9]["id"], 0x030F_0001);
+        assert_eq!(objects[9]["gimbal_model"], "X30/X30GT");
         assert!(objects.iter().all(|o| o["t"].as_f64().unwrap() > 1.6e9));
     }
 

@@ -34,6 +34,8 @@ pub trait BusFault {
 pub struct Seen {
     pub id: Id,
     pub remote: bool,
+    /// The length code: the data's length, or for a remote frame the length it asks for.
+    pub dlc: usize,
     pub data: Vec<u8>,
 }
 
@@ -142,6 +144,7 @@ where
                 log.frames.push(Seen {
                     id: f.id(),
                     remote: f.is_remote_frame(),
+                    dlc: f.dlc(),
                     data: f.data().to_vec(),
                 });
             }
