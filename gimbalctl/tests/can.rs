@@ -3,7 +3,8 @@
 //! module, which CI's kernel lacks: `tools/socketcan/run_check.sh` checks them by hand,
 //! with can-utils at the other end. The CAN transport itself (the library's `CanPort<C>`
 //! under `send`, `monitor` and `mavlink`) is tested on the core's mock bus by the unit
-//! tests (`send_monitor::tests`, `mavlink::tests`); only the socket's opening is SocketCAN's.
+//! tests (`transport::can::tests`, `send_monitor::tests`, `mavlink::tests`); only the
+//! socket's opening is SocketCAN's.
 
 #![cfg(target_os = "linux")]
 

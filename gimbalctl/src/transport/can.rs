@@ -86,12 +86,19 @@ impl TapLog {
         if fatal && self.fatal.is_none() {
             self.fatal = Some(what.clone());
         }
-        if let Some(f) = self.faults.iter_mut().find(|f| f.what == what) {
+        // Bounded: a driver has few kinds of error, but an error frame's text can carry a
+        // number (the bit where arbitration was lost); past MAX_KINDS kinds, the rest are
+        // counted together.
+        let kind = if self.faults.len() < MAX_KINDS || self.faults.iter().any(|f| f.what == what) {
+            what.as_str()
+        } else {
+            MORE_KINDS
+        };
+        if let Some(f) = self.faults.iter_mut().find(|f| f.what == kind) {
             f.count += 1;
-        } else if self.faults.len() < 64 {
-            // Bounded: a driver has few kinds of error.
+        } else {
             self.faults.push(Fault {
-                what: what.clone(),
+                what: kind.to_owned(),
                 count: 1,
                 told: 0,
             });
@@ -99,6 +106,12 @@ impl TapLog {
         self.last_fault = Some(what);
     }
 }
+
+/// The kinds of driver error [`TapLog`] counts apart.
+const MAX_KINDS: usize = 64;
+
+/// Where [`TapLog`] counts the kinds beyond [`MAX_KINDS`].
+const MORE_KINDS: &str = "errors of other kinds";
 
 /// The received-frame bound of [`TapLog`] between two `take_frames` (a monitor that stops
 /// reading them loses the oldest rather than grow without end).
@@ -448,6 +461,61 @@ mod socketcan_open {
                 if matches!(e.raw_os_error(), Some(libc::ENETDOWN | libc::ENODEV | libc::ENXIO | libc::EBADF)))
         }
     }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        /// Each SocketCAN error in words, and whether it ends the session (the interface
+        /// gone or its socket unusable).
+        #[test]
+        fn socketcan_errors_say_what_they_mean_and_which_end_the_session() {
+            use socketcan::CanError as E;
+            let io = |errno| socketcan::Error::Io(std::io::Error::from_raw_os_error(errno));
+            for (e, starts, fatal) in [
+                (socketcan::Error::Can(E::BusOff), "bus off: ", false),
+                (socketcan::Error::Can(E::NoAck), "no ACK: ", false),
+                (
+                    socketcan::Error::Can(E::TransmitTimeout),
+                    "error frame: ",
+                    false,
+                ),
+                (io(libc::ENOBUFS), "transmit queue full ", false),
+                (io(libc::ENETDOWN), "the interface went down", true),
+                (io(libc::ENODEV), "the interface went away ", true),
+                (io(libc::ENXIO), "the interface went away ", true),
+                (io(libc::EBADF), "I/O error: ", true),
+                (io(libc::EIO), "I/O error: ", false),
+            ] {
+                let said = e.describe();
+                assert!(said.starts_with(starts), "{e:?}: {said}");
+                assert_eq!(e.is_fatal(), fatal, "{e:?}");
+            }
+        }
+
+        /// The interfaces of link type CAN, sorted, or "none": read again here from
+        /// /sys/class/net, where `lo` (link type 772) always is and is never listed.
+        #[test]
+        fn the_can_interfaces_listed_are_those_of_link_type_can() {
+            let mut can: Vec<String> = std::fs::read_dir("/sys/class/net")
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .filter(|n| {
+                    std::fs::read_to_string(format!("/sys/class/net/{n}/type"))
+                        .is_ok_and(|t| t.trim() == "280")
+                })
+                .collect();
+            can.sort();
+            let expected = if can.is_empty() {
+                "none".to_owned()
+            } else {
+                can.join(", ")
+            };
+            let listed = can_interfaces();
+            assert_eq!(listed, expected);
+            assert!(!listed.split(", ").any(|n| n == "lo"), "{listed}");
+        }
+    }
 }
 
 #[cfg(test)]
@@ -458,5 +526,141 @@ impl BusFault for idu_gimbal::mock::MockError {
 
     fn is_fatal(&self) -> bool {
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transport::Session;
+    use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
+
+    fn session(bus: &Bus<2, 64>) -> Session<CanTransport<Endpoint<'_, 2, 64>>> {
+        Session::new(CanTransport::new(
+            bus.endpoint(0).unwrap(),
+            "mock0",
+            Mode::Drive,
+        ))
+    }
+
+    /// `n` frames of another device from endpoint 1.
+    fn flood(other: &mut Endpoint<'_, 2, 64>, n: usize) {
+        for i in 0..n {
+            other
+                .transmit(&MockFrame::standard(0x123, &[i as u8]).unwrap())
+                .unwrap();
+        }
+    }
+
+    /// A poll takes at most the link's receive bound (32) and says whether it emptied the
+    /// bus; a pump polls on until one did.
+    #[test]
+    fn a_poll_says_whether_it_emptied_the_bus_and_a_pump_polls_until_one_did() {
+        let bus: Bus<2, 64> = Bus::new(1);
+        let mut s = session(&bus);
+        let mut other = bus.endpoint(1).unwrap();
+        let bound = u32::from(s.link.config().max_rx_per_poll.get());
+        assert_eq!(bound, 32);
+        let now = Instant::from_millis(0);
+        flood(&mut other, 40);
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert_eq!(s.link.stats().frames_received, 32);
+        assert!(!s.transport.drained());
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert_eq!(s.link.stats().frames_received, 40);
+        assert!(s.transport.drained());
+        // Exactly the bound, then nothing: the first poll cannot know it emptied the bus.
+        flood(&mut other, 32);
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert!(!s.transport.drained());
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert!(s.transport.drained());
+        assert_eq!(s.link.stats().frames_received, 72);
+        // 60 in one pump.
+        flood(&mut other, 60);
+        s.pump(now).unwrap();
+        assert_eq!(s.link.stats().frames_received, 132);
+        assert!(s.transport.drained());
+    }
+
+    /// The same driver error twice: one kind, counted twice, said once with both.
+    #[test]
+    fn an_error_of_one_kind_is_counted_each_time() {
+        let bus: Bus<2, 64> = Bus::new(2);
+        let mut s = session(&bus);
+        let now = Instant::from_millis(0);
+        for _ in 0..2 {
+            bus.inject_error(0, embedded_can::ErrorKind::Crc);
+            s.transport.poll(&mut s.link, now).unwrap();
+        }
+        let kind = embedded_can::ErrorKind::Crc.to_string();
+        assert_eq!(s.counters()[2], format!("bus errors 2  last: {kind}"));
+        assert_eq!(s.take_notes(), [format!("mock0: {kind} (2 new, 2 in all)")]);
+        assert!(s.take_notes().is_empty());
+        // One more: new since the last note.
+        bus.inject_error(0, embedded_can::ErrorKind::Crc);
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert_eq!(s.take_notes(), [format!("mock0: {kind} (1 new, 3 in all)")]);
+    }
+
+    /// Past 64 kinds of driver error, the rest are counted together: none goes uncounted.
+    #[test]
+    fn errors_of_more_kinds_than_are_kept_apart_are_all_counted() {
+        let bus: Bus<2, 64> = Bus::new(4);
+        let mut s = session(&bus);
+        for i in 0..70 {
+            s.transport
+                .log
+                .borrow_mut()
+                .fault(format!("kind {i}"), false);
+        }
+        s.transport.log.borrow_mut().fault("kind 3".into(), false);
+        assert_eq!(s.counters()[2], "bus errors 71  last: kind 3");
+        let notes = s.take_notes();
+        assert_eq!(notes.len(), 65);
+        assert_eq!(notes[3], "mock0: kind 3 (2 new, 2 in all)");
+        assert_eq!(notes[63], "mock0: kind 63 (1 new, 1 in all)");
+        assert_eq!(notes[64], "mock0: errors of other kinds (6 new, 6 in all)");
+    }
+
+    /// Something to send: queued on the link until the bus takes it.
+    #[test]
+    fn a_frame_waits_to_be_sent_until_the_bus_takes_it() {
+        let bus: Bus<2, 64> = Bus::new(3);
+        let mut s = session(&bus);
+        let now = Instant::from_millis(0);
+        assert!(!s.has_transmit());
+        let center = idu_gimbal::wire::control::GimbalCommand::Recenter;
+        s.link.send(center).unwrap();
+        assert!(s.has_transmit());
+        s.transport.poll(&mut s.link, now).unwrap();
+        assert!(!s.has_transmit());
+        assert_eq!(s.link.stats().frames_sent, 1);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn interface_names_are_checked_as_linux_takes_them() {
+        for name in ["can0", "vcan0", "slcan0", "a", "fifteen-bytes-0"] {
+            assert!(check_name(name).is_ok(), "{name}");
+        }
+        for name in [
+            "",
+            "sixteen-bytes-00",
+            "can0/x",
+            "can 0",
+            "can\t0",
+            "can:0",
+            ".",
+            "..",
+        ] {
+            let Err(Failure::Usage(e)) = check_name(name) else {
+                panic!("{name:?} taken");
+            };
+            assert!(
+                e.starts_with(&format!("--can {name:?}: not an interface name")),
+                "{e}"
+            );
+        }
     }
 }
