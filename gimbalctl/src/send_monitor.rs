@@ -471,18 +471,16 @@ fn vehicle_text(v: &VehicleFrame) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transport::can::CanTransport;
+    use crate::transport::can::mock_session;
     use embedded_can::{nb::Can, ExtendedId, Frame as _};
     use idu_gimbal::mock::{Bus, MockFrame};
     use idu_gimbal::sim::{SimConfig, Simulator};
     use idu_gimbal::wire::text;
 
-    /// A session on endpoint 0 of the core's mock bus, named `mock0`.
-    fn mock_session<const N: usize>(
-        bus: &Bus<2, N>,
-        mode: Mode,
-    ) -> Session<CanTransport<idu_gimbal::mock::Endpoint<'_, 2, N>>> {
-        Session::new(CanTransport::new(bus.endpoint(0).unwrap(), "mock0", mode))
+    /// The seconds a silence warning on `mock0` says, or `None` for any other line.
+    fn silence_secs(line: &str) -> Option<f64> {
+        let rest = line.strip_prefix("gimbalctl: warning: no postback from mock0 for ")?;
+        Some(rest.strip_suffix(" s").unwrap().parse().unwrap())
     }
 
     fn spec(args: &[&str]) -> Spec {
@@ -634,19 +632,14 @@ mod tests {
         )
         .unwrap();
         assert!(out.is_empty());
-        let silent = "gimbalctl: warning: no postback from mock0 for ";
         type Lines<'a> = Vec<(&'a str, Duration)>;
         let (silence, notes): (Lines, Lines) = warn
             .text
             .lines()
             .zip(warn.ended)
-            .partition(|(l, _)| l.starts_with(silent));
+            .partition(|(l, _)| silence_secs(l).is_some());
         assert_eq!(silence.len(), 1, "{}", warn.text);
-        let secs: f64 = silence[0].0[silent.len()..]
-            .trim_end_matches(" s")
-            .parse()
-            .unwrap();
-        assert!(secs >= 1.5, "{:?}", silence[0]);
+        assert!(silence_secs(silence[0].0) >= Some(1.5), "{:?}", silence[0]);
         assert!(silence[0].1 >= SILENCE_WARNING, "{:?}", silence[0]);
         assert!((1..=6).contains(&notes.len()), "{}", warn.text);
         assert!(notes[0].1 >= NOTE_EVERY, "{:?}", notes[0]);
@@ -714,9 +707,7 @@ mod tests {
         // A postback puts the silence warning 1.5 s after it: any said here (none, unless
         // the test stalls that long) says at least that much.
         for line in String::from_utf8(warn).unwrap().lines() {
-            if let Some(rest) = line.strip_prefix("gimbalctl: warning: no postback from mock0 for ")
-            {
-                let secs: f64 = rest.trim_end_matches(" s").parse().unwrap();
+            if let Some(secs) = silence_secs(line) {
                 assert!(secs >= 1.5, "{line}");
             }
         }

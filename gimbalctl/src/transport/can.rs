@@ -529,6 +529,16 @@ impl BusFault for idu_gimbal::mock::MockError {
     }
 }
 
+/// A session on endpoint 0 of the core's mock bus, named `mock0`: the CAN path of the unit
+/// tests here and in `send_monitor`.
+#[cfg(test)]
+pub fn mock_session<const N: usize>(
+    bus: &idu_gimbal::mock::Bus<2, N>,
+    mode: Mode,
+) -> super::Session<CanTransport<idu_gimbal::mock::Endpoint<'_, 2, N>>> {
+    super::Session::new(CanTransport::new(bus.endpoint(0).unwrap(), "mock0", mode))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -536,11 +546,7 @@ mod tests {
     use idu_gimbal::mock::{Bus, Endpoint, MockFrame};
 
     fn session(bus: &Bus<2, 64>) -> Session<CanTransport<Endpoint<'_, 2, 64>>> {
-        Session::new(CanTransport::new(
-            bus.endpoint(0).unwrap(),
-            "mock0",
-            Mode::Drive,
-        ))
+        mock_session(bus, Mode::Drive)
     }
 
     /// `n` frames of another device from endpoint 1.
