@@ -25,12 +25,17 @@ pub const SILENCE_WARNING: Duration = Duration::from_millis(1500);
 pub fn control_commands(spec: &Spec) -> Result<Vec<Command>, Failure> {
     match spec.build()? {
         Message::Control(cmds) => Ok(cmds),
-        Message::Vehicle(_) | Message::Text(_) => Err(Failure::Usage(format!(
-            "{}: only control commands have a serial/TCP frame (--tcp, --serial); \
-             vehicle and text frames exist only on CAN (--can)",
-            spec.name()
-        ))),
+        Message::Vehicle(_) | Message::Text(_) => Err(no_stream_frame(spec)),
     }
+}
+
+/// The usage error for a vehicle or text command asked of a serial/TCP transport.
+fn no_stream_frame(spec: &Spec) -> Failure {
+    Failure::Usage(format!(
+        "{}: only control commands have a serial/TCP frame (--tcp, --serial); \
+         vehicle and text frames exist only on CAN (--can)",
+        spec.name()
+    ))
 }
 
 /// The zero rate on the same peripheral, for a rate command (the end of a rate hold).
@@ -55,9 +60,9 @@ pub fn send(
     repeat: Option<(NonZeroU64, u64)>,
 ) -> Result<(), Failure> {
     let job = SendJob::new(spec, repeat)?;
-    if !target.carries_vehicle() {
+    if !target.carries_vehicle() && !matches!(job.message, Message::Control(_)) {
         // Vehicle and text frames exist only on CAN: a usage error before connecting.
-        control_commands(spec)?;
+        return Err(no_stream_frame(spec));
     }
     target.run(Mode::Drive, job)
 }
