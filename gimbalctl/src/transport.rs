@@ -345,4 +345,95 @@ mod tests {
             }
         }
     }
+
+    /// Each rejected form says what was wrong, whole.
+    #[test]
+    fn serial_spec_errors_say_what_was_wrong() {
+        let message = |text: &str| match SerialSpec::parse("--serial", text, GIMBAL_BAUD) {
+            Err(Failure::Usage(m)) => m,
+            other => panic!("{text:?}: {other:?}"),
+        };
+        let expected = "; expected PATH[:BAUD] with BAUD in [50, 4000000] (default 115200)";
+        for (text, why) in [
+            ("/dev/ttyUSB0:", "no baud rate after /dev/ttyUSB0:"),
+            ("/dev/ttyUSB0:49", "baud rate 49 is out of range"),
+            ("/dev/ttyUSB0:4000001", "baud rate 4000001 is out of range"),
+            (":115200", "no path"),
+        ] {
+            assert_eq!(message(text), format!("--serial {text}: {why}{expected}"));
+        }
+        // The bounds themselves are taken.
+        for baud in [50, 4_000_000] {
+            let spec = SerialSpec::parse("--serial", &format!("/dev/ttyS0:{baud}"), 0).unwrap();
+            assert_eq!(spec.baud, baud);
+        }
+    }
+
+    fn gimbal(tcp: Option<&str>, can: Option<&str>, serial: Option<&str>) -> GimbalArgs {
+        GimbalArgs {
+            tcp: tcp.map(str::to_owned),
+            can: can.map(str::to_owned),
+            serial: serial.map(str::to_owned),
+        }
+    }
+
+    /// Each option gives its own target, checked by its own rules.
+    #[test]
+    fn targets_from_each_option() {
+        let target = |args: GimbalArgs| Target::from_args(&args);
+        assert_eq!(
+            target(gimbal(Some("127.0.0.1:2000"), None, None)).unwrap(),
+            Target::Tcp("127.0.0.1:2000".into())
+        );
+        assert_eq!(
+            target(gimbal(None, None, Some("/dev/ttyUSB0:9600"))).unwrap(),
+            Target::Serial(SerialSpec {
+                path: "/dev/ttyUSB0".into(),
+                baud: 9600
+            })
+        );
+        let usage = |args: GimbalArgs| match Target::from_args(&args) {
+            Err(Failure::Usage(m)) => m,
+            other => panic!("{args:?}: {other:?}"),
+        };
+        assert_eq!(
+            usage(gimbal(Some("gimbal:port"), None, None)),
+            "--tcp \"gimbal:port\": expected HOST:PORT or HOST (port 2000) with PORT in [0, 65535]"
+        );
+        let one = "give exactly one of --tcp HOST:PORT, --can IFACE, --serial PATH[:BAUD]";
+        assert_eq!(usage(gimbal(None, None, None)), one);
+        assert_eq!(usage(gimbal(Some("h:1"), Some("can0"), None)), one);
+        if cfg!(target_os = "linux") {
+            assert_eq!(
+                target(gimbal(None, Some("vcan0"), None)).unwrap(),
+                Target::Can("vcan0".into())
+            );
+            assert_eq!(
+                usage(gimbal(None, Some("can 0"), None)),
+                "--can \"can 0\": not an interface name (1 to 15 characters, no '/', ':' or \
+                 spaces), e.g. can0"
+            );
+        }
+    }
+
+    /// What a target is said to be, and which carry vehicle and text frames (CAN only).
+    #[test]
+    fn targets_described() {
+        let serial = Target::Serial(SerialSpec {
+            path: "/dev/ttyUSB0".into(),
+            baud: 115_200,
+        });
+        let tcp = Target::Tcp("10.0.0.2:2000".into());
+        let can = Target::Can("can0".into());
+        assert_eq!(tcp.describe(), "the serial server at 10.0.0.2:2000");
+        assert_eq!(can.describe(), "the CAN bus can0");
+        assert_eq!(
+            serial.describe(),
+            "the UART on /dev/ttyUSB0 at 115200 baud 8N1"
+        );
+        assert_eq!(
+            [&tcp, &can, &serial].map(Target::carries_vehicle),
+            [false, true, false]
+        );
+    }
 }
