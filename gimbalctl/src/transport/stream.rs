@@ -504,29 +504,32 @@ mod tests {
         );
     }
 
-    /// The group a device belongs to, named as the system names the test's own (the
-    /// owner of a file it creates): `id -gn`.
+    /// The group a device belongs to, named as coreutils' `stat` names a file's group (a
+    /// file the test creates: its group is the test's, or a setgid directory's).
     #[cfg(unix)]
     #[test]
     fn the_owner_hint_names_the_device_s_group() {
         let path = std::env::temp_dir().join(format!("gimbalctl-owner-{}", std::process::id()));
         std::fs::write(&path, b"").unwrap();
         let hint = owner_hint(path.to_str().unwrap());
+        let stat = |format: &str| {
+            let out = std::process::Command::new("stat")
+                .args(["-c", format])
+                .arg(&path)
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "stat -c {format}");
+            String::from_utf8(out.stdout).unwrap().trim().to_owned()
+        };
+        let (name, gid) = (stat("%G"), stat("%g"));
         std::fs::remove_file(&path).unwrap();
-        let id = std::process::Command::new("id")
-            .arg("-gn")
-            .output()
-            .unwrap();
-        let expected = if id.status.success() {
-            let g = String::from_utf8(id.stdout).unwrap().trim().to_owned();
-            format!(
-                "the device belongs to group {g}: add yourself to it (sudo usermod -aG {g} \
-                 $USER, then log in again) or run as root; "
-            )
+        let expected = if name == "UNKNOWN" {
+            format!("the device belongs to group id {gid}; ")
         } else {
-            let gid = std::process::Command::new("id").arg("-g").output().unwrap();
-            let gid = String::from_utf8(gid.stdout).unwrap();
-            format!("the device belongs to group id {}; ", gid.trim())
+            format!(
+                "the device belongs to group {name}: add yourself to it (sudo usermod -aG \
+                 {name} $USER, then log in again) or run as root; "
+            )
         };
         assert_eq!(hint, expected);
         assert_eq!(owner_hint("/nonexistent/tty"), "");
