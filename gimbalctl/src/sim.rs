@@ -72,6 +72,35 @@ impl NoFrame {
     }
 }
 
+/// Failures to accept a waiting connection (out of descriptors, say), which come back at
+/// every tick while it waits: said at most once a second, with how many came between.
+#[derive(Default)]
+struct AcceptFailures {
+    said_at: Option<StdInstant>,
+    unsaid: u64,
+}
+
+impl AcceptFailures {
+    /// The line to say for the failure `e` at `now`, if one is due.
+    fn note(&mut self, e: &std::io::Error, now: StdInstant) -> Option<String> {
+        if self
+            .said_at
+            .is_some_and(|t| now.saturating_duration_since(t) < Duration::from_secs(1))
+        {
+            self.unsaid += 1;
+            return None;
+        }
+        self.said_at = Some(now);
+        Some(match std::mem::take(&mut self.unsaid) {
+            0 => format!("gimbalctl sim: accept failed: {e}"),
+            n => format!(
+                "gimbalctl sim: accept failed: {e} ({} since the last line)",
+                counted(n, "more failure")
+            ),
+        })
+    }
+}
+
 /// `gimbalctl sim [--listen ADDR] [--exit-after-ms MS] [--max-clients N]`.
 pub fn run(
     listen: &str,
@@ -105,6 +134,7 @@ pub fn run(
         now(),
     );
     let mut clients: Vec<Client> = Vec::new();
+    let mut accept_failures = AcceptFailures::default();
     let mut buf = [0u8; 4096];
     loop {
         if time_is_up(start, exit_after_ms) {
@@ -138,7 +168,9 @@ pub fn run(
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
                 Err(e) => {
                     // Running out of descriptors and the like: report, keep serving.
-                    eprintln!("gimbalctl sim: accept failed: {e}");
+                    if let Some(line) = accept_failures.note(&e, StdInstant::now()) {
+                        eprintln!("{line}");
+                    }
                     break;
                 }
             }
@@ -385,5 +417,35 @@ impl idu_gimbal::port::Uart for PtyMaster {
             Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
             Err(_) => Err(()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first failure is said, the next ones in the same second counted, and said with
+    /// the next line a second or more after the last.
+    #[test]
+    fn accept_failures_are_said_once_a_second() {
+        let e = std::io::Error::from_raw_os_error(24);
+        let t0 = StdInstant::now();
+        let at = |ms| t0 + Duration::from_millis(ms);
+        let mut f = AcceptFailures::default();
+        let said = "gimbalctl sim: accept failed: Too many open files (os error 24)";
+        assert_eq!(f.note(&e, at(0)).as_deref(), Some(said));
+        for ms in [5, 500, 999] {
+            assert_eq!(f.note(&e, at(ms)), None, "{ms} ms");
+        }
+        assert_eq!(
+            f.note(&e, at(1000)),
+            Some(format!("{said} (3 more failures since the last line)"))
+        );
+        assert_eq!(f.note(&e, at(1500)), None);
+        assert_eq!(
+            f.note(&e, at(9000)),
+            Some(format!("{said} (1 more failure since the last line)"))
+        );
+        assert_eq!(f.note(&e, at(10_000)).as_deref(), Some(said));
     }
 }

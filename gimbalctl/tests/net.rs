@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::process::Stdio;
+use std::process::{Command, Stdio};
 use std::thread;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -169,6 +169,102 @@ fn no_frame(log: &str) -> (u64, u64, u64) {
         }
     }
     sum
+}
+
+/// Each command logged once, not each repeat (a rate hold sends one every 50 ms); a
+/// client whose connection is reset dropped with the error said.
+#[test]
+fn sim_logs_each_command_once_and_says_a_reset() {
+    let (_sim, addr, log) = start_sim_logged(&["--exit-after-ms", "8000"], Duration::from_secs(10));
+    let mut a = connect(&addr);
+    let peer = a.local_addr().unwrap();
+    // Pitch -30 three times in one write, then -20 (-200 = FF38), then -30 again.
+    let minus_30 = tcp_frame(&unhex("0F0802D4FE000000"));
+    a.write_all(&minus_30.repeat(3)).unwrap();
+    a.write_all(&tcp_frame(&unhex("0F080238FF000000"))).unwrap();
+    a.write_all(&minus_30).unwrap();
+    let logged = |log: &Log| -> Vec<String> {
+        let prefix = format!("gimbalctl sim: {peer}: pitch ");
+        log.text()
+            .lines()
+            .filter_map(|l| l.strip_prefix(&prefix).map(str::to_owned))
+            .collect()
+    };
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while logged(&log).len() < 3 {
+        assert!(Instant::now() < deadline, "{}", log.text());
+        thread::sleep(Duration::from_millis(5));
+    }
+    // A tick for any line more to come.
+    thread::sleep(Duration::from_millis(50));
+    assert_eq!(logged(&log), ["-30", "-20", "-30"], "{}", log.text());
+    // Closed while holding a postback unread: the kernel resets the connection.
+    a.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    assert!(a.peek(&mut [0; 1]).unwrap() > 0, "a postback");
+    drop(a);
+    log.wait(
+        &format!("gimbalctl sim: {peer}: Connection reset by peer (os error 104)"),
+        Duration::from_secs(5),
+    );
+    assert!(!log.has(&format!("{peer} disconnected")), "{}", log.text());
+}
+
+/// Out of file descriptors, the sim keeps serving the clients it has and says why it takes
+/// no more, at most once a second (the failure comes back at every tick).
+#[test]
+fn sim_out_of_descriptors_keeps_serving_and_says_so_once_a_second() {
+    // stdin, stdout, stderr and the listener leave four of eight descriptors for clients.
+    let mut child = Command::new("sh")
+        .args(["-c", "ulimit -n 8 && exec \"$0\" \"$@\"", BIN])
+        .args(["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "2500"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stdout = lines(child.stdout.take().unwrap());
+    let log = Log::collect(child.stderr.take().unwrap());
+    let mut sim = Guard(child);
+    let first = stdout.recv_timeout(Duration::from_secs(10)).unwrap();
+    let addr = first.rsplit(' ').next().unwrap().to_owned();
+    let mut clients: Vec<TcpStream> = (0..6).map(|_| connect(&addr)).collect();
+    log.wait(
+        "accept failed: Too many open files (os error 24)",
+        Duration::from_secs(5),
+    );
+    // Four, unless the process holds more descriptors than the three and its listener.
+    let text = log.text();
+    let served = text.matches(" connected\n").count();
+    assert!((1..6).contains(&served), "{text}");
+    // Those taken, the first in line, are served: each gets a postback.
+    for c in &mut clients[..served] {
+        read_postbacks(c, 1);
+    }
+    assert_eq!(
+        wait_with_timeout(&mut sim.0, Duration::from_secs(10)),
+        Some(0)
+    );
+    let text = log.text();
+    assert_eq!(text.matches(" connected\n").count(), served, "{text}");
+    let failures: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("accept failed"))
+        .collect();
+    // 2.5 s: three lines at the most (about 400 failures at one a tick).
+    assert!((1..=3).contains(&failures.len()), "{text}");
+    let said = "gimbalctl sim: accept failed: Too many open files (os error 24)";
+    assert_eq!(failures[0], said);
+    for later in &failures[1..] {
+        let count = later
+            .strip_prefix(&format!("{said} ("))
+            .and_then(|rest| rest.strip_suffix(" since the last line)"))
+            .and_then(|n| {
+                n.strip_suffix(" more failures")
+                    .or(n.strip_suffix(" more failure"))
+            })
+            .and_then(|n| n.parse::<u32>().ok());
+        assert!(count.is_some_and(|n| n >= 1), "{later}");
+    }
 }
 
 #[test]
