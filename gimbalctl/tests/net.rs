@@ -214,18 +214,17 @@ fn sim_logs_each_command_once_and_says_a_reset() {
 #[test]
 fn sim_out_of_descriptors_keeps_serving_and_says_so_once_a_second() {
     // stdin, stdout, stderr and the listener leave four of eight descriptors for clients.
-    let mut child = Command::new("sh")
-        .args(["-c", "ulimit -n 8 && exec \"$0\" \"$@\"", BIN])
+    let mut sh = Command::new("sh");
+    sh.args(["-c", "ulimit -n 8 && exec \"$0\" \"$@\"", BIN])
         .args(["sim", "--listen", "127.0.0.1:0", "--exit-after-ms", "2500"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stdout = lines(child.stdout.take().unwrap());
-    let log = Log::collect(child.stderr.take().unwrap());
-    let mut sim = Guard(child);
-    let first = stdout.recv_timeout(Duration::from_secs(10)).unwrap();
+        .stderr(Stdio::piped());
+    let (mut sim, first, log) = start_command(
+        sh,
+        "gimbalctl sim: listening on 127.0.0.1:",
+        Duration::from_secs(10),
+    );
     let addr = first.rsplit(' ').next().unwrap().to_owned();
     let mut clients: Vec<TcpStream> = (0..6).map(|_| connect(&addr)).collect();
     log.wait(

@@ -399,13 +399,19 @@ pub fn spawn(args: &[&str]) -> (Guard, thread::JoinHandle<String>, Log) {
 /// waits up to `within` for its first stdout line, which must start with `says` (where it
 /// listens, say): the guard, that line, its stderr. The rest of stdout is drained.
 pub fn start(args: &[&str], says: &str, within: Duration) -> (Guard, String, Log) {
-    let mut child = command(args).spawn().expect("spawn gimbalctl");
+    start_command(command(args), says, within)
+}
+
+/// [`start`] for a command built by the caller (gimbalctl run through a shell, say), its
+/// stdout and stderr piped.
+pub fn start_command(mut command: Command, says: &str, within: Duration) -> (Guard, String, Log) {
+    let mut child = command.spawn().expect("spawn gimbalctl");
     let stdout = lines(child.stdout.take().unwrap());
     let stderr = Log::collect(child.stderr.take().unwrap());
     let guard = Guard(child);
     let first = stdout
         .recv_timeout(within)
-        .unwrap_or_else(|e| panic!("gimbalctl {args:?} said nothing ({e}): {}", stderr.text()));
+        .unwrap_or_else(|e| panic!("{command:?} said nothing ({e}): {}", stderr.text()));
     assert!(first.starts_with(says), "{first}");
     (guard, first, stderr)
 }
