@@ -428,11 +428,19 @@ mod tests {
         assert_eq!(port.read_now(&mut buf), Ok(3));
         assert_eq!(&buf[..3], b"abc");
         drop(server);
+        // Nothing to read until the server's FIN comes (its delivery may be deferred too).
+        let deadline = std::time::Instant::now() + Duration::from_secs(5);
+        let ended = loop {
+            match port.read_now(&mut [0; 8]) {
+                Ok(0) => {
+                    assert!(std::time::Instant::now() < deadline, "never ended");
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                other => break other,
+            }
+        };
         let name = port.name.clone();
-        assert_eq!(
-            port.read_now(&mut [0; 8]),
-            Err(Ended(format!("{name} closed the connection")))
-        );
+        assert_eq!(ended, Err(Ended(format!("{name} closed the connection"))));
     }
 
     /// A write that finds no room takes nothing (the server not reading); one after the
