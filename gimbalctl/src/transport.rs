@@ -337,22 +337,16 @@ mod tests {
             "/dev/ttyUSB0:0",
             "/dev/ttyUSB0:99999999999",
         ] {
-            match p(bad) {
-                Err(Failure::Usage(m)) => {
-                    assert!(m.contains("--serial") && m.contains("[50, 4000000]"), "{m}")
-                }
-                other => panic!("{bad:?}: {other:?}"),
-            }
+            let m = usage_message(bad, p(bad));
+            assert!(m.contains("--serial") && m.contains("[50, 4000000]"), "{m}");
         }
     }
 
     /// Each rejected form says what was wrong, whole.
     #[test]
     fn serial_spec_errors_say_what_was_wrong() {
-        let message = |text: &str| match SerialSpec::parse("--serial", text, GIMBAL_BAUD) {
-            Err(Failure::Usage(m)) => m,
-            other => panic!("{text:?}: {other:?}"),
-        };
+        let message =
+            |text: &str| usage_message(text, SerialSpec::parse("--serial", text, GIMBAL_BAUD));
         let expected = "; expected PATH[:BAUD] with BAUD in [50, 4000000] (default 115200)";
         for (text, why) in [
             ("/dev/ttyUSB0:", "no baud rate after /dev/ttyUSB0:"),
@@ -366,6 +360,17 @@ mod tests {
         for baud in [50, 4_000_000] {
             let spec = SerialSpec::parse("--serial", &format!("/dev/ttyS0:{baud}"), 0).unwrap();
             assert_eq!(spec.baud, baud);
+        }
+    }
+
+    /// The message of a usage error; any other result fails the test, naming `input`.
+    fn usage_message<T: std::fmt::Debug>(
+        input: impl std::fmt::Debug,
+        result: Result<T, Failure>,
+    ) -> String {
+        match result {
+            Err(Failure::Usage(m)) => m,
+            other => panic!("{input:?}: {other:?}"),
         }
     }
 
@@ -392,10 +397,7 @@ mod tests {
                 baud: 9600
             })
         );
-        let usage = |args: GimbalArgs| match Target::from_args(&args) {
-            Err(Failure::Usage(m)) => m,
-            other => panic!("{args:?}: {other:?}"),
-        };
+        let usage = |args: GimbalArgs| usage_message(&args, Target::from_args(&args));
         assert_eq!(
             usage(gimbal(Some("gimbal:port"), None, None)),
             "--tcp \"gimbal:port\": expected HOST:PORT or HOST (port 2000) with PORT in [0, 65535]"

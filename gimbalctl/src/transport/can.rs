@@ -89,19 +89,19 @@ impl TapLog {
         // Bounded: a driver has few kinds of error, but an error frame's text can carry a
         // number (the bit where arbitration was lost); past MAX_KINDS kinds, the rest are
         // counted together.
-        let kind = if self.faults.len() < MAX_KINDS || self.faults.iter().any(|f| f.what == what) {
-            what.as_str()
-        } else {
-            MORE_KINDS
+        let first = |what: String| Fault {
+            what,
+            count: 1,
+            told: 0,
         };
-        if let Some(f) = self.faults.iter_mut().find(|f| f.what == kind) {
-            f.count += 1;
-        } else {
-            self.faults.push(Fault {
-                what: kind.to_owned(),
-                count: 1,
-                told: 0,
-            });
+        let full = self.faults.len() >= MAX_KINDS;
+        match self.faults.iter_mut().find(|f| f.what == what) {
+            Some(f) => f.count += 1,
+            None if !full => self.faults.push(first(what.clone())),
+            None => match self.faults.iter_mut().find(|f| f.what == MORE_KINDS) {
+                Some(f) => f.count += 1,
+                None => self.faults.push(first(MORE_KINDS.to_owned())),
+            },
         }
         self.last_fault = Some(what);
     }
