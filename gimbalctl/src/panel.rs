@@ -22,10 +22,12 @@
 use std::io::IsTerminal;
 use std::time::{Duration, Instant as StdInstant};
 
-use idu_gimbal::link::Event;
+use idu_gimbal::link::{Event, Link, Medium};
 use idu_gimbal::wire::control::{Command, GimbalCommand, Photo, Rate, Video, Zoom};
 use idu_gimbal::Instant;
-use ratatui::crossterm::event::{self, Event as TermEvent, KeyCode, KeyEventKind, KeyModifiers};
+use ratatui::crossterm::event::{
+    self, Event as TermEvent, KeyCode, KeyEvent, KeyEventKind, KeyModifiers,
+};
 use ratatui::crossterm::{cursor, execute, terminal};
 use ratatui::layout::{Constraint, Layout};
 use ratatui::text::Line;
@@ -81,6 +83,109 @@ struct Panel {
     last_sent: String,
     last_event: String,
     key_events: u64,
+}
+
+/// What a key asks of the panel's loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Next {
+    /// Go on.
+    Go,
+    /// Leave (`q`, Ctrl-C): a zero rate first.
+    Quit,
+}
+
+impl Panel {
+    fn new(target: String, speed: f32) -> Self {
+        Panel {
+            target,
+            speed,
+            held: None,
+            recording: false,
+            last_sent: "nothing yet".into(),
+            last_event: "none".into(),
+            key_events: 0,
+        }
+    }
+
+    /// A link event, as the panel says it.
+    fn event(&mut self, ev: Event) {
+        match ev {
+            Event::Postback | Event::TargetUnreachable { .. } => {}
+            Event::LinkUp => self.last_event = "link up".into(),
+            Event::LinkDown => self.last_event = "link down".into(),
+            Event::RateHoldExpired => {
+                self.held = None;
+                self.last_event = "rate hold ended (dead-man): zero rate sent".into();
+                self.last_sent = "rate 0 0".into();
+            }
+            Event::AimNotReached => self.last_event = "aim not reached".into(),
+        }
+    }
+
+    /// A key pressed or repeated (never a release) at `t`: the rate it holds on `link` or
+    /// the command it queues there, and what the panel says of it.
+    fn key<M: Medium>(&mut self, link: &mut Link<8, 8, M>, key: KeyEvent, t: Instant) -> Next {
+        self.key_events += 1;
+        let speed = self.speed;
+        let rate = |yaw: f32, pitch: f32| Rate::new(yaw, pitch).ok();
+        let mut send: Option<Command> = None;
+        let mut hold: Option<Rate> = None;
+        match key.code {
+            KeyCode::Char('q') => return Next::Quit,
+            KeyCode::Char('c') if key.modifiers.contains(KeyModifiers::CONTROL) => {
+                return Next::Quit
+            }
+            KeyCode::Up => hold = rate(0.0, speed),
+            KeyCode::Down => hold = rate(0.0, -speed),
+            KeyCode::Left => hold = rate(-speed, 0.0),
+            KeyCode::Right => hold = rate(speed, 0.0),
+            KeyCode::Char('c') => send = Some(GimbalCommand::Recenter.into()),
+            KeyCode::Char('d') => send = Some(GimbalCommand::LookDown.into()),
+            KeyCode::Char('+') | KeyCode::Char('=') => {
+                send = Some(GimbalCommand::Zoom(Zoom::Double).into())
+            }
+            KeyCode::Char('-') => send = Some(GimbalCommand::Zoom(Zoom::Half).into()),
+            KeyCode::Char('p') => send = Some(GimbalCommand::Photo(Photo::Single).into()),
+            KeyCode::Char('r') => {
+                let v = if self.recording {
+                    Video::Stop
+                } else {
+                    Video::Start
+                };
+                send = Some(GimbalCommand::Video(v).into());
+            }
+            KeyCode::Char('f') => send = Some(GimbalCommand::NoseFollowing.into()),
+            _ => {}
+        }
+        if let Some(r) = hold {
+            match link.set_rate(r, t) {
+                Ok(()) => {
+                    if self.held != Some(r) {
+                        self.last_sent = spec::command_line(&GimbalCommand::Rate(r).into());
+                    }
+                    self.held = Some(r);
+                }
+                Err(_) => self.last_event = "queue full: rate not taken".into(),
+            }
+        }
+        if let Some(cmd) = send {
+            match link.send(cmd) {
+                Ok(()) => {
+                    if cmd == Command::from(GimbalCommand::Video(Video::Start)) {
+                        self.recording = true;
+                    } else if cmd == Command::from(GimbalCommand::Video(Video::Stop)) {
+                        self.recording = false;
+                    }
+                    if cmd.is_pointing() {
+                        self.held = None;
+                    }
+                    self.last_sent = spec::command_line(&cmd);
+                }
+                Err(_) => self.last_event = "queue full: command not sent".into(),
+            }
+        }
+        Next::Go
+    }
 }
 
 fn centi(v: i64) -> String {
@@ -217,15 +322,7 @@ impl Job for Panelled {
 /// The panel over an open session.
 fn panel<T: Transport>(mut session: Session<T>, speed: f32) -> Result<(), Failure> {
     let now = clock(StdInstant::now());
-    let mut panel = Panel {
-        target: session.transport.name().to_owned(),
-        speed,
-        held: None,
-        recording: false,
-        last_sent: "nothing yet".into(),
-        last_event: "none".into(),
-        key_events: 0,
-    };
+    let mut panel = Panel::new(session.transport.name().to_owned(), speed);
 
     let guard = TerminalGuard::enter()?;
     let backend = ratatui::backend::CrosstermBackend::new(std::io::stdout());
@@ -237,18 +334,7 @@ fn panel<T: Transport>(mut session: Session<T>, speed: f32) -> Result<(), Failur
             session.pump(t)?;
             let mut changed = false;
             while let Some(ev) = session.link.next_event() {
-                match ev {
-                    Event::Postback => {}
-                    Event::LinkUp => panel.last_event = "link up".into(),
-                    Event::LinkDown => panel.last_event = "link down".into(),
-                    Event::RateHoldExpired => {
-                        panel.held = None;
-                        panel.last_event = "rate hold ended (dead-man): zero rate sent".into();
-                        panel.last_sent = "rate 0 0".into();
-                    }
-                    Event::TargetUnreachable { .. } => {}
-                    Event::AimNotReached => panel.last_event = "aim not reached".into(),
-                }
+                panel.event(ev);
                 changed = true;
             }
             if changed || drawn.elapsed() >= REDRAW {
@@ -269,67 +355,9 @@ fn panel<T: Transport>(mut session: Session<T>, speed: f32) -> Result<(), Failur
                     continue;
                 };
                 if key.kind != KeyEventKind::Release {
-                    panel.key_events += 1;
                     let t = now();
-                    let ctrl_c = key.code == KeyCode::Char('c')
-                        && key.modifiers.contains(KeyModifiers::CONTROL);
-                    let rate = |yaw: f32, pitch: f32| Rate::new(yaw, pitch).ok();
-                    let mut send: Option<Command> = None;
-                    let mut hold: Option<Rate> = None;
-                    match key.code {
-                        _ if ctrl_c => return quit(&mut session, now),
-                        KeyCode::Char('q') => return quit(&mut session, now),
-                        KeyCode::Up => hold = rate(0.0, speed),
-                        KeyCode::Down => hold = rate(0.0, -speed),
-                        KeyCode::Left => hold = rate(-speed, 0.0),
-                        KeyCode::Right => hold = rate(speed, 0.0),
-                        KeyCode::Char('c') => send = Some(GimbalCommand::Recenter.into()),
-                        KeyCode::Char('d') => send = Some(GimbalCommand::LookDown.into()),
-                        KeyCode::Char('+') | KeyCode::Char('=') => {
-                            send = Some(GimbalCommand::Zoom(Zoom::Double).into())
-                        }
-                        KeyCode::Char('-') => send = Some(GimbalCommand::Zoom(Zoom::Half).into()),
-                        KeyCode::Char('p') => {
-                            send = Some(GimbalCommand::Photo(Photo::Single).into())
-                        }
-                        KeyCode::Char('r') => {
-                            let v = if panel.recording {
-                                Video::Stop
-                            } else {
-                                Video::Start
-                            };
-                            send = Some(GimbalCommand::Video(v).into());
-                        }
-                        KeyCode::Char('f') => send = Some(GimbalCommand::NoseFollowing.into()),
-                        _ => {}
-                    }
-                    if let Some(r) = hold {
-                        match session.link.set_rate(r, t) {
-                            Ok(()) => {
-                                if panel.held != Some(r) {
-                                    panel.last_sent =
-                                        spec::command_line(&GimbalCommand::Rate(r).into());
-                                }
-                                panel.held = Some(r);
-                            }
-                            Err(_) => panel.last_event = "queue full: rate not taken".into(),
-                        }
-                    }
-                    if let Some(cmd) = send {
-                        match session.link.send(cmd) {
-                            Ok(()) => {
-                                if cmd == Command::from(GimbalCommand::Video(Video::Start)) {
-                                    panel.recording = true;
-                                } else if cmd == Command::from(GimbalCommand::Video(Video::Stop)) {
-                                    panel.recording = false;
-                                }
-                                if cmd.is_pointing() {
-                                    panel.held = None;
-                                }
-                                panel.last_sent = spec::command_line(&cmd);
-                            }
-                            Err(_) => panel.last_event = "queue full: command not sent".into(),
-                        }
+                    if panel.key(&mut session.link, key, t) == Next::Quit {
+                        return quit(&mut session, now);
                     }
                     session.pump(t)?;
                 }
@@ -377,3 +405,6 @@ fn quit<T: Transport>(session: &mut Session<T>, now: impl Fn() -> Instant) -> Re
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests;
