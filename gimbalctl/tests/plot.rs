@@ -471,6 +471,92 @@ fn plot_errors() {
     );
 }
 
+/// A log of attitude frames only (no postback, no command) is drawn: the panels with
+/// nothing in them over their default ranges, each with its margin (8% of the span):
+/// pitch -90 to 30 deg (-99.6 to 39.6), rates -10 to 10 deg/s (-11.6 to 11.6).
+#[test]
+fn a_log_of_attitude_frames_only_is_drawn() {
+    let mut log = String::new();
+    for k in 0..50 {
+        let t = f64::from(k) * 0.2;
+        let mut d = vec![0u8; 8];
+        d[4..6].copy_from_slice(&(3000i16 + 10 * k as i16).to_le_bytes());
+        line(&mut log, t, 0x0000_FF13, &d);
+    }
+    let (out, svg) = render(&log);
+    assert_eq!(out.code, 0, "{out:?}");
+    assert!(
+        out.stdout.ends_with(
+            ": 9.8 s, 0 postbacks, 0 commands, 50 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n"
+        ),
+        "{}",
+        out.stdout
+    );
+    let texts = texts(&svg);
+    let panels = Panels::of(&texts);
+    for (panel, lo, hi, (from, to)) in [
+        (0, -90.0, 30.0, (-99.6, 39.6)),
+        (2, -10.0, 10.0, (-11.6, 11.6)),
+    ] {
+        let values: Vec<f64> = y_ticks(&texts, &panels, panel)
+            .iter()
+            .map(|t| t.1)
+            .collect();
+        let (min, max) = (
+            values[0].min(values[values.len() - 1]),
+            values[0].max(values[values.len() - 1]),
+        );
+        // The ticks lie on the axis and reach within a tick step (a quarter of the
+        // default span at most) of its default ends.
+        let step = (hi - lo) / 4.0;
+        assert!(
+            values.iter().all(|v| (from..=to).contains(v)),
+            "panel {panel}: {values:?}"
+        );
+        assert!(
+            min <= lo + step && max >= hi - step,
+            "panel {panel}: {values:?}"
+        );
+    }
+    // The vehicle heading (30 to 34.9 deg) is drawn in the heading panel, and no
+    // reported pitch anywhere.
+    let vehicle = polylines(&svg, "#8C564B");
+    let long: Vec<_> = vehicle.iter().filter(|l| l.len() > 2).collect();
+    assert_eq!(long.len(), 1, "{vehicle:?}");
+    assert!(long[0].iter().all(|p| panels.index(p.1) == 1), "{long:?}");
+    assert!(polylines(&svg, "#1F77B4").is_empty());
+}
+
+/// A log whose one postback has all its frames at one timestamp: no time passes, and the
+/// time axis is 0 to 1 s.
+#[test]
+fn a_log_without_time_passing_is_drawn_over_one_second() {
+    let mut log = String::new();
+    for f in postback_frames(&postback(1, 0, 2, -1000, 4500, 0)) {
+        line(&mut log, 0.0, 0x030F_0001, &f);
+    }
+    let (out, svg) = render(&log);
+    assert_eq!(out.code, 0, "{out:?}");
+    assert!(
+        out.stdout.ends_with(
+            ": 0.0 s, 1 postbacks, 0 commands, 0 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n"
+        ),
+        "{}",
+        out.stdout
+    );
+    let texts = texts(&svg);
+    let panels = Panels::of(&texts);
+    for panel in 0..4 {
+        let values: Vec<f64> = x_ticks(&texts, &panels, panel)
+            .iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(values.first(), Some(&0.0), "panel {panel}: {values:?}");
+        let last = values[values.len() - 1];
+        assert!((0.75..=1.0).contains(&last), "panel {panel}: {values:?}");
+    }
+}
+
 #[test]
 fn timestamps_that_are_not_finite_times_are_counted_not_drawn() {
     // A candump timestamp of 309 digits or more parses to infinity: the time axis went to

@@ -148,4 +148,68 @@ mod tests {
             .any(|&(t, v)| v == 500.0 && (t - 7777.77).abs() < 1e-6));
         assert_eq!(s.count, 1_000_000);
     }
+
+    /// A point with a time or value that is not a finite number is not taken.
+    #[test]
+    fn points_that_are_not_finite_are_not_taken() {
+        let mut s = Series::default();
+        for (t, v) in [
+            (f64::NAN, 1.0),
+            (1.0, f64::NAN),
+            (f64::INFINITY, 1.0),
+            (1.0, f64::NEG_INFINITY),
+        ] {
+            s.push(t, v);
+        }
+        assert_eq!(s.count, 0);
+        assert!(s.is_empty());
+        s.push(1.0, 2.0);
+        assert_eq!(s.points(), [(1.0, 2.0)]);
+        assert_eq!(s.range(), Some((2.0, 2.0)));
+    }
+
+    /// A step inside one bucket (0.05 s wide) is drawn where it happened: a bucket's
+    /// minimum and maximum are the first points at those values, not the last.
+    #[test]
+    fn a_step_inside_one_bucket_keeps_its_time() {
+        for (before, after) in [(1.0, 0.0), (0.0, 1.0)] {
+            let mut s = Series::default();
+            s.push(0.0, before);
+            for t in [0.01, 0.02, 0.03] {
+                s.push(t, after);
+            }
+            assert_eq!(s.buckets.len(), 1);
+            assert_eq!(
+                s.points(),
+                [(0.0, before), (0.01, after), (0.03, after)],
+                "{before} to {after}"
+            );
+        }
+    }
+
+    /// One point a bucket (each in the middle of its 0.05 s, so that no rounding moves
+    /// it): `BUCKETS` buckets fill, and the next point halves them (pairs merged, the width
+    /// doubled to 0.1 s) before it takes a bucket of its own; never more than `BUCKETS`.
+    #[test]
+    fn buckets_merge_in_pairs_when_one_more_is_needed() {
+        let mut s = Series::default();
+        let at = |k: usize| k as f64 * 0.05 + 0.025;
+        for k in 0..BUCKETS {
+            s.push(at(k), k as f64);
+        }
+        assert_eq!(s.buckets.len(), BUCKETS);
+        assert_eq!(s.width, 0.05);
+        s.push(at(BUCKETS), 0.0);
+        assert_eq!(s.buckets.len(), BUCKETS / 2 + 1);
+        assert_eq!(s.width, 0.1);
+        // Merged pairs: the first bucket now holds the first two points.
+        assert_eq!(s.points()[..2], [(at(0), 0.0), (at(1), 1.0)]);
+        // Each 0.1 s after that is a bucket of its own, up to the bound again.
+        for k in 1..BUCKETS / 2 {
+            s.push(at(BUCKETS) + k as f64 * 0.1, 0.0);
+            assert!(s.buckets.len() <= BUCKETS);
+        }
+        assert_eq!(s.buckets.len(), BUCKETS);
+        assert_eq!(s.width, 0.1);
+    }
 }
