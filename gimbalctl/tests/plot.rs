@@ -525,6 +525,18 @@ fn a_log_of_attitude_frames_only_is_drawn() {
     assert_eq!(long.len(), 1, "{vehicle:?}");
     assert!(long[0].iter().all(|p| panels.index(p.1) == 1), "{long:?}");
     assert!(polylines(&svg, "#1F77B4").is_empty());
+    // Only what is drawn is in a legend.
+    for label in [
+        "pitch (reported)",
+        "pitch (commanded)",
+        "heading (reported)",
+        "heading (commanded)",
+        "yaw rate (commanded)",
+        "CRC error",
+    ] {
+        assert!(!texts.iter().any(|t| t.2 == label), "legend has {label}");
+    }
+    assert!(texts.iter().any(|t| t.2 == "vehicle heading (attitude)"));
 }
 
 /// A log whose one postback has all its frames at one timestamp: no time passes, and the

@@ -212,4 +212,47 @@ mod tests {
         assert_eq!(s.buckets.len(), BUCKETS);
         assert_eq!(s.width, 0.1);
     }
+
+    /// Merging keeps each pair's extremes wherever they lie in their buckets, and of two
+    /// equal ones the first.
+    #[test]
+    fn merged_buckets_keep_the_extremes_of_both() {
+        let mut s = Series::default();
+        // Bucket k: 5 at 0.01 s into it, its middle value at 0.025 s, 5 at 0.04 s.
+        let at = |k: usize, into: f64| k as f64 * 0.05 + into;
+        let middles = [0.0, 0.0, 10.0, 10.0, 0.0, -1.0, 10.0, 11.0];
+        for k in 0..BUCKETS {
+            let middle = middles.get(k).copied().unwrap_or(5.0);
+            for (into, v) in [(0.01, 5.0), (0.025, middle), (0.04, 5.0)] {
+                s.push(at(k, into), v);
+            }
+        }
+        s.push(at(BUCKETS, 0.01), 5.0);
+        let (start, middle, end) = (
+            |k| (at(k, 0.01), 5.0),
+            |k| at(k, 0.025),
+            |k| (at(k, 0.04), 5.0),
+        );
+        assert_eq!(
+            s.points()[..12],
+            [
+                // 0 and 0: the first 0.
+                start(0),
+                (middle(0), 0.0),
+                end(1),
+                // 10 and 10: the first 10.
+                start(2),
+                (middle(2), 10.0),
+                end(3),
+                // 0 and -1: the -1.
+                start(4),
+                (middle(5), -1.0),
+                end(5),
+                // 10 and 11: the 11.
+                start(6),
+                (middle(7), 11.0),
+                end(7),
+            ]
+        );
+    }
 }

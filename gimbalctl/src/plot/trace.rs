@@ -240,4 +240,51 @@ mod tests {
         assert_eq!(t.gaps.last().map(|g| g.1), Some(99_992.0));
         assert!(t.gaps.windows(2).all(|w| w[0].1 <= w[1].0));
     }
+
+    /// Past `MAX_GAPS`, the two gaps with the least time between them become one: 2 s
+    /// gaps every 10 s (8 s apart), but the twelfth closer to the eleventh.
+    #[test]
+    fn the_closest_gaps_merge() {
+        // The time between gap 10 and 11, and any other gap moved closer to its forerunner.
+        for (space, other) in [(0.5, Some((21, 0.75))), (1.5, None)] {
+            let mut t = Trace::default();
+            for i in 0..MAX_GAPS {
+                let from = match (i, other) {
+                    (11, _) => 102.0 + space,
+                    (k, Some((j, s))) if k == j => k as f64 * 10.0 - 8.0 + s,
+                    _ => i as f64 * 10.0,
+                };
+                t.add_gap(from, from + 2.0);
+            }
+            t.add_gap(5000.0, 5002.0);
+            assert_eq!(t.gaps.len(), MAX_GAPS);
+            assert_eq!(
+                t.gaps[9..12],
+                [(90.0, 92.0), (100.0, 104.0 + space), (120.0, 122.0)],
+                "{space}"
+            );
+            assert_eq!(t.gaps.last(), Some(&(5000.0, 5002.0)));
+        }
+    }
+
+    fn postback_at(t: &mut Trace, at: f64) {
+        t.timed = true;
+        t.postback(at, &Postback::default());
+    }
+
+    /// A link gap is a postback more than 1.5 s after the one before, or the first more
+    /// than 1.5 s after the log began; exactly 1.5 s is none.
+    #[test]
+    fn a_gap_is_more_than_one_and_a_half_seconds() {
+        let mut t = Trace::default();
+        for at in [1.5, 3.0, 4.5] {
+            postback_at(&mut t, at);
+        }
+        assert!(t.gaps.is_empty());
+        postback_at(&mut t, 6.0625);
+        assert_eq!(t.gaps, [(4.5, 6.0625)]);
+        let mut t = Trace::default();
+        postback_at(&mut t, 1.5625);
+        assert_eq!(t.gaps, [(0.0, 1.5625)]);
+    }
 }
