@@ -11,6 +11,9 @@ struct Bucket {
     min: (f64, f64),
     max: (f64, f64),
     last: (f64, f64),
+    /// Whether the maximum came after the minimum (the order they are drawn in; their
+    /// times can be equal, at a step).
+    max_after_min: bool,
 }
 
 /// A time series in at most [`BUCKETS`] min/max buckets (see the module docs).
@@ -47,9 +50,11 @@ impl Series {
                 Some(b) if key <= b.key => {
                     if v < b.min.1 {
                         b.min = (t, v);
+                        b.max_after_min = false;
                     }
                     if v > b.max.1 {
                         b.max = (t, v);
+                        b.max_after_min = true;
                     }
                     b.last = (t, v);
                     return;
@@ -61,6 +66,7 @@ impl Series {
                         min: (t, v),
                         max: (t, v),
                         last: (t, v),
+                        max_after_min: false,
                     });
                     return;
                 }
@@ -77,12 +83,20 @@ impl Series {
             let key = b.key.div_euclid(2);
             match merged.last_mut() {
                 Some(m) if m.key == key => {
-                    if b.min.1 < m.min.1 {
+                    // `b`'s points all came after `m`'s.
+                    let (min, max) = (b.min.1 < m.min.1, b.max.1 > m.max.1);
+                    if min {
                         m.min = b.min;
                     }
-                    if b.max.1 > m.max.1 {
+                    if max {
                         m.max = b.max;
                     }
+                    m.max_after_min = match (min, max) {
+                        (true, true) => b.max_after_min,
+                        (true, false) => false,
+                        (false, true) => true,
+                        (false, false) => m.max_after_min,
+                    };
                     m.last = b.last;
                 }
                 _ => merged.push(Bucket { key, ..b }),
@@ -91,17 +105,17 @@ impl Series {
         self.buckets = merged;
     }
 
-    /// The points to draw, in time order: each bucket's first point, its min and max, and
-    /// its last point (so steps keep their shape and spikes survive).
+    /// The points to draw, in the order they came: each bucket's first point, its min and
+    /// max, and its last point (so steps keep their shape and spikes survive).
     pub fn points(&self) -> Vec<(f64, f64)> {
         let mut out: Vec<(f64, f64)> = Vec::with_capacity(self.buckets.len() * 4);
         for b in &self.buckets {
-            let (lo, hi) = if b.min.0 <= b.max.0 {
+            let (earlier, later) = if b.max_after_min {
                 (b.min, b.max)
             } else {
                 (b.max, b.min)
             };
-            for p in [b.first, lo, hi, b.last] {
+            for p in [b.first, earlier, later, b.last] {
                 if out.last() != Some(&p) {
                     out.push(p);
                 }
@@ -254,5 +268,22 @@ mod tests {
                 end(7),
             ]
         );
+    }
+
+    /// A step at one instant (two points at one time) is drawn in the order it came, in
+    /// either direction, each point once.
+    #[test]
+    fn a_step_at_one_instant_is_drawn_in_the_order_it_came() {
+        for (a, b) in [(5.0, 0.0), (0.0, 5.0)] {
+            let mut s = Series::default();
+            for (t, v) in [(1.0, 2.0), (1.01, a), (1.01, b), (1.03, 2.0)] {
+                s.push(t, v);
+            }
+            assert_eq!(
+                s.points(),
+                [(1.0, 2.0), (1.01, a), (1.01, b), (1.03, 2.0)],
+                "{a} to {b}"
+            );
+        }
     }
 }

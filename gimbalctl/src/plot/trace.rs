@@ -287,4 +287,43 @@ mod tests {
         postback_at(&mut t, 1.5625);
         assert_eq!(t.gaps, [(0.0, 1.5625)]);
     }
+
+    /// The commanded angles as crosses at their values (look-down at -90, centre at 0);
+    /// the commanded rate as steps, back to zero 250 ms after a rate not repeated.
+    #[test]
+    fn commands_are_drawn_at_their_values() {
+        use idu_gimbal::wire::control::{Heading, Photo, Pitch, Rate};
+        let mut t = Trace::default();
+        let g = |g: GimbalCommand| Command::from(g);
+        for (at, cmd) in [
+            (1.0, g(GimbalCommand::Pitch(Pitch::new(-30.0).unwrap()))),
+            (2.0, g(GimbalCommand::LookDown)),
+            (3.0, g(GimbalCommand::Recenter)),
+            (4.0, g(GimbalCommand::Heading(Heading::new(90.0).unwrap()))),
+            // A rate repeated 125 ms and then exactly 250 ms later (both within the
+            // dead-man; times exact in binary), then not.
+            (5.0, g(GimbalCommand::Rate(Rate::new(5.0, -2.0).unwrap()))),
+            (5.125, g(GimbalCommand::Rate(Rate::new(5.0, -2.0).unwrap()))),
+            (5.375, g(GimbalCommand::Rate(Rate::new(5.0, -2.0).unwrap()))),
+            (7.0, g(GimbalCommand::Photo(Photo::Single))),
+        ] {
+            t.command(at, &cmd);
+        }
+        assert_eq!(t.commands, 8);
+        assert_eq!(
+            t.cmd_pitch.points(),
+            [(1.0, -30.0), (2.0, -90.0), (3.0, 0.0)]
+        );
+        assert_eq!(t.cmd_heading.points(), [(4.0, 90.0)]);
+        // 250 ms after the last.
+        let stop = 5.625;
+        assert_eq!(
+            t.cmd_yaw_rate.points(),
+            [(5.0, 5.0), (stop, 5.0), (stop, 0.0)]
+        );
+        assert_eq!(
+            t.cmd_pitch_rate.points(),
+            [(5.0, -2.0), (stop, -2.0), (stop, 0.0)]
+        );
+    }
 }
