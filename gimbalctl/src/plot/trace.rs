@@ -286,6 +286,15 @@ mod tests {
         let mut t = Trace::default();
         postback_at(&mut t, 1.5625);
         assert_eq!(t.gaps, [(0.0, 1.5625)]);
+        // The log going on without postbacks: a gap to its end, if more than 1.5 s.
+        for (end, gaps) in [(3.0625, &[][..]), (3.125, &[(1.5625, 3.125)][..])] {
+            let mut t = Trace::default();
+            postback_at(&mut t, 1.0);
+            postback_at(&mut t, 1.5625);
+            t.end = end;
+            t.finish();
+            assert_eq!(t.gaps, gaps, "{end}");
+        }
     }
 
     /// The commanded angles as crosses at their values (look-down at -90, centre at 0);
