@@ -160,10 +160,19 @@ fn wait_still(pitches: &Pitches, after: Instant) -> i16 {
 }
 
 /// Runs `control ARGS` in a detached 80x24 tmux session; the file its exit status goes to.
+/// The terminal's state after it goes to the same path with `.term`: its line settings
+/// (`stty -a`), and tmux's alternate-screen and cursor-visible flags.
 fn control_in_tmux(tmux: &Tmux, args: &str, name: &str) -> std::path::PathBuf {
     let rc = std::env::temp_dir().join(format!("gimbalctl-{name}-{}.rc", std::process::id()));
     let _ = std::fs::remove_file(&rc);
-    let cmd = format!("'{BIN}' control {args}; echo $? > '{}'", rc.display());
+    let term = rc.with_extension("term");
+    let _ = std::fs::remove_file(&term);
+    let cmd = format!(
+        "'{BIN}' control {args}; echo $? > '{}'; {{ stty -a; tmux display-message -p \
+         'alternate #{{alternate_on}} cursor #{{cursor_flag}}'; }} > '{}' 2>&1",
+        rc.display(),
+        term.display()
+    );
     let out = tmux.run(&[
         "new-session",
         "-d",
@@ -193,6 +202,22 @@ fn exit_status(tmux: &Tmux, rc: &std::path::Path) -> String {
     let code = std::fs::read_to_string(rc).unwrap_or_default();
     let _ = std::fs::remove_file(rc);
     code.trim().to_owned()
+}
+
+/// After the panel exited: the terminal as it found it (line editing and echo back, the
+/// main screen, the cursor shown).
+fn assert_terminal_restored(rc: &std::path::Path) {
+    let term = rc.with_extension("term");
+    let state = std::fs::read_to_string(&term).unwrap_or_default();
+    let _ = std::fs::remove_file(&term);
+    let words: Vec<&str> = state.split_whitespace().collect();
+    for flag in ["icanon", "echo"] {
+        assert!(
+            words.contains(&flag) && !words.contains(&format!("-{flag}").as_str()),
+            "{flag}: {state}"
+        );
+    }
+    assert!(state.contains("alternate 0 cursor 1"), "{state}");
 }
 
 #[test]
@@ -249,6 +274,7 @@ fn control_moves_the_simulated_gimbal_and_stops_it() {
     let gone = log.wait_after(" disconnected", t, Duration::from_secs(5));
     assert!(zero <= gone);
     assert_eq!(exit_status(&tmux, &rc), "0");
+    assert_terminal_restored(&rc);
 }
 
 #[test]
@@ -320,6 +346,7 @@ fn control_drives_the_gimbal_over_its_uart() {
     log.wait_after(": center", t, Duration::from_secs(5));
     tmux.keys(&["q"]);
     assert_eq!(exit_status(&tmux, &rc), "0");
+    assert_terminal_restored(&rc);
 }
 
 /// Bytes that hold no frame (a wrong baud rate): counted on the panel, with the likely
@@ -345,4 +372,5 @@ fn control_shows_garbage_on_the_line() {
     }
     tmux.keys(&["q"]);
     assert_eq!(exit_status(&tmux, &rc), "0");
+    assert_terminal_restored(&rc);
 }

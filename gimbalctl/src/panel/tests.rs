@@ -293,13 +293,12 @@ fn the_panel_shows_the_gimbal_the_commands_and_the_counters() {
         shown[2],
         "│mode    full_lock        tracking no    gimbal 1 (X30/X30GT)                  │"
     );
-    // No postback for 1.5 s: the link goes down, and the hold is not shown as held.
+    // No postback for 1.5 s: the link goes down. The hold has ended too, and is not
+    // shown as held even before the panel has taken the link's events.
     let late = t0.add_millis(2100);
     s.pump(late).unwrap();
-    while let Some(ev) = s.link.next_event() {
-        panel.event(ev);
-    }
     assert!(!s.link.is_rate_holding());
+    assert!(panel.held.is_some());
     let shown = screen(&s, &panel, late);
     assert_eq!(
         shown[3],
@@ -309,6 +308,10 @@ fn the_panel_shows_the_gimbal_the_commands_and_the_counters() {
         shown[6],
         "│rate hold  none                                                               │"
     );
+    while let Some(ev) = s.link.next_event() {
+        panel.event(ev);
+    }
+    let shown = screen(&s, &panel, late);
     assert_eq!(
         shown[9],
         "│last event rate hold ended (dead-man): zero rate sent                         │"
