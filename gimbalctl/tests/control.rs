@@ -188,6 +188,12 @@ fn control_in_tmux(tmux: &Tmux, args: &str, name: &str) -> std::path::PathBuf {
     rc
 }
 
+/// The postback's age the panel shows (ms), if it shows one.
+fn postback_age(pane: &str) -> Option<u32> {
+    let line = pane.lines().find(|l| l.contains("│age "))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
 /// Waits for the panel to exit; its exit status.
 fn exit_status(tmux: &Tmux, rc: &std::path::Path) -> String {
     let deadline = Instant::now() + Duration::from_secs(10);
@@ -234,6 +240,20 @@ fn control_moves_the_simulated_gimbal_and_stops_it() {
     assert!(pane.lines().count() <= 24, "{pane}");
     assert!(pane.lines().all(|l| l.chars().count() <= 80), "{pane}");
     let p0 = wait_still(&pitches, Instant::now());
+
+    // The terminal resized (an event that is not a key): the panel is drawn again at the
+    // new width, and goes on without a key (the postback's age moves: the sim sends one
+    // every 500 ms, the panel is drawn every 100 ms).
+    let out = tmux.run(&["resize-window", "-t", "ctl", "-x", "100", "-y", "30"]);
+    assert!(out.status.success(), "resize-window: {out:?}");
+    let pane = tmux.wait_pane("the panel 100 columns wide", Duration::from_secs(5), |p| {
+        p.lines().next().is_some_and(|l| l.chars().count() == 100)
+    });
+    let before = postback_age(&pane);
+    assert!(before.is_some(), "{pane}");
+    tmux.wait_pane("the postback's age moving", Duration::from_secs(5), |p| {
+        postback_age(p) != before
+    });
 
     // Up held for 1.5 s.
     let (started, last_key) = tmux.hold("Up", Duration::from_millis(1500));
