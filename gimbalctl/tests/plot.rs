@@ -268,6 +268,14 @@ fn render(log: &str) -> (Out, String) {
     (out, svg)
 }
 
+/// The picture of `log`, which `plot` drew with exit 0 and a summary ending `summary`.
+fn rendered(log: &str, summary: &str) -> String {
+    let (out, svg) = render(log);
+    assert_eq!(out.code, 0, "{out:?}");
+    assert!(out.stdout.ends_with(summary), "{}", out.stdout);
+    svg
+}
+
 #[test]
 fn plot_of_a_flight_log_has_its_series_axes_and_faults() {
     let (log, valid) = flight_log();
@@ -483,15 +491,7 @@ fn a_log_of_attitude_frames_only_is_drawn() {
         d[4..6].copy_from_slice(&(3000i16 + 10 * k as i16).to_le_bytes());
         line(&mut log, t, 0x0000_FF13, &d);
     }
-    let (out, svg) = render(&log);
-    assert_eq!(out.code, 0, "{out:?}");
-    assert!(
-        out.stdout.ends_with(
-            ": 9.8 s, 0 postbacks, 0 commands, 50 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n"
-        ),
-        "{}",
-        out.stdout
-    );
+    let svg = rendered(&log, ": 9.8 s, 0 postbacks, 0 commands, 50 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n");
     let texts = texts(&svg);
     let panels = Panels::of(&texts);
     for (panel, lo, hi, (from, to)) in [
@@ -547,15 +547,7 @@ fn a_log_without_time_passing_is_drawn_over_one_second() {
     for f in postback_frames(&postback(1, 0, 2, -1000, 4500, 0)) {
         line(&mut log, 0.0, 0x030F_0001, &f);
     }
-    let (out, svg) = render(&log);
-    assert_eq!(out.code, 0, "{out:?}");
-    assert!(
-        out.stdout.ends_with(
-            ": 0.0 s, 1 postbacks, 0 commands, 0 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n"
-        ),
-        "{}",
-        out.stdout
-    );
+    let svg = rendered(&log, ": 0.0 s, 1 postbacks, 0 commands, 0 attitude frames, 0 link gaps, 0 CRC errors, 0 lost frames\n");
     let texts = texts(&svg);
     let panels = Panels::of(&texts);
     for panel in 0..4 {

@@ -15,6 +15,14 @@ fn press(code: KeyCode) -> KeyEvent {
     KeyEvent::new(code, KeyModifiers::NONE)
 }
 
+/// A panel at `speed` deg/s over a session on endpoint 0 of `bus`, and the gimbal's end
+/// of the bus.
+fn on(bus: &Bus<2, 64>, speed: f32) -> (MockSession<'_>, Endpoint<'_, 2, 64>, Panel) {
+    let session = mock_session(bus, Mode::Drive);
+    let gimbal = bus.endpoint(1).unwrap();
+    (session, gimbal, Panel::new("mock0".into(), speed))
+}
+
 /// The commands on the bus since the last look, as `send` names them.
 fn sent(gimbal: &mut Endpoint<'_, 2, 64>) -> Vec<String> {
     let mut out = Vec::new();
@@ -67,9 +75,7 @@ fn hundredths_are_written_with_their_sign() {
 #[test]
 fn arrows_hold_a_rate_at_the_panel_speed() {
     let bus: Bus<2, 64> = Bus::new(1);
-    let mut s = mock_session(&bus, Mode::Drive);
-    let mut gimbal = bus.endpoint(1).unwrap();
-    let mut panel = Panel::new("mock0".into(), 12.5);
+    let (mut s, mut gimbal, mut panel) = on(&bus, 12.5);
     let mut t = Instant::from_millis(0);
     for (key, rate) in [
         (KeyCode::Up, "rate 0 12.5"),
@@ -98,9 +104,7 @@ fn arrows_hold_a_rate_at_the_panel_speed() {
 #[test]
 fn keys_send_their_commands() {
     let bus: Bus<2, 64> = Bus::new(2);
-    let mut s = mock_session(&bus, Mode::Drive);
-    let mut gimbal = bus.endpoint(1).unwrap();
-    let mut panel = Panel::new("mock0".into(), 20.0);
+    let (mut s, mut gimbal, mut panel) = on(&bus, 20.0);
     let t = Instant::from_millis(0);
     for (key, command, recording) in [
         ('p', "photo single", false),
@@ -147,9 +151,7 @@ fn keys_send_their_commands() {
 #[test]
 fn q_and_ctrl_c_leave() {
     let bus: Bus<2, 64> = Bus::new(3);
-    let mut s = mock_session(&bus, Mode::Drive);
-    let mut gimbal = bus.endpoint(1).unwrap();
-    let mut panel = Panel::new("mock0".into(), 20.0);
+    let (mut s, mut gimbal, mut panel) = on(&bus, 20.0);
     let t = Instant::from_millis(0);
     let ctrl_c = KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL);
     for key in [press(KeyCode::Char('q')), ctrl_c] {
@@ -215,9 +217,7 @@ fn link_events_are_said() {
 #[test]
 fn the_panel_shows_the_gimbal_the_commands_and_the_counters() {
     let bus: Bus<2, 64> = Bus::new(5);
-    let mut s = mock_session(&bus, Mode::Drive);
-    let mut gimbal = bus.endpoint(1).unwrap();
-    let mut panel = Panel::new("mock0".into(), 20.0);
+    let (mut s, mut gimbal, mut panel) = on(&bus, 20.0);
     let t0 = Instant::from_millis(1000);
     let before = screen(&s, &panel, t0);
     let keys = [
@@ -325,9 +325,7 @@ fn quit_sends_a_zero_rate_first() {
     let now = || Instant::from_millis(0);
     for (key, first) in [(KeyCode::Up, "rate 0 20"), (KeyCode::Char('c'), "center")] {
         let bus: Bus<2, 64> = Bus::new(6);
-        let mut s = mock_session(&bus, Mode::Drive);
-        let mut gimbal = bus.endpoint(1).unwrap();
-        let mut panel = Panel::new("mock0".into(), 20.0);
+        let (mut s, mut gimbal, mut panel) = on(&bus, 20.0);
         panel.key(&mut s.link, press(key), now());
         quit(&mut s, now).unwrap();
         assert!(!s.link.is_rate_holding());
@@ -342,9 +340,7 @@ fn quit_sends_a_zero_rate_first() {
 fn quit_waits_a_second_for_the_bus() {
     let now = || Instant::from_millis(0);
     let bus: Bus<2, 64> = Bus::new(7);
-    let mut s = mock_session(&bus, Mode::Drive);
-    let mut gimbal = bus.endpoint(1).unwrap();
-    let mut panel = Panel::new("mock0".into(), 20.0);
+    let (mut s, mut gimbal, mut panel) = on(&bus, 20.0);
     for _ in 0..8 {
         panel.key(&mut s.link, press(KeyCode::Char('p')), now());
     }
