@@ -1,7 +1,7 @@
 //! The `defmt` encoding of what a log must get right, captured by a host logger: every
 //! driver error kind distinct (or an operator cannot tell an acknowledge error, no other
-//! node on the bus, from a CRC error, noise), a range error's value, and the camera's
-//! credentials without their password.
+//! node on the bus, from a CRC error, noise), the mock bus's errors by name, a range
+//! error's value, and the camera's credentials without their password.
 #![cfg(feature = "defmt")]
 
 use embedded_can::ErrorKind;
@@ -35,6 +35,30 @@ fn every_error_kind_has_its_own_encoding() {
         for (j, b) in encoded.iter().enumerate().skip(i + 1) {
             assert_ne!(a, b, "{:?} and {:?} encode alike", kinds[i], kinds[j]);
         }
+    }
+}
+
+/// The mock bus's error names its kind in its record (a test's log says which fault was
+/// injected): each kind's name, and `Other` for the rest.
+#[test]
+fn a_mock_error_names_its_kind() {
+    use idu_gimbal::mock::MockError;
+    let contains =
+        |haystack: &[u8], needle: &[u8]| haystack.windows(needle.len()).any(|w| w == needle);
+    for (kind, name) in [
+        (ErrorKind::Overrun, "Overrun"),
+        (ErrorKind::Bit, "Bit"),
+        (ErrorKind::Stuff, "Stuff"),
+        (ErrorKind::Crc, "Crc"),
+        (ErrorKind::Form, "Form"),
+        (ErrorKind::Acknowledge, "Acknowledge"),
+        (ErrorKind::Other, "Other"),
+    ] {
+        let r = record(&MockError::new(kind));
+        // The name as a length-prefixed `str` argument: its length, then its bytes.
+        let mut arg = (name.len() as u32).to_le_bytes().to_vec();
+        arg.extend_from_slice(name.as_bytes());
+        assert!(contains(&r, &arg), "{kind:?}: {r:?}");
     }
 }
 
