@@ -610,4 +610,15 @@ mod tests {
         assert_eq!(run(5), run(5));
         assert_ne!(run(5).1, run(6).1);
     }
+
+    /// Each error says what happened in words (a test's failure message shows them).
+    #[test]
+    fn errors_say_what_happened() {
+        use std::string::ToString;
+        assert_eq!(
+            MockSerialError::Overrun.to_string(),
+            "receive overrun: bytes were dropped"
+        );
+        assert_eq!(MockSerialError::Noise.to_string(), "line noise");
+    }
 }
