@@ -12,6 +12,11 @@ mod defmt_capture;
 
 use defmt_capture::record;
 
+/// Whether `needle` is in `haystack`.
+fn contains(haystack: &[u8], needle: &[u8]) -> bool {
+    haystack.windows(needle.len()).any(|w| w == needle)
+}
+
 fn encode(kind: ErrorKind) -> Vec<u8> {
     record(&DriverError(kind))
 }
@@ -43,8 +48,6 @@ fn every_error_kind_has_its_own_encoding() {
 #[test]
 fn a_mock_error_names_its_kind() {
     use idu_gimbal::mock::MockError;
-    let contains =
-        |haystack: &[u8], needle: &[u8]| haystack.windows(needle.len()).any(|w| w == needle);
     for (kind, name) in [
         (ErrorKind::Overrun, "Overrun"),
         (ErrorKind::Bit, "Bit"),
@@ -84,8 +87,6 @@ fn a_range_error_encodes_its_value() {
 #[test]
 fn credentials_log_the_user_and_never_the_password() {
     use idu_gimbal::video::Credentials;
-    let contains =
-        |haystack: &[u8], needle: &[u8]| haystack.windows(needle.len()).any(|w| w == needle);
     let a = record(&Credentials::new("operator", "hunter2-secret"));
     assert!(contains(&a, b"operator"), "{a:?}");
     assert!(
