@@ -500,6 +500,93 @@ fn silent_mode_stops_postbacks_and_resumes_on_the_grid() {
 }
 
 #[test]
+fn silence_is_reported_and_outlasts_a_reboot() {
+    let mut sim = Simulator::new(SimConfig::default(), t(0));
+    assert!(!sim.is_silent());
+    sim.set_silent(true);
+    sim.reboot(t(100));
+    assert!(sim.is_silent(), "a reboot carries the silence over");
+    // Past the start-up (3 s) and then some: still nothing sent.
+    for ms in (100..=6000).step_by(10) {
+        assert_eq!(sim.poll(t(ms)), None, "at {ms}");
+    }
+    assert!(!sim.is_booting());
+    sim.set_silent(false);
+    assert!(!sim.is_silent());
+    assert!(sim.poll(t(6500)).is_some());
+}
+
+#[test]
+fn a_reboot_at_an_earlier_instant_keeps_the_clock() {
+    let mut sim = Simulator::new(SimConfig::default(), t(0));
+    sim.poll(t(1000));
+    // A stale instant (before the last one seen): the start-up still counts from 1000 ms.
+    sim.reboot(t(400));
+    sim.poll(t(1000 + 3000 - 1));
+    assert!(sim.is_booting(), "1 ms of the start-up left");
+    sim.poll(t(1000 + 3000));
+    assert!(!sim.is_booting());
+}
+
+#[test]
+fn the_postback_grid_restarts_after_a_gap_of_half_the_clock() {
+    let mut sim = Simulator::new(SimConfig::default(), t(0));
+    assert!(sim.poll(t(500)).is_some());
+    // Frames only, no poll, for more than 2^31 ms: the next postback's instant (1000 ms)
+    // now reads as ahead of the clock by 2^31 - 500 ms. The grid restarts from the poll
+    // that sees it: one period later, not 2^31 ms.
+    attitude(&mut sim, 0.0, t(1 << 30));
+    let now = (1u32 << 31) + 1500;
+    attitude(&mut sim, 0.0, t(now));
+    assert_eq!(sim.poll(t(now)), None);
+    assert_eq!(sim.poll(t(now + 499)), None);
+    assert!(sim.poll(t(now + 500)).is_some());
+}
+
+#[test]
+fn a_pointing_command_ends_a_rate_at_once() {
+    let centre = TrackingBox::from_raw(ImagePoint::new(4096, 4096).unwrap(), 8, 8);
+    let commands = [
+        GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()),
+        GimbalCommand::Heading(Heading::new(0.0).unwrap()),
+        GimbalCommand::NoseFollowing,
+        GimbalCommand::Recenter,
+        GimbalCommand::LookDown,
+        GimbalCommand::StartTracking(centre),
+    ];
+    for command in commands {
+        let mut sim = Simulator::new(SimConfig::default(), t(0));
+        send(
+            &mut sim,
+            GimbalCommand::Rate(Rate::new(20.0, 0.0).unwrap()),
+            t(0),
+        );
+        sim.poll(t(100));
+        assert_eq!(sim.state().rate, (20.0, 0.0));
+        send(&mut sim, command, t(100));
+        assert_eq!(sim.state().rate, (0.0, 0.0), "{command:?}");
+        if let GimbalCommand::Pitch(_) = command {
+            // 20°/s for 100 ms, then no more yaw (the pitch command sets no yaw target).
+            sim.poll(t(1100));
+            assert!(close(sim.state().motor_yaw_deg, 2.0), "{command:?}");
+        }
+    }
+}
+
+#[test]
+fn a_direction_behind_the_camera_is_in_no_image() {
+    // Behind the camera the tangent comes round again: 180° off the axis would land on
+    // the image centre, 170° near it, if either axis alone were checked.
+    for direction in [(180.0, 0.0), (0.0, 180.0), (170.0, 0.0), (0.0, -170.0)] {
+        assert_eq!(image_point(direction, 1.0), None, "{direction:?}");
+    }
+    assert_eq!(
+        image_point((0.0, 0.0), 1.0),
+        Some(ImagePoint::new(4096, 4096).unwrap())
+    );
+}
+
+#[test]
 fn stream_mode_queues_no_frames() {
     let config = SimConfig {
         emit_can_frames: false,
@@ -652,13 +739,18 @@ fn every_gimbal_command_changes_the_state_as_documented() {
     assert_eq!(sim.state().photos, 8);
     sim.poll(now.add_millis(9000)); // photos at 4, 6, 8 s
     assert_eq!(sim.state().photos, 11);
+    // The step ran 1 s past the photo at 8 s: the next is still on the grid, at 10 s.
+    sim.poll(now.add_millis(9999));
+    assert_eq!(sim.state().photos, 11);
+    sim.poll(now.add_millis(10_000));
+    assert_eq!(sim.state().photos, 12);
     send(
         &mut sim,
         GimbalCommand::Photo(Photo::Stop),
-        now.add_millis(9000),
+        now.add_millis(10_000),
     );
     sim.poll(now.add_millis(60_000));
-    assert_eq!(sim.state().photos, 11);
+    assert_eq!(sim.state().photos, 12);
     let now = now.add_millis(60_000);
 
     // Focus and calibration are counted.
