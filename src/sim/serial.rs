@@ -176,3 +176,136 @@ impl<const OUT: usize> SerialSimulator<OUT> {
         self.parser = StreamParser::new();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::port::PortError;
+    use crate::wire::serial::control_frame;
+    use std::vec::Vec;
+
+    /// A serial line seen from the gimbal: what it reads, in the chunks given; what it
+    /// wrote, at most `room` bytes in all (then `Ok(0)`); one read or write error on demand.
+    #[derive(Default)]
+    struct Line {
+        input: Vec<Vec<u8>>,
+        written: Vec<u8>,
+        room: usize,
+        fail_read: bool,
+        fail_write: bool,
+    }
+
+    impl Uart for Line {
+        type ReadError = &'static str;
+        type WriteError = &'static str;
+
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, &'static str> {
+            if core::mem::take(&mut self.fail_read) {
+                return Err("overrun");
+            }
+            if self.input.is_empty() {
+                return Ok(0);
+            }
+            let chunk = self.input.remove(0);
+            buf[..chunk.len()].copy_from_slice(&chunk);
+            Ok(chunk.len())
+        }
+
+        fn write(&mut self, bytes: &[u8]) -> Result<usize, &'static str> {
+            if core::mem::take(&mut self.fail_write) {
+                return Err("break");
+            }
+            let n = bytes.len().min(self.room);
+            self.room -= n;
+            self.written.extend_from_slice(&bytes[..n]);
+            Ok(n)
+        }
+    }
+
+    fn t(ms: u32) -> Instant {
+        Instant::from_millis(ms)
+    }
+
+    /// Look down, as a 24-byte serial control frame (the protocol notes' serial vector).
+    fn look_down() -> [u8; 24] {
+        control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0])
+    }
+
+    #[test]
+    fn serve_reads_a_frame_in_pieces_polls_and_writes_the_postback() {
+        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        let frame = look_down();
+        let mut line = Line {
+            input: Vec::from([frame[..5].to_vec(), frame[5..].to_vec()]),
+            room: usize::MAX,
+            ..Line::default()
+        };
+        assert_eq!(sim.serve(&mut line, t(0)), Ok(None));
+        assert_eq!(sim.sim().state().target_pitch_deg, Some(-90.0));
+        assert!(line.input.is_empty() && line.written.is_empty());
+        let status = sim.serve(&mut line, t(500)).unwrap().unwrap();
+        // Half a second at 60°/s: -30°, as the postback says.
+        assert_eq!(status.pitch, -3000);
+        assert_eq!(status, sim.sim().postback());
+        assert_eq!(line.written, status.to_stream_bytes());
+        assert!(sim.transmit_bytes().is_empty());
+    }
+
+    #[test]
+    fn serve_writes_what_the_port_takes_and_the_rest_later() {
+        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        let mut line = Line {
+            room: 10,
+            ..Line::default()
+        };
+        let status = sim.serve(&mut line, t(500)).unwrap().unwrap();
+        assert_eq!(line.written.len(), 10);
+        assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN - 10);
+        line.room = usize::MAX;
+        assert_eq!(sim.serve(&mut line, t(600)), Ok(None));
+        assert_eq!(line.written, status.to_stream_bytes());
+    }
+
+    #[test]
+    fn a_port_error_ends_the_exchange_and_loses_nothing() {
+        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        // A read error: returned before the poll, the frame behind it read at the next.
+        let mut line = Line {
+            input: Vec::from([look_down().to_vec()]),
+            room: usize::MAX,
+            fail_read: true,
+            ..Line::default()
+        };
+        assert_eq!(
+            sim.serve(&mut line, t(500)),
+            Err(PortError::Read("overrun"))
+        );
+        assert_eq!(sim.sim().stats().postbacks, 0, "no poll after the error");
+        assert_eq!(line.input.len(), 1);
+        // A write error: after the poll; the postback's bytes wait for the next exchange.
+        line.fail_write = true;
+        assert_eq!(sim.serve(&mut line, t(500)), Err(PortError::Write("break")));
+        assert_eq!(sim.sim().state().target_pitch_deg, Some(-90.0));
+        assert_eq!(sim.sim().stats().postbacks, 1);
+        assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN);
+        assert_eq!(sim.serve(&mut line, t(600)), Ok(None));
+        assert_eq!(line.written.len(), MESSAGE_LEN);
+    }
+
+    #[test]
+    fn a_postback_is_dropped_and_counted_only_when_its_27_bytes_do_not_fit() {
+        // Room for exactly two postbacks.
+        let mut sim: SerialSimulator<54> = SerialSimulator::new(SimConfig::default(), t(0));
+        assert!(sim.poll(t(500)).is_some());
+        assert!(sim.poll(t(1000)).is_some());
+        assert_eq!(sim.out_overflows(), 0);
+        assert_eq!(sim.transmit_bytes().len(), 2 * MESSAGE_LEN);
+        assert_eq!(sim.poll(t(1500)), None);
+        assert_eq!(sim.poll(t(2000)), None);
+        assert_eq!(sim.out_overflows(), 2);
+        assert_eq!(sim.sim().stats().postbacks, 4, "the model made all four");
+        sim.transmit_written(MESSAGE_LEN);
+        assert!(sim.poll(t(2500)).is_some());
+        assert_eq!(sim.out_overflows(), 2);
+    }
+}
