@@ -688,13 +688,14 @@ fn a_backlog_beyond_the_per_poll_bound_is_read_over_later_polls() {
     assert_eq!(got, sent);
 }
 
-/// A UART that says it read or wrote more bytes than the buffer it was given holds: each
-/// read hands out the stream form of one postback and reports 5 bytes beyond the buffer,
-/// each write reports 3 bytes beyond what it was given.
+/// A UART that says it read or wrote `over` bytes more than the buffer it was given holds
+/// (0: exactly the buffer, the contract's edge): each read hands out the stream form of
+/// one postback in a buffer of zeros, each write takes all it was given.
 struct Overlong {
     postback: [u8; MESSAGE_LEN],
     reads_left: u32,
     written: Vec<u8>,
+    over: usize,
 }
 
 impl Uart for Overlong {
@@ -708,12 +709,12 @@ impl Uart for Overlong {
         self.reads_left -= 1;
         buf.fill(0);
         buf[..MESSAGE_LEN].copy_from_slice(&self.postback);
-        Ok(buf.len() + 5)
+        Ok(buf.len() + self.over)
     }
 
     fn write(&mut self, bytes: &[u8]) -> Result<usize, Self::WriteError> {
         self.written.extend_from_slice(bytes);
-        Ok(bytes.len() + 3)
+        Ok(bytes.len() + self.over)
     }
 }
 
@@ -732,6 +733,7 @@ fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
         postback: postback.to_stream_bytes(),
         reads_left: 2,
         written: Vec::new(),
+        over: 3,
     });
     link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
         .unwrap();
@@ -753,6 +755,31 @@ fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
     assert_eq!(stats.bytes_sent, FRAME_LEN as u32);
     assert_eq!(link.stats().frames_sent, 1);
     assert!(!link.has_transmit());
+}
+
+/// A read that fills the whole buffer and a write that takes the whole frame, reported as
+/// exactly that, are the contract kept: nothing counted.
+#[test]
+fn a_uart_reporting_exactly_its_buffer_is_not_counted() {
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut port = SerialPort::new(Overlong {
+        postback: Postback::default().to_stream_bytes(),
+        reads_left: 2,
+        written: Vec::new(),
+        over: 0,
+    });
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
+    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+    let stats = port.stats();
+    assert_eq!(stats.port_errors.overlong, 0);
+    assert_eq!(
+        (stats.bytes_received, stats.bytes_sent),
+        (64, FRAME_LEN as u32)
+    );
+    assert_eq!(link.stats().postbacks, 2);
+    let pitch = encode(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()));
+    assert_eq!(port.uart().written, control_frame(&pitch));
 }
 
 #[test]
