@@ -718,6 +718,22 @@ impl Uart for Overlong {
     }
 }
 
+/// One poll of a link's port over an [`Overlong`] UART reporting `over` bytes more: two
+/// reads, each of `postback` in the 32-byte buffer, and a pitch command's frame written.
+fn poll_over(postback: Postback, over: usize) -> (SerialLink, SerialPort<Overlong>) {
+    let mut link: SerialLink = SerialLink::new(Config::default());
+    let mut port = SerialPort::new(Overlong {
+        postback: postback.to_stream_bytes(),
+        reads_left: 2,
+        written: Vec::new(),
+        over,
+    });
+    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
+        .unwrap();
+    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+    (link, port)
+}
+
 /// A UART that breaks its contract by saying it read or wrote more than the buffer held is
 /// counted (`overlong`) each time, never silently: its buffer is taken whole (the postback
 /// in it arrives, the zeros after it are skipped bytes), and a write it over-reports
@@ -728,16 +744,7 @@ fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
         pitch: -1234,
         ..Postback::default()
     };
-    let mut link: SerialLink = SerialLink::new(Config::default());
-    let mut port = SerialPort::new(Overlong {
-        postback: postback.to_stream_bytes(),
-        reads_left: 2,
-        written: Vec::new(),
-        over: 3,
-    });
-    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
-        .unwrap();
-    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+    let (link, port) = poll_over(postback, 3);
 
     // Two reads of the 32-byte buffer and one write of a whole frame, each over-reported.
     let stats = port.stats();
@@ -761,16 +768,7 @@ fn a_uart_reporting_more_bytes_than_its_buffer_is_counted() {
 /// exactly that, are the contract kept: nothing counted.
 #[test]
 fn a_uart_reporting_exactly_its_buffer_is_not_counted() {
-    let mut link: SerialLink = SerialLink::new(Config::default());
-    let mut port = SerialPort::new(Overlong {
-        postback: Postback::default().to_stream_bytes(),
-        reads_left: 2,
-        written: Vec::new(),
-        over: 0,
-    });
-    link.send(GimbalCommand::Pitch(Pitch::new(-10.0).unwrap()))
-        .unwrap();
-    port.poll(&mut link, Instant::from_millis(0)).unwrap();
+    let (link, port) = poll_over(Postback::default(), 0);
     let stats = port.stats();
     assert_eq!(stats.port_errors.overlong, 0);
     assert_eq!(
