@@ -180,47 +180,14 @@ impl<const OUT: usize> SerialSimulator<OUT> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::port::PortError;
+    use crate::mock::serial::{MockSerialError, Pipe, SerialFaults};
+    use crate::port::{Io, PortError};
     use crate::wire::serial::control_frame;
-    use std::vec::Vec;
+    use embedded_io::{Read, Write};
 
-    /// A serial line seen from the gimbal: what it reads, in the chunks given; what it
-    /// wrote, at most `room` bytes in all (then `Ok(0)`); one read or write error on demand.
-    #[derive(Default)]
-    struct Line {
-        input: Vec<Vec<u8>>,
-        written: Vec<u8>,
-        room: usize,
-        fail_read: bool,
-        fail_write: bool,
-    }
-
-    impl Uart for Line {
-        type ReadError = &'static str;
-        type WriteError = &'static str;
-
-        fn read(&mut self, buf: &mut [u8]) -> Result<usize, &'static str> {
-            if core::mem::take(&mut self.fail_read) {
-                return Err("overrun");
-            }
-            if self.input.is_empty() {
-                return Ok(0);
-            }
-            let chunk = self.input.remove(0);
-            buf[..chunk.len()].copy_from_slice(&chunk);
-            Ok(chunk.len())
-        }
-
-        fn write(&mut self, bytes: &[u8]) -> Result<usize, &'static str> {
-            if core::mem::take(&mut self.fail_write) {
-                return Err("break");
-            }
-            let n = bytes.len().min(self.room);
-            self.room -= n;
-            self.written.extend_from_slice(&bytes[..n]);
-            Ok(n)
-        }
-    }
+    // The flight controller on the pipe's port 0, the gimbal on port 1; 128 bytes each way
+    // hold every exchange below.
+    const N: usize = 128;
 
     fn t(ms: u32) -> Instant {
         Instant::from_millis(ms)
@@ -231,65 +198,101 @@ mod tests {
         control_frame(&[0x0F, 0x07, 0, 0, 0, 0, 0, 0])
     }
 
+    /// What waits for the flight controller on `rx`, read whole.
+    fn drain(rx: &mut impl Read<Error = MockSerialError>) -> std::vec::Vec<u8> {
+        let mut got = std::vec::Vec::new();
+        let mut buf = [0u8; N];
+        while let Ok(n @ 1..) = rx.read(&mut buf) {
+            got.extend_from_slice(&buf[..n]);
+        }
+        got
+    }
+
     #[test]
-    fn serve_reads_a_frame_in_pieces_polls_and_writes_the_postback() {
+    fn serve_reads_frames_in_pieces_polls_and_writes_the_postback() {
+        // Split reads of 1 to 5 bytes: each frame arrives in at least five pieces, and two
+        // frames (48 bytes) take more than one 32-byte read of `serve`'s buffer anyway.
+        let pipe: Pipe<N> = Pipe::new(3).with_faults(SerialFaults {
+            max_read: 5,
+            ..SerialFaults::NONE
+        });
+        let (mut fc_rx, mut fc_tx) = pipe.port(0).unwrap();
+        let (rx, tx) = pipe.port(1).unwrap();
+        let mut port = Io::new(rx, tx);
         let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
-        let frame = look_down();
-        let mut line = Line {
-            input: Vec::from([frame[..5].to_vec(), frame[5..].to_vec()]),
-            room: usize::MAX,
-            ..Line::default()
-        };
-        assert_eq!(sim.serve(&mut line, t(0)), Ok(None));
+        let mut two = look_down().to_vec();
+        two.extend_from_slice(&look_down());
+        assert_eq!(fc_tx.write(&two), Ok(48));
+        assert_eq!(sim.serve(&mut port, t(0)), Ok(None));
+        assert_eq!(pipe.pending(1), Some(0), "all read in one exchange");
+        assert_eq!(sim.sim().stats().commands, 2);
         assert_eq!(sim.sim().state().target_pitch_deg, Some(-90.0));
-        assert!(line.input.is_empty() && line.written.is_empty());
-        let status = sim.serve(&mut line, t(500)).unwrap().unwrap();
+        assert!(drain(&mut fc_rx).is_empty());
+        let status = sim.serve(&mut port, t(500)).unwrap().unwrap();
         // Half a second at 60°/s: -30°, as the postback says.
         assert_eq!(status.pitch, -3000);
         assert_eq!(status, sim.sim().postback());
-        assert_eq!(line.written, status.to_stream_bytes());
+        assert_eq!(drain(&mut fc_rx), status.to_stream_bytes());
         assert!(sim.transmit_bytes().is_empty());
     }
 
     #[test]
     fn serve_writes_what_the_port_takes_and_the_rest_later() {
+        // A port that takes nothing now (`write_ready` false): the postback waits whole.
+        let pipe: Pipe<N> = Pipe::new(3).with_faults(SerialFaults {
+            write_stall: 1.0,
+            ..SerialFaults::NONE
+        });
+        let (mut fc_rx, _) = pipe.port(0).unwrap();
+        let (rx, tx) = pipe.port(1).unwrap();
+        let mut port = Io::new(rx, tx);
         let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
-        let mut line = Line {
-            room: 10,
-            ..Line::default()
-        };
-        let status = sim.serve(&mut line, t(500)).unwrap().unwrap();
-        assert_eq!(line.written.len(), 10);
-        assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN - 10);
-        line.room = usize::MAX;
-        assert_eq!(sim.serve(&mut line, t(600)), Ok(None));
-        assert_eq!(line.written, status.to_stream_bytes());
+        let status = sim.serve(&mut port, t(500)).unwrap().unwrap();
+        assert_eq!(pipe.stats(1).unwrap().written, 0);
+        assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN);
+        // A slow writer taking 1 to 10 bytes a write: all 27 in the next exchange.
+        pipe.set_faults(SerialFaults {
+            max_write: 10,
+            ..SerialFaults::NONE
+        });
+        assert_eq!(sim.serve(&mut port, t(600)), Ok(None));
+        assert!(sim.transmit_bytes().is_empty());
+        assert_eq!(drain(&mut fc_rx), status.to_stream_bytes());
     }
 
     #[test]
     fn a_port_error_ends_the_exchange_and_loses_nothing() {
+        let pipe: Pipe<N> = Pipe::new(3).with_faults(SerialFaults {
+            rx_error: 1.0,
+            ..SerialFaults::NONE
+        });
+        let (mut fc_rx, mut fc_tx) = pipe.port(0).unwrap();
+        let (rx, tx) = pipe.port(1).unwrap();
+        let mut port = Io::new(rx, tx);
         let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
         // A read error: returned before the poll, the frame behind it read at the next.
-        let mut line = Line {
-            input: Vec::from([look_down().to_vec()]),
-            room: usize::MAX,
-            fail_read: true,
-            ..Line::default()
-        };
+        assert_eq!(fc_tx.write(&look_down()), Ok(24));
         assert_eq!(
-            sim.serve(&mut line, t(500)),
-            Err(PortError::Read("overrun"))
+            sim.serve(&mut port, t(500)),
+            Err(PortError::Read(MockSerialError::Noise))
         );
         assert_eq!(sim.sim().stats().postbacks, 0, "no poll after the error");
-        assert_eq!(line.input.len(), 1);
+        assert_eq!(pipe.pending(1), Some(24));
         // A write error: after the poll; the postback's bytes wait for the next exchange.
-        line.fail_write = true;
-        assert_eq!(sim.serve(&mut line, t(500)), Err(PortError::Write("break")));
+        pipe.set_faults(SerialFaults {
+            tx_error: 1.0,
+            ..SerialFaults::NONE
+        });
+        assert_eq!(
+            sim.serve(&mut port, t(500)),
+            Err(PortError::Write(MockSerialError::Noise))
+        );
         assert_eq!(sim.sim().state().target_pitch_deg, Some(-90.0));
         assert_eq!(sim.sim().stats().postbacks, 1);
         assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN);
-        assert_eq!(sim.serve(&mut line, t(600)), Ok(None));
-        assert_eq!(line.written.len(), MESSAGE_LEN);
+        pipe.set_faults(SerialFaults::NONE);
+        assert_eq!(sim.serve(&mut port, t(600)), Ok(None));
+        assert_eq!(drain(&mut fc_rx).len(), MESSAGE_LEN);
     }
 
     #[test]
