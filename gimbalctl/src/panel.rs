@@ -379,19 +379,18 @@ fn panel<T: Transport>(mut session: Session<T>, speed: f32) -> Result<(), Failur
 }
 
 /// `q`: a zero rate (through the link: the end of the hold, or a zero-rate command when
-/// none is held), written before leaving.
+/// none is held, queued as soon as the queue has room), written before leaving.
 fn quit<T: Transport>(session: &mut Session<T>, now: impl Fn() -> Instant) -> Result<(), Failure> {
-    let link = &mut session.link;
-    if link.is_rate_holding() {
-        link.stop_rate();
-    } else if link.send(GimbalCommand::Rate(Rate::ZERO)).is_err() {
-        // A full queue: end any hold the link would restart, and let the queue drain.
-        link.stop_rate();
-    }
+    // Ending a hold queues the link's own zero rate, which is never refused.
+    let mut zero_queued = session.link.is_rate_holding();
+    session.link.stop_rate();
     let deadline = StdInstant::now() + QUIT_FLUSH;
     loop {
+        if !zero_queued {
+            zero_queued = session.link.send(GimbalCommand::Rate(Rate::ZERO)).is_ok();
+        }
         session.pump(now())?;
-        if !session.has_transmit() {
+        if zero_queued && !session.has_transmit() {
             break;
         }
         if StdInstant::now() >= deadline {
