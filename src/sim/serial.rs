@@ -180,7 +180,7 @@ impl<const OUT: usize> SerialSimulator<OUT> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mock::serial::{MockSerialError, Pipe, SerialFaults};
+    use crate::mock::serial::{MockSerialError, Pipe, Rx, SerialFaults, Tx};
     use crate::port::{Io, PortError};
     use crate::wire::serial::control_frame;
     use embedded_io::{Read, Write};
@@ -188,6 +188,8 @@ mod tests {
     // The flight controller on the pipe's port 0, the gimbal on port 1; 128 bytes each way
     // hold every exchange below.
     const N: usize = 128;
+
+    type GimbalPort<'a> = Io<Rx<'a, N>, Tx<'a, N>>;
 
     fn t(ms: u32) -> Instant {
         Instant::from_millis(ms)
@@ -199,13 +201,21 @@ mod tests {
     }
 
     /// What waits for the flight controller on `rx`, read whole.
-    fn drain(rx: &mut impl Read<Error = MockSerialError>) -> std::vec::Vec<u8> {
+    fn drain(rx: &mut Rx<'_, N>) -> std::vec::Vec<u8> {
         let mut got = std::vec::Vec::new();
         let mut buf = [0u8; N];
         while let Ok(n @ 1..) = rx.read(&mut buf) {
             got.extend_from_slice(&buf[..n]);
         }
         got
+    }
+
+    /// The flight controller's port 0 of `pipe`, and a gimbal at rest on port 1 through `Io`.
+    fn gimbal_on(pipe: &Pipe<N>) -> (Rx<'_, N>, Tx<'_, N>, GimbalPort<'_>, SerialSimulator) {
+        let (fc_rx, fc_tx) = pipe.port(0).unwrap();
+        let (rx, tx) = pipe.port(1).unwrap();
+        let sim = SerialSimulator::new(SimConfig::default(), t(0));
+        (fc_rx, fc_tx, Io::new(rx, tx), sim)
     }
 
     #[test]
@@ -216,10 +226,7 @@ mod tests {
             max_read: 5,
             ..SerialFaults::NONE
         });
-        let (mut fc_rx, mut fc_tx) = pipe.port(0).unwrap();
-        let (rx, tx) = pipe.port(1).unwrap();
-        let mut port = Io::new(rx, tx);
-        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        let (mut fc_rx, mut fc_tx, mut port, mut sim) = gimbal_on(&pipe);
         let mut two = look_down().to_vec();
         two.extend_from_slice(&look_down());
         assert_eq!(fc_tx.write(&two), Ok(48));
@@ -243,10 +250,7 @@ mod tests {
             write_stall: 1.0,
             ..SerialFaults::NONE
         });
-        let (mut fc_rx, _) = pipe.port(0).unwrap();
-        let (rx, tx) = pipe.port(1).unwrap();
-        let mut port = Io::new(rx, tx);
-        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        let (mut fc_rx, _, mut port, mut sim) = gimbal_on(&pipe);
         let status = sim.serve(&mut port, t(500)).unwrap().unwrap();
         assert_eq!(pipe.stats(1).unwrap().written, 0);
         assert_eq!(sim.transmit_bytes().len(), MESSAGE_LEN);
@@ -266,10 +270,7 @@ mod tests {
             rx_error: 1.0,
             ..SerialFaults::NONE
         });
-        let (mut fc_rx, mut fc_tx) = pipe.port(0).unwrap();
-        let (rx, tx) = pipe.port(1).unwrap();
-        let mut port = Io::new(rx, tx);
-        let mut sim: SerialSimulator = SerialSimulator::new(SimConfig::default(), t(0));
+        let (mut fc_rx, mut fc_tx, mut port, mut sim) = gimbal_on(&pipe);
         // A read error: returned before the poll, the frame behind it read at the next.
         assert_eq!(fc_tx.write(&look_down()), Ok(24));
         assert_eq!(

@@ -18,6 +18,16 @@ fn send<const TX: usize>(sim: &mut Simulator<TX>, c: impl Into<Command>, at: Ins
     sim.receive(f.id, &f.data, at).unwrap();
 }
 
+/// Points the gimbal: a pitch, then a heading, both commanded at `at`.
+fn point<const TX: usize>(sim: &mut Simulator<TX>, pitch: f32, heading: f32, at: Instant) {
+    send(sim, GimbalCommand::Pitch(Pitch::new(pitch).unwrap()), at);
+    send(
+        sim,
+        GimbalCommand::Heading(Heading::new(heading).unwrap()),
+        at,
+    );
+}
+
 fn attitude<const TX: usize>(sim: &mut Simulator<TX>, heading: f32, at: Instant) {
     let f = VehicleFrame::from(Attitude::new(0.0, 0.0, heading).unwrap()).to_frame();
     sim.receive(f.id, &f.data, at).unwrap();

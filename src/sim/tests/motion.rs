@@ -7,16 +7,7 @@ use super::*;
 #[test]
 fn angle_targets_are_reached_at_the_slew_rate_exactly() {
     let mut sim = Simulator::new(SimConfig::default(), t(0));
-    send(
-        &mut sim,
-        GimbalCommand::Pitch(Pitch::new(-45.0).unwrap()),
-        t(0),
-    );
-    send(
-        &mut sim,
-        GimbalCommand::Heading(Heading::new(90.0).unwrap()),
-        t(0),
-    );
+    point(&mut sim, -45.0, 90.0, t(0));
     assert_eq!(sim.state().mode, ControlMode::Lock);
     assert_eq!(sim.state().target_pitch_deg, Some(-45.0));
     assert_eq!(sim.state().target_yaw_deg, Some(90.0));
@@ -47,16 +38,7 @@ fn angle_targets_are_reached_at_the_slew_rate_exactly() {
 #[test]
 fn one_long_gap_reaches_the_target_without_overshoot() {
     let mut sim = Simulator::new(SimConfig::default(), t(0));
-    send(
-        &mut sim,
-        GimbalCommand::Pitch(Pitch::new(-100.0).unwrap()),
-        t(0),
-    );
-    send(
-        &mut sim,
-        GimbalCommand::Heading(Heading::new(200.0).unwrap()),
-        t(0),
-    );
+    point(&mut sim, -100.0, 200.0, t(0));
     sim.poll(t(10 * 3600 * 1000)); // ten hours later
     assert_eq!(sim.state().pitch_deg, -100.0);
     assert_eq!(sim.state().motor_yaw_deg, -160.0); // 200° nose-relative is -160°

@@ -57,16 +57,7 @@ fn a_reboot_is_silent_for_its_boot_time_ignores_frames_and_comes_back_at_rest() 
 #[test]
 fn postbacks_come_every_500_ms_as_four_parsable_frames_matching_the_state() {
     let mut sim = Simulator::new(SimConfig::default(), t(0));
-    send(
-        &mut sim,
-        GimbalCommand::Pitch(Pitch::new(-80.0).unwrap()),
-        t(0),
-    );
-    send(
-        &mut sim,
-        GimbalCommand::Heading(Heading::new(300.0).unwrap()),
-        t(0),
-    );
+    point(&mut sim, -80.0, 300.0, t(0));
     let mut times = heapless::Vec::<u32, 32>::new();
     for ms in (0..=10_000).step_by(10) {
         if ms == 2000 {
