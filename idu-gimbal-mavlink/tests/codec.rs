@@ -253,7 +253,8 @@ proptest! {
             [ours.angular_velocity_x, ours.angular_velocity_y, ours.angular_velocity_z].map(f32::to_bits),
             [theirs.angular_velocity_x, theirs.angular_velocity_y, theirs.angular_velocity_z].map(f32::to_bits)
         );
-        // Bits outside the dialect dropped by both (tests/bridge.rs says why that is safe).
+        // Bits outside the dialect dropped by both (tests/bridge/setpoints.rs says why that
+        // is safe).
         prop_assert_eq!(ours.flags, theirs.flags);
         prop_assert_eq!((ours.target_system, ours.target_component),
                         (theirs.target_system, theirs.target_component));
