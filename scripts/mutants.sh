@@ -26,13 +26,13 @@
 #   tests/serial.rs (the serial link and port over the mock pipe) and tests/bounds.rs
 #   (the parsers and the link under floods), tests/blocking_adapter.rs (the Blocking
 #   adapter's classifier), tests/next_deadline.rs (the ports' next_deadline),
-#   tests/api_contracts.rs (the public API's documented contracts) and tests/aiming.rs (the
+#   tests/api_contracts.rs (the public API's documented contracts) and tests/aiming/ (the
 #   closed-loop aim against the simulator). Left out: tests/no_panic.rs (fixed 2000 cases
 #   per property, about a minute a run, and it only checks panic-freedom, which the unit
 #   tests' proptests also exercise), tests/fuzz_corpus.rs (the same, over the fuzz
 #   corpora), tests/geo.rs (src/geo.rs is the `geometry` scope's) and doctests (examples,
 #   not checks). The `geometry` scope runs the unit tests, tests/geo.rs and the two that
-#   aim through it (tests/point_at.rs, tests/aiming.rs).
+#   aim through it (tests/point_at.rs, tests/aiming/).
 # - PROPTEST_CASES=32 instead of 256: the proptests dominate the test time; 32 cases still
 #   cover each property, and the hand-written vectors do the exact checking.
 # - --all-features: the port tests need the `mock` bus.

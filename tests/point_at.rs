@@ -88,7 +88,7 @@ fn fly(config: Config, push_attitude_to_gimbal: bool, holds: LockHolds) -> (usiz
 
 /// How far the reported heading may be off the true bearing: the orbit turns the vehicle
 /// at 3.44°/s (12 m/s on a 200 m radius), and a gimbal whose lock holds its motor angle
-/// lags by what `tests/aiming.rs`'s `turn_lag` allows at that rate, 255 ms of turn plus
+/// lags by what `tests/aiming/main.rs`'s `turn_lag` allows at that rate, 255 ms of turn plus
 /// the command's 0.1°: 0.98° (0.40° seen; 0.06° and 0.10° where the gimbal holds north or
 /// references the nose).
 const HEADING_TOL_DEG: f64 = 1.0;
