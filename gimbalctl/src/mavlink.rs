@@ -54,7 +54,6 @@ use idu_gimbal::Instant;
 use idu_gimbal_mavlink::camera::fov::FieldOfView;
 use idu_gimbal_mavlink::camera::CameraConfig;
 use idu_gimbal_mavlink::framing::FrameReader;
-use idu_gimbal_mavlink::signing::{SigningConfig, SigningStats, STREAMS};
 use idu_gimbal_mavlink::{Bridge, BridgeConfig};
 
 use crate::counts::{counted, grown};
@@ -67,11 +66,13 @@ use crate::transport::{
 
 mod peer_log;
 mod peers;
+mod signing;
 mod sim_watch;
 mod udp;
 
 use peer_log::PeerLog;
 use peers::{Peers, PEER_CAPACITY, PEER_TIMEOUT};
+pub use signing::SigningKey;
 use sim_watch::SimWatch;
 use udp::{receive_udp, send_udp, Clients, Unsent};
 
@@ -112,68 +113,6 @@ pub enum SimLock {
     North,
     /// Its motor angle: it turns with the vehicle.
     Motor,
-}
-
-/// Where the MAVLink 2 signing key comes from.
-pub enum SigningKey<'a> {
-    /// Its SHA-256 is the key, as MAVProxy and QGroundControl derive it.
-    Passphrase(&'a str),
-    /// A file of 64 hex digits.
-    File(&'a str),
-}
-
-/// The link id gimbalctl signs with.
-const SIGNING_LINK_ID: u8 = 1;
-
-/// The signing configuration `key` names: usage errors for a key file that is not 64 hex
-/// digits, a runtime failure for one that cannot be read.
-fn signing_config(key: &SigningKey<'_>) -> Result<SigningConfig, Failure> {
-    match key {
-        SigningKey::Passphrase(p) => Ok(SigningConfig::from_passphrase(
-            p.as_bytes(),
-            SIGNING_LINK_ID,
-        )),
-        SigningKey::File(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                Failure::Runtime(format!("--signing-key-file: cannot read {path}: {e}"))
-            })?;
-            let hex = text.trim();
-            let usage = || {
-                Failure::Usage(format!(
-                    "--signing-key-file: {path} holds no key: 64 hex digits (32 bytes) expected"
-                ))
-            };
-            // Hex digits only: `from_str_radix` would take a sign (`+f`) as well.
-            if hex.len() != 64 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
-                return Err(usage());
-            }
-            let mut key = [0u8; 32];
-            for (i, k) in key.iter_mut().enumerate() {
-                *k = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| usage())?;
-            }
-            Ok(SigningConfig {
-                key,
-                link_id: SIGNING_LINK_ID,
-            })
-        }
-    }
-}
-
-/// What signing let through and turned away, for stderr.
-fn signing_line(s: &SigningStats) -> String {
-    format!(
-        "frames accepted: {}; turned away: {} unsigned, {} with a bad signature, {} replayed, {} from a new stream while {} were remembered",
-        s.accepted, s.unsigned, s.bad_signature, s.replayed, s.streams_full, STREAMS
-    )
-}
-
-/// `at` as MAVLink 2 signing counts time: 10 µs units since 2015-01-01 00:00 GMT (0 for
-/// a clock set before then).
-fn signing_timestamp(at: std::time::SystemTime) -> u64 {
-    const EPOCH_2015_S: u64 = 1_420_070_400;
-    at.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| {
-        (d.as_micros() / 10).saturating_sub(u128::from(EPOCH_2015_S) * 100_000) as u64
-    })
 }
 
 /// What `gimbalctl mavlink` was asked to do.
@@ -296,7 +235,7 @@ pub fn run(opts: &Options<'_>) -> Result<(), Failure> {
     let config = BridgeConfig {
         system_id: opts.system_id,
         camera: Some(camera),
-        signing: opts.signing.as_ref().map(signing_config).transpose()?,
+        signing: opts.signing.as_ref().map(signing::config).transpose()?,
         ..BridgeConfig::default()
     }
     .check()
@@ -477,7 +416,7 @@ fn serve<S: Pump>(
     loop {
         if exit_after_ms.is_some_and(|ms| start.elapsed() >= Duration::from_millis(ms)) {
             if let Some(s) = bridge.signing_stats() {
-                eprintln!("gimbalctl mavlink: signing: {}", signing_line(&s));
+                eprintln!("gimbalctl mavlink: signing: {}", signing::line(&s));
             }
             for line in clients.unsent.lines(StdInstant::now(), true) {
                 eprintln!("gimbalctl mavlink: warning: {line}");
@@ -499,7 +438,7 @@ fn serve<S: Pump>(
         // The host's clock, when signing: the first signed frames already carry the time
         // receivers know.
         if bridge.signing_stats().is_some() {
-            bridge.signing_time_at_least(signing_timestamp(std::time::SystemTime::now()));
+            bridge.signing_time_at_least(signing::timestamp(std::time::SystemTime::now()));
         }
         let clock = StdInstant::now();
         let drained = match &mut port {
@@ -587,7 +526,7 @@ fn serve<S: Pump>(
             if let Some(s) = bridge.signing_stats() {
                 let turned = (s.unsigned, s.bad_signature, s.replayed, s.streams_full);
                 if turned != signing_turned {
-                    eprintln!("gimbalctl mavlink: warning: signing: {}", signing_line(&s));
+                    eprintln!("gimbalctl mavlink: warning: signing: {}", signing::line(&s));
                     signing_turned = turned;
                 }
             }
@@ -716,44 +655,6 @@ mod tests {
         for bad in ["60", "60,180", "0,30", "60,", "a,b", ""] {
             assert!(matches!(parse_fov(bad), Err(Failure::Usage(_))), "{bad:?}");
         }
-    }
-
-    /// MAVLink 2 signing's clock: 10 µs units from 2015-01-01 00:00 UTC (Unix time
-    /// 1,420,070,400 s); none before.
-    #[test]
-    fn the_signing_timestamp_counts_10_us_from_2015() {
-        use std::time::{Duration, UNIX_EPOCH};
-        let epoch_2015 = UNIX_EPOCH + Duration::from_secs(1_420_070_400);
-        assert_eq!(signing_timestamp(epoch_2015), 0);
-        assert_eq!(signing_timestamp(epoch_2015 + Duration::from_micros(19)), 1);
-        assert_eq!(signing_timestamp(epoch_2015 + Duration::from_micros(20)), 2);
-        assert_eq!(
-            signing_timestamp(epoch_2015 + Duration::from_secs(1)),
-            100_000
-        );
-        // 2026-11-28 00:00 UTC: Unix time 1,795,824,000 s.
-        let day = UNIX_EPOCH + Duration::from_secs(1_795_824_000);
-        assert_eq!(signing_timestamp(day), 37_575_360_000_000);
-        assert_eq!(signing_timestamp(epoch_2015 - Duration::from_secs(1)), 0);
-        assert_eq!(signing_timestamp(UNIX_EPOCH), 0);
-    }
-
-    #[test]
-    fn the_signing_line_names_each_count() {
-        let stats = SigningStats {
-            accepted: 1,
-            unsigned: 2,
-            bad_signature: 3,
-            replayed: 4,
-            streams_full: 5,
-        };
-        assert_eq!(
-            signing_line(&stats),
-            format!(
-                "frames accepted: 1; turned away: 2 unsigned, 3 with a bad signature, \
-                 4 replayed, 5 from a new stream while {STREAMS} were remembered"
-            )
-        );
     }
 
     /// The autopilot's serial bytes that wait for room in the bridge's outbox go before
